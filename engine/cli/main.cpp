@@ -1,0 +1,56 @@
+// lodforge: one binary, subcommands registered in one explicit list.
+#include <cstring>
+#include <iostream>
+#include <spdlog/spdlog.h>
+
+#include "commands/commands.hpp"
+#include "io/errors.hpp"
+
+namespace {
+
+struct Command {
+  const char* name;
+  const char* summary;
+  int (*run)(int, char**);
+};
+
+const Command commands[] = {
+    {"regularize", "LOD0 footprints of every building in a segmentation raster", lodforge::run_regularize},
+    {"synth", "generate a procedural demo city (segmentation, DSM, DTM, true footprints)", lodforge::run_synth},
+    {"options", "print every stage option with its default", lodforge::run_options},
+};
+
+void usage(std::ostream& out) {
+  out << "lodforge " << LODFORGE_VERSION << " — vectorized LOD0/LOD1 building models from segmentation rasters\n\n"
+      << "usage: lodforge COMMAND [options]   (lodforge COMMAND --help for its options)\n\ncommands:\n";
+  for (const Command& c : commands) out << "  " << c.name << std::string(14 - std::strlen(c.name), ' ') << c.summary << '\n';
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  spdlog::set_pattern("[%H:%M:%S] [%^%l%$] %v");
+  if (argc < 2 || !std::strcmp(argv[1], "--help") || !std::strcmp(argv[1], "help")) {
+    usage(argc < 2 ? std::cerr : std::cout);
+    return argc < 2 ? 2 : 0;
+  }
+  if (!std::strcmp(argv[1], "--version")) {
+    std::cout << "lodforge " << LODFORGE_VERSION << '\n';
+    return 0;
+  }
+  for (const Command& c : commands) {
+    if (std::strcmp(argv[1], c.name) != 0) continue;
+    try {
+      return c.run(argc, argv);
+    } catch (const lodforge::InputError& e) {
+      std::cerr << "lodforge " << c.name << ": error: " << e.what() << '\n';
+      return 1;
+    } catch (const std::exception& e) {
+      std::cerr << "lodforge " << c.name << ": internal error: " << e.what() << '\n';
+      return 3;
+    }
+  }
+  std::cerr << "lodforge: unknown command '" << argv[1] << "'\n\n";
+  usage(std::cerr);
+  return 2;
+}

@@ -1,0 +1,141 @@
+// lodforge regularize: the per-building core on one segmentation raster, LOD0 polygons out.
+#include <atomic>
+#include <iostream>
+#include <map>
+#include <spdlog/spdlog.h>
+#include <tbb/global_control.h>
+#include <tbb/parallel_for.h>
+
+#include "cli/args.hpp"
+#include "commands/commands.hpp"
+#include "commands/stage_options.hpp"
+#include "io/errors.hpp"
+#include "io/footprint_writer.hpp"
+#include "io/raster.hpp"
+#include "pipeline/building.hpp"
+
+namespace lodforge {
+
+namespace {
+
+BuildingSelector parse_selector(const Args& args) {
+  BuildingSelector selector;
+  if (args.has("building-rgb") && args.has("building-value"))
+    throw InputError("lodforge regularize: give either --building-value or --building-rgb, not both");
+  auto numbers = [](const std::string& text, const std::string& flag) {
+    std::vector<int> out;
+    std::size_t start = 0;
+    while (start <= text.size()) {
+      const std::size_t comma = text.find(',', start);
+      const std::string item = text.substr(start, comma == std::string::npos ? std::string::npos : comma - start);
+      try {
+        std::size_t used = 0;
+        out.push_back(std::stoi(item, &used));
+        if (used != item.size()) throw std::invalid_argument(item);
+      } catch (const std::exception&) {
+        throw InputError("lodforge regularize: " + flag + " '" + text + "': not a comma-separated list of integers");
+      }
+      if (comma == std::string::npos) break;
+      start = comma + 1;
+    }
+    return out;
+  };
+  if (auto rgb = args.get("building-rgb")) {
+    const auto v = numbers(*rgb, "--building-rgb");
+    if (v.size() != 3) throw InputError("lodforge regularize: --building-rgb '" + *rgb + "': needs three values R,G,B");
+    selector.rgb = std::array<int, 3>{v[0], v[1], v[2]};
+  } else if (auto values = args.get("building-value")) {
+    selector.values = numbers(*values, "--building-value");
+  }
+  return selector;
+}
+
+}  // namespace
+
+int run_regularize(int argc, char** argv) {
+  Args args("regularize", "Extracts every building of a segmentation raster and writes its regularized LOD0 footprint\n"
+                          "(with holes) and its status to a GeoPackage.");
+  args.value("mask", "RASTER", "segmentation raster (any GDAL format), georeferenced")
+      .value("building-value", "V[,V...]", "class value(s) of buildings in a one-band raster (default 6)")
+      .value("building-rgb", "R,G,B", "building colour in an RGB raster, e.g. 0,0,255 (ISPRS)")
+      .value("out", "FILE", "output footprints (.gpkg or .geojson)")
+      .value("route", "NAME", "corner route: 'original' (lines fitted to the raw contour) or 'deformed' (the paper)")
+      .value("threads", "N", "worker threads (default: all cores)")
+      .value("set", "KEY=VALUE", "set any stage option, e.g. labeling.kappa2=5 (see lodforge options)", true)
+      .flag("help", "show this help");
+  args.parse(argc, argv, 2);
+  if (args.has("help")) { std::cout << args.help(); return 0; }
+  const std::string mask_path = args.require("mask");
+  const std::string out_path = args.require("out");
+  StageOptions options;
+  std::vector<std::string> assignments = args.all("set");
+  if (auto route = args.get("route")) assignments.push_back("corners.route=" + *route);
+  apply_overrides(options, assignments);
+  int threads = 0;
+  if (auto t = args.get("threads")) {
+    try { threads = std::stoi(*t); } catch (...) { threads = -1; }
+    if (threads < 0) throw InputError("lodforge regularize: --threads '" + *t + "': must be a number >= 0");
+  }
+  const BuildingSelector selector = parse_selector(args);
+  check_output_path(out_path);
+
+  const MaskRaster raster = read_building_mask(mask_path, selector);
+  const double pixel_size = raster.transform.pixel_size();
+  spdlog::info("{}: {} x {} pixels of {:.3g} m, buildings = {}", mask_path, raster.mask.cols, raster.mask.rows, pixel_size,
+               selector.describe());
+  const ContourResult contours = extract_contours(raster.mask, raster.transform, options.contour);
+  const std::size_t count = contours.buildings.size();
+  if (count == 0)
+    throw InputError("'" + mask_path + "': no building of at least " + std::to_string(options.contour.min_area_m2) +
+                     " m^2 (" + std::to_string(contours.dropped_small) + " smaller components dropped)");
+  spdlog::info("{} buildings, {} components below {} m^2 dropped", count, contours.dropped_small, options.contour.min_area_m2);
+
+  std::vector<BuildingResult> results(count);
+  std::atomic<std::size_t> done{0};
+  std::unique_ptr<tbb::global_control> limit;
+  if (threads > 0) limit = std::make_unique<tbb::global_control>(tbb::global_control::max_allowed_parallelism, threads);
+  tbb::parallel_for(std::size_t(0), count, [&](std::size_t i) {
+    results[i] = regularize_building(contours.buildings[i].rings, pixel_size, options.core);
+    const std::size_t n = ++done;
+    if (count >= 20 && n % (count / 10) == 0) spdlog::info("{}/{} buildings", n, count);
+  });
+
+  std::vector<FootprintRecord> records(count);
+  std::map<std::string, int> failures;
+  int failed = 0;
+  for (std::size_t i = 0; i < count; ++i) {
+    const BuildingResult& r = results[i];
+    FootprintRecord& rec = records[i];
+    rec.id = long(i) + 1;
+    rec.polygon = r.footprint;
+    rec.status = r.status();
+    rec.failed_stage = r.failed_stage;
+    rec.reason = r.reason;
+    rec.regularizer = r.ok ? "contour_" + options.core.corners.route : "douglas_peucker";
+    if (!r.ok) {
+      ++failed;
+      ++failures[r.failed_stage];
+      if (failed <= 20) spdlog::warn("building {} (first pixel row {}, col {}): {} failed: {}; Douglas-Peucker fallback written",
+                                     rec.id, contours.buildings[i].first_row, contours.buildings[i].first_col, r.failed_stage, r.reason);
+    }
+  }
+  FootprintLayer layer;
+  layer.crs_wkt = raster.crs_wkt;
+  write_footprints(out_path, layer, records);
+  std::string by_stage;
+  for (const auto& [stage, n] : failures) by_stage += (by_stage.empty() ? " (" : ", ") + stage + ": " + std::to_string(n);
+  if (!by_stage.empty()) by_stage += ")";
+  spdlog::info("wrote {} footprints to {}: {} ok, {} fallback{}", count, out_path, count - failed, failed, by_stage);
+  return 0;
+}
+
+int run_options(int argc, char** argv) {
+  Args args("options", "Prints every stage option with its default and meaning (set them with --set KEY=VALUE).");
+  args.flag("help", "show this help");
+  args.parse(argc, argv, 2);
+  if (args.has("help")) { std::cout << args.help(); return 0; }
+  std::cout << print_defaults();
+  return 0;
+}
+
+}  // namespace lodforge

@@ -1,0 +1,36 @@
+#include "commands/stage_options.hpp"
+
+#include "common/option_visitors.hpp"
+#include "io/errors.hpp"
+
+namespace lodforge {
+
+void apply_overrides(StageOptions& options, const std::vector<std::string>& assignments) {
+  std::vector<std::string> errors;
+  std::map<std::string, std::string> values;
+  for (const std::string& a : assignments) {
+    const auto eq = a.find('=');
+    if (eq == std::string::npos || eq == 0) {
+      errors.push_back("--set " + a + ": expected KEY=VALUE, e.g. labeling.kappa2=5");
+      continue;
+    }
+    values[a.substr(0, eq)] = a.substr(eq + 1);
+  }
+  OptionSetter setter(values);
+  options.visit(setter);
+  setter.report_unknown();
+  errors.insert(errors.end(), setter.errors.begin(), setter.errors.end());
+  OptionValidator validator;
+  options.visit(validator);
+  errors.insert(errors.end(), validator.errors.begin(), validator.errors.end());
+  if (!errors.empty()) throw input_errors(errors);
+}
+
+std::string print_defaults() {
+  StageOptions defaults;
+  OptionPrinter printer;
+  defaults.visit(printer);
+  return printer.str();
+}
+
+}  // namespace lodforge

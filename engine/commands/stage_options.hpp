@@ -1,0 +1,30 @@
+// Every stage option of a job, as one tree: contour extraction plus the per-building core.
+// Paths like "labeling.kappa2" address one option (--set on the command line).
+#pragma once
+#include <map>
+#include <string>
+#include <vector>
+
+#include "contour/contour.hpp"
+#include "pipeline/core_options.hpp"
+
+namespace lodforge {
+
+struct StageOptions {
+  ContourOptions contour;
+  CoreOptions core;
+
+  template <class V>
+  void visit(V& v) {
+    v.section("contour", contour);
+    core.visit(v);
+  }
+};
+
+// Applies "path=value" assignments, then validates everything; throws InputError listing every
+// problem at once, each with its key path.
+void apply_overrides(StageOptions& options, const std::vector<std::string>& assignments);
+
+std::string print_defaults();
+
+}  // namespace lodforge

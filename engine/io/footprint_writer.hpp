@@ -1,0 +1,33 @@
+// Writes LOD0 footprints with their attributes to a GeoPackage (or any OGR vector format
+// chosen by the file extension), atomically: a temporary file renamed on success, so a failed
+// run never leaves a file that looks complete.
+#pragma once
+#include <string>
+#include <vector>
+
+#include "geometry/types.hpp"
+
+namespace lodforge {
+
+struct FootprintRecord {
+  long id = 0;
+  PolygonWithHoles polygon;
+  std::string status, failed_stage, reason;
+  std::string regularizer;
+  std::string kind;              // for synthetic truth; empty otherwise
+  double roof_height = 0, ground_height = 0;  // written when write_heights
+};
+
+struct FootprintLayer {
+  std::string name = "footprints";
+  std::string crs_wkt;
+  bool write_status = true;   // status, stage, reason, regularizer
+  bool write_heights = false; // roof_height, ground_height, kind (synthetic truth)
+};
+
+// Checks up front that path can be written (directory exists and is writable, extension known).
+void check_output_path(const std::string& path);
+
+void write_footprints(const std::string& path, const FootprintLayer& layer, const std::vector<FootprintRecord>& records);
+
+}  // namespace lodforge

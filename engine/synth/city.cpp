@@ -1,0 +1,225 @@
+#include "synth/city.hpp"
+
+#include <cmath>
+#include <opencv2/imgproc.hpp>
+#include <random>
+#include <Eigen/Geometry>
+
+#include "geometry/polygon.hpp"
+
+namespace lodforge {
+
+namespace {
+
+using Rng = std::mt19937_64;
+
+double uniform(Rng& rng, double lo, double hi) { return std::uniform_real_distribution<double>(lo, hi)(rng); }
+
+Ring rectangle(double w, double h) { return {{0, 0}, {w, 0}, {w, h}, {0, h}}; }
+
+// Local shapes, counter-clockwise, in metres with the origin at a corner.
+PolygonWithHoles make_shape(const std::string& kind, Rng& rng) {
+  const double w = uniform(rng, 14, 32), h = uniform(rng, 12, 28);
+  const double a = uniform(rng, 6, 0.45 * w), b = uniform(rng, 6, 0.45 * h);
+  if (kind == "l_shape") return {{{0, 0}, {w, 0}, {w, b}, {a, b}, {a, h}, {0, h}}, {}};
+  if (kind == "t_shape") {
+    const double s = std::max(6.0, 0.4 * w);
+    return {{{w / 2 - s / 2, 0}, {w / 2 + s / 2, 0}, {w / 2 + s / 2, h - b}, {w, h - b}, {w, h}, {0, h}, {0, h - b}, {w / 2 - s / 2, h - b}}, {}};
+  }
+  if (kind == "u_shape") {
+    const double arm = std::min(a, 0.3 * w);
+    return {{{0, 0}, {w, 0}, {w, h}, {w - arm, h}, {w - arm, b}, {arm, b}, {arm, h}, {0, h}}, {}};
+  }
+  if (kind == "cut45") {
+    const double c = uniform(rng, 4, 0.45 * std::min(w, h));
+    return {{{0, 0}, {w, 0}, {w, h - c}, {w - c, h}, {0, h}}, {}};
+  }
+  if (kind == "courtyard") {
+    const double W = std::max(w, 22.0), H = std::max(h, 20.0), t = uniform(rng, 6, 8);
+    Ring hole = {{t, t}, {t, H - t}, {W - t, H - t}, {W - t, t}};  // clockwise
+    return {rectangle(W, H), {hole}};
+  }
+  if (kind == "round") {
+    const double r = uniform(rng, 6, 12);
+    Ring ring;
+    for (int k = 0; k < 72; ++k) ring.emplace_back(r + r * std::cos(2 * M_PI * k / 72), r + r * std::sin(2 * M_PI * k / 72));
+    return {ring, {}};
+  }
+  if (kind == "irregular") {
+    const int n = 5 + int(rng() % 3);
+    const double r = uniform(rng, 8, 14);
+    Ring ring;
+    double angle = uniform(rng, 0, 0.5);
+    for (int k = 0; k < n; ++k) {
+      angle += 2 * M_PI / n * uniform(rng, 0.75, 1.25);
+      if (angle >= 2 * M_PI) break;
+      const double rk = r * uniform(rng, 0.85, 1.0);
+      ring.emplace_back(r + rk * std::cos(angle), r + rk * std::sin(angle));
+    }
+    return {ring, {}};
+  }
+  return {rectangle(w, h), {}};
+}
+
+PolygonWithHoles transformed(const PolygonWithHoles& p, double angle, const Vec2& centre) {
+  Vec2 mean = Vec2::Zero();
+  for (const Vec2& q : p.outer) mean += q;
+  mean /= double(p.outer.size());
+  const Eigen::Rotation2Dd rotation(angle);
+  auto apply = [&](Ring ring) {
+    for (Vec2& q : ring) q = centre + rotation * (q - mean);
+    return ring;
+  };
+  PolygonWithHoles out{apply(p.outer), {}};
+  for (const Ring& h : p.holes) out.holes.push_back(apply(h));
+  return out;
+}
+
+// Even-odd scanline fill of one ring: exactly the pixels whose centre lies inside.
+void fill_ring(cv::Mat& image, const Ring& ring, const GeoTransform& t, double value) {
+  std::vector<Vec2> px;
+  for (const Vec2& p : ring) px.emplace_back((p.x() - t.c[0]) / t.c[1], (p.y() - t.c[3]) / t.c[5]);
+  double top = px[0].y(), bottom = px[0].y();
+  for (const Vec2& p : px) { top = std::min(top, p.y()); bottom = std::max(bottom, p.y()); }
+  const int first = std::max(0, int(std::floor(top))), last = std::min(image.rows - 1, int(std::ceil(bottom)));
+  std::vector<double> crossings;
+  for (int row = first; row <= last; ++row) {
+    const double y = row + 0.5;
+    crossings.clear();
+    for (std::size_t i = 0; i < px.size(); ++i) {
+      const Vec2& a = px[i];
+      const Vec2& b = px[(i + 1) % px.size()];
+      if ((a.y() <= y) != (b.y() <= y)) crossings.push_back(a.x() + (y - a.y()) * (b.x() - a.x()) / (b.y() - a.y()));
+    }
+    std::sort(crossings.begin(), crossings.end());
+    for (std::size_t k = 0; k + 1 < crossings.size(); k += 2) {
+      // Pixel col is inside when its centre col + 0.5 lies in [x0, x1).
+      const int c0 = std::max(0, int(std::ceil(crossings[k] - 0.5)));
+      const int c1 = std::min(image.cols - 1, int(std::ceil(crossings[k + 1] - 0.5)) - 1);
+      if (c1 >= c0) image.row(row).colRange(c0, c1 + 1).setTo(value);
+    }
+  }
+}
+
+}  // namespace
+
+void rasterize(cv::Mat& image, const PolygonWithHoles& p, const GeoTransform& t, double outer_value, double hole_value) {
+  fill_ring(image, p.outer, t, outer_value);
+  for (const Ring& h : p.holes) fill_ring(image, h, t, hole_value);
+}
+
+namespace {
+
+// A row of adjacent houses that a segmentation merges into one blob.
+std::vector<SynthBuilding> row_of_houses(Rng& rng, double angle, const Vec2& centre) {
+  const int count = 3 + int(rng() % 4);
+  std::vector<double> widths;
+  double total = 0;
+  for (int k = 0; k < count; ++k) { widths.push_back(uniform(rng, 5.5, 8)); total += widths.back(); }
+  std::vector<SynthBuilding> houses;
+  double x = -total / 2;
+  const Eigen::Rotation2Dd rotation(angle);
+  for (int k = 0; k < count; ++k) {
+    const double depth = uniform(rng, 9, 12);
+    Ring ring = {{x, -5}, {x + widths[k], -5}, {x + widths[k], depth - 5}, {x, depth - 5}};
+    for (Vec2& q : ring) q = centre + rotation * q;
+    houses.push_back({{ring, {}}, "row_house", 0, 0});
+    x += widths[k];
+  }
+  return houses;
+}
+
+double terrain(const Vec2& local) {
+  return 2.0 + 0.01 * local.x() - 0.006 * local.y() + 0.8 * std::sin(local.x() / 70.0) * std::cos(local.y() / 90.0);
+}
+
+}  // namespace
+
+SynthCity generate_city(const SynthOptions& o) {
+  SynthCity city;
+  Rng rng(o.seed);
+  const int cols = std::max(1, int(std::lround(o.width_m / o.pixel_size_m)));
+  const int rows = std::max(1, int(std::lround(o.height_m / o.pixel_size_m)));
+  city.transform.c = {o.origin_x, o.pixel_size_m, 0, o.origin_y, 0, -o.pixel_size_m};
+  static const std::vector<std::string> kinds = {"rectangle", "rectangle", "l_shape", "t_shape", "u_shape", "cut45",
+                                                 "courtyard", "row_house", "row_house", "round", "irregular"};
+  const double pitch = 48.0;
+  const double district_angle = uniform(rng, 0, M_PI / 2);
+  for (double cy = pitch / 2; cy + pitch / 2 <= o.height_m + 1e-9; cy += pitch) {
+    for (double cx = pitch / 2; cx + pitch / 2 <= o.width_m + 1e-9; cx += pitch) {
+      const std::string kind = kinds[rng() % kinds.size()];
+      const double pick = uniform(rng, 0, 1);
+      const double angle = pick < 0.4 ? 0.0 : pick < 0.7 ? district_angle : uniform(rng, 0, M_PI / 2);
+      const Vec2 centre(o.origin_x + cx + uniform(rng, -3, 3), o.origin_y - cy + uniform(rng, -3, 3));
+      if (kind == "row_house") {
+        for (SynthBuilding& b : row_of_houses(rng, angle, centre)) city.buildings.push_back(std::move(b));
+      } else {
+        city.buildings.push_back({transformed(make_shape(kind, rng), angle, centre), kind, 0, 0});
+      }
+    }
+  }
+  // Heights: a sloped, gently rolling terrain; flat roofs 5–30 m above it.
+  city.dtm.create(rows, cols, CV_32F);
+  for (int r = 0; r < rows; ++r)
+    for (int c = 0; c < cols; ++c)
+      city.dtm.at<float>(r, c) = float(terrain({(c + 0.5) * o.pixel_size_m, (r + 0.5) * o.pixel_size_m}));
+  city.dsm = city.dtm.clone();
+  cv::Mat truth = cv::Mat::zeros(rows, cols, CV_8U);
+  for (SynthBuilding& b : city.buildings) {
+    const Vec2 corner = b.footprint.outer.front();
+    b.ground_height = terrain({corner.x() - o.origin_x, o.origin_y - corner.y()});
+    b.roof_height = b.ground_height + uniform(rng, 5, 30);
+    rasterize(truth, b.footprint, city.transform);
+    cv::Mat roof = cv::Mat::zeros(rows, cols, CV_8U);
+    rasterize(roof, b.footprint, city.transform);
+    city.dsm.setTo(cv::Scalar(b.roof_height), roof);
+  }
+  cv::Mat height_noise(rows, cols, CV_32F);
+  cv::RNG cv_rng(o.seed * 7919 + 1);
+  cv_rng.fill(height_noise, cv::RNG::NORMAL, 0, 0.05);
+  city.dsm += height_noise;
+
+  // The segmentation: rounded corners, a smooth boundary wobble, speckles.
+  cv::Mat mask = degrade_mask(truth, o.boundary_noise_px, o.corner_radius_px, o.seed * 7919 + 2);
+  const int speckles = int(o.speckle_per_km2 * o.width_m * o.height_m / 1e6);
+  for (int k = 0; k < speckles; ++k) {
+    const int c = int(rng() % cols), r = int(rng() % rows), size = 1 + int(rng() % 2);
+    const cv::Rect box = cv::Rect(c, r, size, size) & cv::Rect(0, 0, cols, rows);
+    mask(box).setTo(mask.at<uint8_t>(r, c) ? 0 : 1);
+  }
+  city.building_mask = mask;
+  return city;
+}
+
+cv::Mat degrade_mask(const cv::Mat& truth, double noise_px, double corner_radius_px, std::uint64_t seed) {
+  const int rows = truth.rows, cols = truth.cols;
+  cv::Mat mask = truth.clone();
+  const int radius = int(std::lround(corner_radius_px));
+  if (radius > 0) {
+    const cv::Mat kernel = cv::getStructuringElement(cv::MORPH_ELLIPSE, {2 * radius + 1, 2 * radius + 1});
+    cv::morphologyEx(mask, mask, cv::MORPH_OPEN, kernel);
+    cv::morphologyEx(mask, mask, cv::MORPH_CLOSE, kernel);
+  }
+  if (noise_px > 0) {
+    cv::RNG cv_rng(seed);
+    cv::Mat inside, outside, inverse = 1 - mask;
+    cv::distanceTransform(mask, inside, cv::DIST_L2, cv::DIST_MASK_PRECISE);
+    cv::distanceTransform(inverse, outside, cv::DIST_L2, cv::DIST_MASK_PRECISE);
+    cv::Mat signed_distance(rows, cols, CV_32F);
+    for (int r = 0; r < rows; ++r)
+      for (int c = 0; c < cols; ++c)
+        signed_distance.at<float>(r, c) = mask.at<uint8_t>(r, c) ? inside.at<float>(r, c) - 0.5f
+                                                                  : 0.5f - outside.at<float>(r, c);
+    cv::Mat noise(rows, cols, CV_32F);
+    cv_rng.fill(noise, cv::RNG::NORMAL, 0, 1);
+    cv::GaussianBlur(noise, noise, {0, 0}, 3.0);
+    cv::Scalar mean, stddev;
+    cv::meanStdDev(noise, mean, stddev);
+    noise = noise * (noise_px / std::max(stddev[0], 1e-9));
+    mask = (signed_distance + noise) > 0;
+    mask /= 255;
+  }
+  return mask;
+}
+
+}  // namespace lodforge

@@ -1,0 +1,64 @@
+// A procedural city for demos, tests and benchmarks: true footprints, a building mask that
+// looks like a segmentation network's output, a DSM and a DTM. Seeded and deterministic.
+#pragma once
+#include <cstdint>
+#include <opencv2/core/mat.hpp>
+#include <string>
+#include <vector>
+
+#include "common/option.hpp"
+#include "contour/contour.hpp"
+#include "geometry/types.hpp"
+
+namespace lodforge {
+
+struct SynthOptions {
+  double width_m = 300, height_m = 300;   // extent
+  double pixel_size_m = 0.25;
+  std::uint64_t seed = 1;
+  double origin_x = 85000, origin_y = 447000;  // upper-left corner, map metres
+  int epsg = 28992;
+  double boundary_noise_px = 0.8;  // amplitude of the smooth boundary wobble
+  double corner_radius_px = 2.0;   // corners rounded like a network's output
+  double speckle_per_km2 = 400;    // small false holes and blobs
+
+  template <class V>
+  void visit(V& v) {
+    v("width_m", width_m, "extent east-west (m)", Check::above(0));
+    v("height_m", height_m, "extent north-south (m)", Check::above(0));
+    v("pixel_size_m", pixel_size_m, "ground sampling distance (m)", Check::above(0));
+    v("seed", seed, "random seed", Check::at_least(0));
+    v("origin_x", origin_x, "x of the upper-left corner (m)");
+    v("origin_y", origin_y, "y of the upper-left corner (m)");
+    v("epsg", epsg, "EPSG code of the projected CRS", Check::at_least(1));
+    v("boundary_noise_px", boundary_noise_px, "boundary noise amplitude (pixels)", Check::at_least(0));
+    v("corner_radius_px", corner_radius_px, "corner rounding radius (pixels)", Check::at_least(0));
+    v("speckle_per_km2", speckle_per_km2, "false holes and blobs per km^2", Check::at_least(0));
+  }
+};
+
+struct SynthBuilding {
+  PolygonWithHoles footprint;  // map metres
+  std::string kind;            // rectangle, l_shape, t_shape, u_shape, cut45, courtyard, row_house, round, irregular
+  double ground_height = 0, roof_height = 0;
+};
+
+struct SynthCity {
+  std::vector<SynthBuilding> buildings;
+  GeoTransform transform;
+  cv::Mat building_mask;  // CV_8U, 1 = building (noisy, as segmented)
+  cv::Mat dsm, dtm;       // CV_32F
+};
+
+// Pure: the same options give the same city.
+SynthCity generate_city(const SynthOptions& options);
+
+// Burns a polygon into image (pixel centres inside get outer_value, inside holes hole_value).
+void rasterize(cv::Mat& image, const PolygonWithHoles& polygon, const GeoTransform& transform, double outer_value = 1,
+               double hole_value = 0);
+
+// Degrades a clean 0/1 mask like a segmentation network's output: rounded corners, a smooth
+// boundary wobble of about noise_px pixels. Seeded.
+cv::Mat degrade_mask(const cv::Mat& mask, double noise_px, double corner_radius_px, std::uint64_t seed);
+
+}  // namespace lodforge

@@ -1,0 +1,57 @@
+// Stage 1: building contours from a binary mask (paper §2.2, first paragraph).
+// Connected components are buildings; each yields an outer ring and its holes traced on pixel
+// corners, mapped to map coordinates through the raster's geotransform.
+#pragma once
+#include <array>
+#include <opencv2/core/mat.hpp>
+#include <vector>
+
+#include "common/option.hpp"
+#include "geometry/types.hpp"
+
+namespace lodforge {
+
+struct ContourOptions {
+  int connectivity = 8;           // pixels touching at a corner belong to one building (8) or not (4)
+  double min_area_m2 = 4.0;       // smaller components are noise, not buildings
+  double min_hole_area_m2 = 4.0;  // smaller holes are filled (segmentation speckle)
+
+  template <class V>
+  void visit(V& v) {
+    v("connectivity", connectivity, "pixel connectivity of a building: 4 or 8", Check::between(4, 8));
+    v("min_area_m2", min_area_m2, "components smaller than this are dropped (m^2)", Check::at_least(0));
+    v("min_hole_area_m2", min_hole_area_m2, "holes smaller than this are filled (m^2)", Check::at_least(0));
+  }
+};
+
+// GDAL's affine geotransform: x = c0 + col*c1 + row*c2, y = c3 + col*c4 + row*c5.
+struct GeoTransform {
+  std::array<double, 6> c{0, 1, 0, 0, 0, -1};
+  Vec2 to_map(double col, double row) const {
+    return {c[0] + col * c[1] + row * c[2], c[3] + col * c[4] + row * c[5]};
+  }
+  double pixel_size() const;  // sqrt of the pixel's area, the ground sampling distance
+};
+
+struct BuildingContour {
+  int first_row = 0, first_col = 0;  // the component's first pixel in raster order
+  long pixel_count = 0;
+  cv::Rect bbox;                      // pixel bounding box in the mask
+  std::vector<Ring> rings;            // [0] outer (counter-clockwise), then holes (clockwise)
+};
+
+struct ContourResult {
+  std::vector<BuildingContour> buildings;  // sorted by first pixel in raster order
+  int dropped_small = 0;                   // components below min_area_m2
+};
+
+// mask: CV_8U, non-zero = building.
+ContourResult extract_contours(const cv::Mat& mask, const GeoTransform& transform,
+                               const ContourOptions& options);
+
+// Traces one component given as a CV_8U 0/1 image; returns rings in pixel-corner coordinates
+// (x = column, y = row) oriented as map rings of a north-up raster: outer first.
+// Diagonal-only pixel contacts are resolved first so that every ring is simple.
+std::vector<Ring> trace_component(cv::Mat component);
+
+}  // namespace lodforge

@@ -1,0 +1,40 @@
+// Stage 7: corner extraction into the LOD0 ring (paper §2.5). Each maximal run of edges with one
+// target direction becomes a line with that direction, placed by least squares (closed form:
+// with the direction fixed, the offset is the length-weighted mean of the edge midpoints'
+// projections); corners are the intersections of consecutive lines.
+#pragma once
+#include <string>
+#include <vector>
+
+#include "common/option.hpp"
+#include "geometry/types.hpp"
+
+namespace lodforge {
+
+struct CornerOptions {
+  std::string route = "original";  // fit the lines to the original contour, or the deformed one
+  double min_run_px = 2.0;         // runs shorter than this (in pixel edges) join a neighbour
+  double parallel_angle_deg = 15.0;  // consecutive lines closer than this in angle get a step
+  double max_corner_shift_m = 3.0;   // an intersection farther than this from the run junction is
+                                     // replaced by a step between the two lines
+  int repair_attempts = 4;           // an invalid polygon is retried with min_run doubled this often
+
+  template <class V>
+  void visit(V& v) {
+    v("route", route, "fit the corner lines to the 'original' contour with the MRF directions, or to the 'deformed' contour (the paper)", Check::one_of({"original", "deformed"}));
+    v("min_run_px", min_run_px, "runs of one direction shorter than this (pixel lengths) join their neighbours", Check::at_least(0));
+    v("parallel_angle_deg", parallel_angle_deg, "consecutive lines closer than this in angle are joined by a perpendicular step (degrees)", Check::between(0, 89));
+    v("max_corner_shift_m", max_corner_shift_m, "an intersection farther than this from where the runs meet is replaced by a step (m)", Check::above(0));
+    v("repair_attempts", repair_attempts, "retries of an invalid polygon with min_run_px doubled each time", Check::between(0, 20));
+  }
+};
+
+// Absorbs runs shorter than min_run_px pixel lengths into their longer neighbour, in place.
+void absorb_short_runs(const Ring& ring, std::vector<int>& labels, double min_length);
+
+// The corner ring of one contour ring. labels: per edge; directions: unit outward normals.
+// Returns an empty ring and sets *problem when no polygon can be formed.
+Ring extract_corners(const Ring& ring, const std::vector<int>& labels, const std::vector<Vec2>& directions,
+                     double pixel_size, const CornerOptions& options, std::string* problem);
+
+}  // namespace lodforge

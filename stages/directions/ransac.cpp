@@ -1,0 +1,82 @@
+#include "directions/ransac.hpp"
+
+#include <cmath>
+#include <numeric>
+#include <random>
+
+namespace lodforge {
+
+namespace {
+
+struct Candidate {
+  Vec2 direction;
+  double support = 0;
+};
+
+Candidate evaluate(const Vec2& d, const std::vector<Vec2>& normals, const std::vector<double>& w,
+                   const std::vector<char>& remaining, double cos_threshold) {
+  Candidate c{d, 0};
+  for (std::size_t k = 0; k < normals.size(); ++k) {
+    if (remaining[k] && normals[k].dot(d) > cos_threshold) c.support += w[k];
+  }
+  return c;
+}
+
+// Eq. 4: the normalized sum of the inlier normals, iterated to a fixed inlier set.
+Vec2 refine(Vec2 d, const std::vector<Vec2>& normals, const std::vector<double>& w,
+            const std::vector<char>& remaining, double cos_threshold) {
+  for (int iteration = 0; iteration < 5; ++iteration) {
+    Vec2 sum = Vec2::Zero();
+    for (std::size_t k = 0; k < normals.size(); ++k) {
+      if (remaining[k] && normals[k].dot(d) > cos_threshold) sum += w[k] * normals[k];
+    }
+    if (sum.norm() < 1e-12) break;
+    const Vec2 next = sum.normalized();
+    if ((next - d).norm() < 1e-9) break;
+    d = next;
+  }
+  return d;
+}
+
+}  // namespace
+
+std::vector<DominantDirection> detect_directions(const std::vector<Vec2>& normals,
+                                                 const std::vector<double>& weights,
+                                                 const RansacOptions& o) {
+  std::vector<DominantDirection> directions;
+  if (normals.empty()) return directions;
+  const double cos_threshold = std::cos(o.inlier_angle_deg * M_PI / 180.0);
+  const double total = std::accumulate(weights.begin(), weights.end(), 0.0);
+  std::vector<char> remaining(normals.size(), 1);
+  std::vector<std::size_t> pool(normals.size());
+  std::mt19937_64 rng(o.seed);
+  while (static_cast<int>(directions.size()) < o.max_directions) {
+    pool.clear();
+    double remaining_weight = 0;
+    for (std::size_t k = 0; k < normals.size(); ++k) {
+      if (remaining[k]) { pool.push_back(k); remaining_weight += weights[k]; }
+    }
+    if (pool.empty()) break;
+    Candidate best;
+    for (int drawn = 1; drawn <= o.max_candidates; ++drawn) {
+      const std::size_t k = pool[std::uniform_int_distribution<std::size_t>(0, pool.size() - 1)(rng)];
+      const Candidate c = evaluate(normals[k], normals, weights, remaining, cos_threshold);
+      if (c.support > best.support) best = c;
+      // Eq. 3 with the probability of never having drawn from the best set, as in Schnabel et
+      // al. (the paper prints the ratio without the complement, which never falls).
+      const double p_missing = std::pow(1.0 - best.support / remaining_weight, drawn);
+      if (p_missing < o.missing_probability) break;
+    }
+    if (best.support < o.min_support_fraction * total) break;
+    const Vec2 d = refine(best.direction, normals, weights, remaining, cos_threshold);
+    double support = 0;
+    for (std::size_t k = 0; k < normals.size(); ++k) {
+      if (remaining[k] && normals[k].dot(d) > cos_threshold) { remaining[k] = 0; support += weights[k]; }
+    }
+    if (support <= 0) break;
+    directions.push_back({d, support});
+  }
+  return directions;
+}
+
+}  // namespace lodforge

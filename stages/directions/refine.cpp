@@ -1,0 +1,134 @@
+#include "directions/refine.hpp"
+
+#include <Eigen/Eigenvalues>
+#include <cmath>
+
+#include "labeling/mrf.hpp"
+
+namespace lodforge {
+
+namespace {
+
+struct Fit {
+  Eigen::Matrix2d scatter = Eigen::Matrix2d::Zero();  // pooled within-run scatter
+  Vec2 chord_sum = Vec2::Zero();                      // fallback when the scatter is degenerate
+  bool used = false;
+};
+
+// Within-run scatter of the length-weighted edge midpoints, ends trimmed.
+Eigen::Matrix2d run_scatter(const Ring& ring, int first, int count, double trim) {
+  const std::size_t n = ring.size();
+  std::vector<double> position(count + 1, 0.0);
+  for (int k = 0; k < count; ++k) position[k + 1] = position[k] + edge_vector(ring, (first + k) % n).norm();
+  const double length = position[count];
+  const double effective_trim = std::min(trim, 0.25 * length);
+  double w_sum = 0;
+  Vec2 mean = Vec2::Zero();
+  std::vector<std::pair<Vec2, double>> points;
+  for (int k = 0; k < count; ++k) {
+    const double mid = 0.5 * (position[k] + position[k + 1]);
+    if (mid < effective_trim || mid > length - effective_trim) continue;
+    const std::size_t i = (first + k) % n;
+    const double w = position[k + 1] - position[k];
+    points.push_back({ring[i] + 0.5 * edge_vector(ring, i), w});
+    mean += w * points.back().first;
+    w_sum += w;
+  }
+  Eigen::Matrix2d s = Eigen::Matrix2d::Zero();
+  if (points.size() < 2 || w_sum <= 0) return s;
+  mean /= w_sum;
+  for (const auto& [p, w] : points) s += w * (p - mean) * (p - mean).transpose();
+  return s;
+}
+
+// The unit normal of the best-fitting orientation of a scatter, on the side of `hint`.
+Vec2 normal_of(const Eigen::Matrix2d& scatter, const Vec2& hint) {
+  Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> eig(scatter);
+  Vec2 n = eig.eigenvectors().col(0);  // smallest eigenvalue: across the lines
+  return n.dot(hint) < 0 ? Vec2(-n) : n;
+}
+
+bool well_posed(const Eigen::Matrix2d& scatter) {
+  Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> eig(scatter);
+  return eig.eigenvalues()[1] > 0 && eig.eigenvalues()[1] > 4 * eig.eigenvalues()[0];
+}
+
+// Rotation by k quarter turns.
+Eigen::Matrix2d quarter_turns(int k) {
+  const int m = ((k % 4) + 4) % 4;
+  const double c[4] = {1, 0, -1, 0}, s[4] = {0, 1, 0, -1};
+  Eigen::Matrix2d r;
+  r << c[m], -s[m], s[m], c[m];
+  return r;
+}
+
+double angle_deg(const Vec2& n) { return std::atan2(n.y(), n.x()) * 180.0 / M_PI; }
+
+}  // namespace
+
+void refine_directions(const std::vector<Ring>& rings, EdgeLabels& labels, std::vector<Vec2>& directions,
+                       double pixel_size, const RefineOptions& o) {
+  const std::size_t count = directions.size();
+  std::vector<Fit> fits(count);
+  for (std::size_t r = 0; r < rings.size(); ++r) {
+    for (auto [first, length] : label_runs(labels[r])) {
+      Fit& f = fits[labels[r][first]];
+      f.used = true;
+      f.scatter += run_scatter(rings[r], first, length, o.trim_px * pixel_size);
+      f.chord_sum += rings[r][(first + length) % rings[r].size()] - rings[r][first];
+    }
+  }
+  // 1. Each used direction on its own; merge the ones that coincide.
+  std::vector<int> remap(count, -1);
+  std::vector<Vec2> result;
+  std::vector<Eigen::Matrix2d> scatter;
+  const double merge_cos = std::cos(o.merge_angle_deg * M_PI / 180.0);
+  for (std::size_t l = 0; l < count; ++l) {
+    if (!fits[l].used) continue;
+    Vec2 n = directions[l];
+    if (well_posed(fits[l].scatter)) n = normal_of(fits[l].scatter, directions[l]);
+    else if (fits[l].chord_sum.norm() > 0 && outward_normal(fits[l].chord_sum).dot(directions[l]) > 0.5)
+      n = outward_normal(fits[l].chord_sum);
+    for (std::size_t k = 0; k < result.size() && remap[l] < 0; ++k) {
+      if (result[k].dot(n) > merge_cos) {
+        remap[l] = int(k);
+        scatter[k] += fits[l].scatter;
+        if (well_posed(scatter[k])) result[k] = normal_of(scatter[k], result[k]);
+      }
+    }
+    if (remap[l] < 0) {
+      remap[l] = int(result.size());
+      result.push_back(n);
+      scatter.push_back(fits[l].scatter);
+    }
+  }
+  for (auto& ring : labels) for (int& x : ring) x = remap[x];
+  // 2. Groups of directions within snap_deg of a common quarter-turn lattice share one fit.
+  if (o.snap_deg > 0) {
+    std::vector<int> group(result.size(), -1);
+    for (std::size_t a = 0; a < result.size(); ++a) {
+      if (group[a] >= 0) continue;
+      group[a] = int(a);
+      std::vector<std::pair<std::size_t, int>> members{{a, 0}};
+      for (std::size_t b = a + 1; b < result.size(); ++b) {
+        if (group[b] >= 0) continue;
+        const double diff = angle_deg(result[b]) - angle_deg(result[a]);
+        const int k = int(std::lround(diff / 90.0));
+        if (std::abs(diff - 90.0 * k) <= o.snap_deg) {
+          group[b] = int(a);
+          members.push_back({b, k});
+        }
+      }
+      if (members.size() < 2) continue;
+      // Rotate every member's scatter into a's frame, pool, fit, rotate back.
+      Eigen::Matrix2d pooled = Eigen::Matrix2d::Zero();
+      for (auto [m, k] : members) pooled += quarter_turns(-k) * scatter[m] * quarter_turns(-k).transpose();
+      if (!well_posed(pooled)) continue;
+      const Vec2 reference = normal_of(pooled, result[a]);
+      for (auto [m, k] : members) result[m] = quarter_turns(k) * reference;
+    }
+  }
+  directions.swap(result);
+}
+
+}  // namespace lodforge

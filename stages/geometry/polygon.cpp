@@ -1,0 +1,249 @@
+#include "geometry/polygon.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <vector>
+
+namespace lodforge {
+
+double signed_area(const Ring& ring) {
+  double twice = 0.0;
+  for (std::size_t i = 0; i < ring.size(); ++i) {
+    twice += cross(ring[i], ring[(i + 1) % ring.size()]);
+  }
+  return 0.5 * twice;
+}
+
+double area(const PolygonWithHoles& polygon) {
+  double a = std::abs(signed_area(polygon.outer));
+  for (const Ring& hole : polygon.holes) a -= std::abs(signed_area(hole));
+  return a;
+}
+
+double perimeter(const Ring& ring) {
+  double length = 0.0;
+  for (std::size_t i = 0; i < ring.size(); ++i) length += edge_vector(ring, i).norm();
+  return length;
+}
+
+bool point_in_ring(const Vec2& p, const Ring& ring) {
+  bool inside = false;
+  for (std::size_t i = 0, j = ring.size() - 1; i < ring.size(); j = i++) {
+    const Vec2& a = ring[i];
+    const Vec2& b = ring[j];
+    if ((a.y() > p.y()) != (b.y() > p.y())) {
+      const double x = a.x() + (p.y() - a.y()) * (b.x() - a.x()) / (b.y() - a.y());
+      if (p.x() < x) inside = !inside;
+    }
+  }
+  return inside;
+}
+
+namespace {
+
+int orientation(const Vec2& a, const Vec2& b, const Vec2& c) {
+  const double v = cross(b - a, c - a);
+  const double scale = std::max({(b - a).squaredNorm(), (c - a).squaredNorm(), 1e-300});
+  if (std::abs(v) <= 1e-12 * scale) return 0;
+  return v > 0 ? 1 : -1;
+}
+
+bool on_segment(const Vec2& a, const Vec2& b, const Vec2& p) {
+  return std::min(a.x(), b.x()) <= p.x() && p.x() <= std::max(a.x(), b.x()) &&
+         std::min(a.y(), b.y()) <= p.y() && p.y() <= std::max(a.y(), b.y());
+}
+
+struct Segment {
+  Vec2 a, b;
+  int ring, index;
+  double min_x() const { return std::min(a.x(), b.x()); }
+  double max_x() const { return std::max(a.x(), b.x()); }
+};
+
+bool adjacent_in_ring(const Segment& s, const Segment& t, const std::vector<std::size_t>& sizes) {
+  if (s.ring != t.ring) return false;
+  const int n = static_cast<int>(sizes[s.ring]);
+  return (s.index + 1) % n == t.index || (t.index + 1) % n == s.index;
+}
+
+// Sweep over x: reports the first pair of non-adjacent segments that touch, O(n log n + k).
+std::string first_crossing(const std::vector<Ring>& rings) {
+  std::vector<Segment> segments;
+  std::vector<std::size_t> sizes;
+  for (std::size_t r = 0; r < rings.size(); ++r) {
+    sizes.push_back(rings[r].size());
+    for (std::size_t i = 0; i < rings[r].size(); ++i) {
+      segments.push_back({rings[r][i], rings[r][(i + 1) % rings[r].size()], static_cast<int>(r),
+                          static_cast<int>(i)});
+    }
+  }
+  std::sort(segments.begin(), segments.end(),
+            [](const Segment& s, const Segment& t) { return s.min_x() < t.min_x(); });
+  for (std::size_t i = 0; i < segments.size(); ++i) {
+    const Segment& s = segments[i];
+    for (std::size_t j = i + 1; j < segments.size() && segments[j].min_x() <= s.max_x(); ++j) {
+      const Segment& t = segments[j];
+      if (adjacent_in_ring(s, t, sizes)) {
+        // Adjacent edges share one vertex; they are invalid only if they fold back on each other.
+        const bool s_first = (s.index + 1) % static_cast<int>(sizes[s.ring]) == t.index;
+        const Segment& first = s_first ? s : t;
+        const Segment& second = s_first ? t : s;
+        if (sizes[s.ring] > 2 && orientation(first.a, first.b, second.b) == 0 &&
+            (first.b - first.a).dot(second.b - second.a) < 0) {
+          return "ring " + std::to_string(s.ring) + " folds back at vertex " +
+                 std::to_string(second.index);
+        }
+        continue;
+      }
+      if (segments_intersect(s.a, s.b, t.a, t.b)) {
+        return s.ring == t.ring ? "ring " + std::to_string(s.ring) + " crosses itself near (" +
+                                      std::to_string(s.a.x()) + ", " + std::to_string(s.a.y()) + ")"
+                                : "rings " + std::to_string(s.ring) + " and " +
+                                      std::to_string(t.ring) + " touch or cross";
+      }
+    }
+  }
+  return {};
+}
+
+}  // namespace
+
+bool segments_intersect(const Vec2& a, const Vec2& b, const Vec2& c, const Vec2& d) {
+  const int o1 = orientation(a, b, c), o2 = orientation(a, b, d);
+  const int o3 = orientation(c, d, a), o4 = orientation(c, d, b);
+  if (o1 != o2 && o3 != o4) return true;
+  if (o1 == 0 && on_segment(a, b, c)) return true;
+  if (o2 == 0 && on_segment(a, b, d)) return true;
+  if (o3 == 0 && on_segment(c, d, a)) return true;
+  if (o4 == 0 && on_segment(c, d, b)) return true;
+  return false;
+}
+
+std::string ring_problem(const Ring& ring) {
+  if (ring.size() < 3) return "ring has fewer than 3 vertices";
+  for (std::size_t i = 0; i < ring.size(); ++i) {
+    if (!std::isfinite(ring[i].x()) || !std::isfinite(ring[i].y())) return "non-finite vertex";
+    if (edge_vector(ring, i).squaredNorm() == 0.0) return "zero-length edge";
+  }
+  if (std::string crossing = first_crossing({ring}); !crossing.empty()) return crossing;
+  if (signed_area(ring) == 0.0) return "ring has zero area";
+  return {};
+}
+
+std::string polygon_problem(const PolygonWithHoles& polygon) {
+  if (std::string p = ring_problem(polygon.outer); !p.empty()) return "outer ring: " + p;
+  if (signed_area(polygon.outer) <= 0) return "outer ring is not counter-clockwise";
+  std::vector<Ring> rings{polygon.outer};
+  for (std::size_t h = 0; h < polygon.holes.size(); ++h) {
+    const Ring& hole = polygon.holes[h];
+    if (std::string p = ring_problem(hole); !p.empty()) return "hole " + std::to_string(h) + ": " + p;
+    if (signed_area(hole) >= 0) return "hole " + std::to_string(h) + " is not clockwise";
+    if (!point_in_ring(hole.front(), polygon.outer)) {
+      return "hole " + std::to_string(h) + " lies outside the outer ring";
+    }
+    rings.push_back(hole);
+  }
+  if (rings.size() > 1) {
+    if (std::string p = first_crossing(rings); !p.empty()) return p;
+    for (std::size_t h = 0; h < polygon.holes.size(); ++h) {
+      for (std::size_t k = 0; k < polygon.holes.size(); ++k) {
+        if (h != k && point_in_ring(polygon.holes[h].front(), polygon.holes[k])) {
+          return "hole " + std::to_string(h) + " lies inside hole " + std::to_string(k);
+        }
+      }
+    }
+  }
+  return {};
+}
+
+Ring remove_degenerate_vertices(const Ring& ring, double eps) {
+  Ring out = ring;
+  bool changed = true;
+  while (changed && out.size() >= 3) {
+    changed = false;
+    Ring kept;
+    kept.reserve(out.size());
+    const std::size_t n = out.size();
+    for (std::size_t i = 0; i < n; ++i) {
+      const Vec2& prev = kept.empty() ? out[(i + n - 1) % n] : kept.back();
+      const Vec2& cur = out[i];
+      const Vec2& next = out[(i + 1) % n];
+      if ((cur - prev).norm() < eps) { changed = true; continue; }
+      const Vec2 chord = next - prev;
+      const double length = chord.norm();
+      const bool collinear = length > eps && std::abs(cross(chord, cur - prev)) / length < eps &&
+                             (cur - prev).dot(next - cur) > 0;
+      if (collinear) { changed = true; continue; }
+      kept.push_back(cur);
+    }
+    out.swap(kept);
+  }
+  return out;
+}
+
+namespace {
+
+double distance_to_segment(const Vec2& p, const Vec2& a, const Vec2& b) {
+  const Vec2 ab = b - a;
+  const double len2 = ab.squaredNorm();
+  if (len2 == 0) return (p - a).norm();
+  const double t = std::clamp((p - a).dot(ab) / len2, 0.0, 1.0);
+  return (p - (a + t * ab)).norm();
+}
+
+// Marks the vertices to keep in the open chain pts[first..last] (inclusive).
+void simplify_chain(const std::vector<Vec2>& pts, std::size_t first, std::size_t last,
+                    double tolerance, std::vector<char>& keep) {
+  std::vector<std::pair<std::size_t, std::size_t>> stack{{first, last}};
+  while (!stack.empty()) {
+    auto [i, j] = stack.back();
+    stack.pop_back();
+    double worst = -1;
+    std::size_t index = i;
+    for (std::size_t k = i + 1; k < j; ++k) {
+      const double d = distance_to_segment(pts[k], pts[i], pts[j]);
+      if (d > worst) { worst = d; index = k; }
+    }
+    if (worst > tolerance) {
+      keep[index] = 1;
+      stack.push_back({i, index});
+      stack.push_back({index, j});
+    }
+  }
+}
+
+}  // namespace
+
+Ring douglas_peucker(const Ring& ring, double tolerance) {
+  const std::size_t n = ring.size();
+  if (n <= 3) return ring;
+  // Anchor on the vertex farthest from vertex 0, split the ring into two chains.
+  std::size_t far = 0;
+  double far_distance = -1;
+  for (std::size_t i = 1; i < n; ++i) {
+    const double d = (ring[i] - ring[0]).squaredNorm();
+    if (d > far_distance) { far_distance = d; far = i; }
+  }
+  std::vector<Vec2> pts(ring.begin(), ring.end());
+  pts.push_back(ring[0]);
+  std::vector<char> keep(pts.size(), 0);
+  keep[0] = keep[far] = 1;
+  simplify_chain(pts, 0, far, tolerance, keep);
+  simplify_chain(pts, far, n, tolerance, keep);
+  Ring out;
+  for (std::size_t i = 0; i < n; ++i) if (keep[i]) out.push_back(ring[i]);
+  if (out.size() < 3) {  // keep a triangle at least: add the vertex farthest from the chord
+    std::size_t best = 0;
+    double best_distance = -1;
+    for (std::size_t i = 0; i < n; ++i) {
+      const double d = distance_to_segment(ring[i], ring[0], ring[far]);
+      if (d > best_distance && i != 0 && i != far) { best_distance = d; best = i; }
+    }
+    out = {ring[0]};
+    if (best < far) { out.push_back(ring[best]); out.push_back(ring[far]); }
+    else { out.push_back(ring[far]); out.push_back(ring[best]); }
+  }
+  return out;
+}
+
+}  // namespace lodforge

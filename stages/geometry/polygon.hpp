@@ -1,0 +1,32 @@
+// Polygon measures, validity checks and Douglas–Peucker simplification.
+#pragma once
+#include <string>
+
+#include "geometry/types.hpp"
+
+namespace lodforge {
+
+double signed_area(const Ring& ring);  // > 0 for counter-clockwise
+double area(const PolygonWithHoles& polygon);
+double perimeter(const Ring& ring);
+bool point_in_ring(const Vec2& p, const Ring& ring);  // even-odd rule, boundary undefined
+
+// True when segments [a,b] and [c,d] share any point.
+bool segments_intersect(const Vec2& a, const Vec2& b, const Vec2& c, const Vec2& d);
+
+// Empty string when the ring is simple (no repeated vertex, no self-intersection, no zero-length
+// edge, at least 3 vertices, non-zero area); otherwise the reason.
+std::string ring_problem(const Ring& ring);
+
+// Empty string when the polygon is valid in the OGC sense as we write it: simple rings, outer
+// counter-clockwise, holes clockwise, inside the outer ring and pairwise disjoint.
+std::string polygon_problem(const PolygonWithHoles& polygon);
+
+// Removes consecutive duplicates (closer than eps) and vertices whose two edges are collinear
+// (deviation below eps from the line through their neighbours).
+Ring remove_degenerate_vertices(const Ring& ring, double eps);
+
+// Douglas–Peucker on a closed ring; keeps the orientation. tolerance in map units.
+Ring douglas_peucker(const Ring& ring, double tolerance);
+
+}  // namespace lodforge

@@ -1,0 +1,33 @@
+// Plain geometry types shared by all stages. Coordinates are map metres.
+#pragma once
+#include <Eigen/Core>
+#include <vector>
+
+namespace lodforge {
+
+using Vec2 = Eigen::Vector2d;
+
+// A closed ring: the closing edge from back() to front() is implied.
+// Outer rings run counter-clockwise, holes clockwise, so the polygon's interior is always on
+// the left of every edge and the outward normal of edge t is (t.y, -t.x).
+using Ring = std::vector<Vec2>;
+
+struct PolygonWithHoles {
+  Ring outer;
+  std::vector<Ring> holes;
+};
+
+// Edge i of a ring goes from ring[i] to ring[(i+1) % size].
+inline Vec2 edge_vector(const Ring& ring, std::size_t i) {
+  return ring[(i + 1) % ring.size()] - ring[i];
+}
+
+// Outward unit normal of a direction vector, for rings with the interior on the left.
+inline Vec2 outward_normal(const Vec2& t) { return Vec2(t.y(), -t.x()).normalized(); }
+
+// The tangent direction whose outward normal is n (inverse of outward_normal).
+inline Vec2 tangent_of_normal(const Vec2& n) { return Vec2(-n.y(), n.x()); }
+
+inline double cross(const Vec2& a, const Vec2& b) { return a.x() * b.y() - a.y() * b.x(); }
+
+}  // namespace lodforge

@@ -1,0 +1,161 @@
+#include "labeling/mrf.hpp"
+
+#include <cmath>
+#include <maxflow.h>
+#include <numeric>
+
+namespace lodforge {
+
+namespace {
+
+using Graph = maxflow::Graph_DDD;
+
+double label_cost(const LabelingInput& in, std::size_t l, const MrfOptions& o) {
+  const double total = std::accumulate(in.support.begin(), in.support.end(), 0.0);
+  const double h = total > 0 ? in.support[l] / total : 0.0;
+  return o.kappa2 * (1.0 - h) * (1.0 - h);
+}
+
+double data_term(const LabelingInput& in, std::size_t r, std::size_t i, int l, const MrfOptions& o) {
+  return in.lengths[r][i] / o.unit_length_m * (in.normals[r][i] - in.directions[l]).norm();
+}
+
+// Weight of the smoothness term between edge i and its successor (eq. 6, read as intended: the
+// more alike the two normals, the dearer a label change; the printed sqrt(2) - exp(...) rises
+// with the difference, the opposite of what the text says).
+double smooth_weight(const LabelingInput& in, std::size_t r, std::size_t i, const MrfOptions& o) {
+  const std::size_t n = in.normals[r].size();
+  const std::size_t j = (i + 1) % n;
+  const double diff = (in.normals[r][i] - in.normals[r][j]).norm();
+  const double length = 0.5 * (in.lengths[r][i] + in.lengths[r][j]) / o.unit_length_m;
+  return o.kappa1 * length * std::exp(-diff / (2.0 * o.sigma * o.sigma));
+}
+
+double distance(const LabelingInput& in, int a, int b) {
+  return (in.directions[a] - in.directions[b]).norm();
+}
+
+// Adds E(x) with x = 0 (source side, keep) and x = 1 (sink side, switch to alpha).
+void add_unary(Graph& g, int node, double e0, double e1) { g.add_tweights(node, e1, e0); }
+
+// Adds the pairwise E(x_p, x_q) table; requires e00 + e11 <= e01 + e10 (metric labels).
+void add_pairwise(Graph& g, int p, int q, double e00, double e01, double e10, double e11) {
+  add_unary(g, p, 0.0, e10 - e00);
+  add_unary(g, q, 0.0, e11 - e10);
+  const double c = e01 + e10 - e00 - e11;
+  if (c > 0) g.add_edge(p, q, c, 0.0);  // paid when p keeps and q switches
+  // the constant e00 does not change the minimizer
+}
+
+EdgeLabels expand(const LabelingInput& in, const EdgeLabels& labels, int alpha, const MrfOptions& o) {
+  std::vector<int> offset(in.normals.size() + 1, 0);
+  for (std::size_t r = 0; r < in.normals.size(); ++r) offset[r + 1] = offset[r] + int(in.normals[r].size());
+  const int n = offset.back();
+  const int labels_count = int(in.directions.size());
+  Graph g(n + labels_count + 1, 3 * n);
+  g.add_node(n);
+  for (std::size_t r = 0; r < in.normals.size(); ++r) {
+    const std::size_t m = in.normals[r].size();
+    for (std::size_t i = 0; i < m; ++i) {
+      const int p = offset[r] + int(i);
+      add_unary(g, p, data_term(in, r, i, labels[r][i], o), data_term(in, r, i, alpha, o));
+      if (m < 2) continue;
+      const std::size_t j = (i + 1) % m;
+      const int q = offset[r] + int(j);
+      const double w = smooth_weight(in, r, i, o);
+      const int a = labels[r][i], b = labels[r][j];
+      add_pairwise(g, p, q, w * distance(in, a, b), w * distance(in, a, alpha),
+                   w * distance(in, alpha, b), 0.0);
+    }
+  }
+  // Label costs (Delong et al. 2012, §3): one auxiliary node per label that may vanish or appear.
+  std::vector<std::vector<int>> members(labels_count);
+  for (std::size_t r = 0; r < labels.size(); ++r)
+    for (std::size_t i = 0; i < labels[r].size(); ++i) members[labels[r][i]].push_back(offset[r] + int(i));
+  for (int l = 0; l < labels_count; ++l) {
+    const double h = label_cost(in, l, o);
+    if (h <= 0) continue;
+    if (l != alpha && !members[l].empty()) {
+      // h * [some member keeps l] = h - h * prod(x_p): aux y = 1 only if all switch.
+      const int y = g.add_node();
+      add_unary(g, y, 0.0, -h);
+      for (int p : members[l]) g.add_edge(p, y, h, 0.0);  // y on sink while p on source costs h
+    } else if (l == alpha && members[l].empty()) {
+      // h * [some node switches to alpha] = h - h * prod(1 - x_p): aux z = 0 only if none does.
+      const int z = g.add_node();
+      add_unary(g, z, -h, 0.0);
+      for (int p = 0; p < n; ++p) g.add_edge(z, p, h, 0.0);  // z on source while p on sink costs h
+    }
+  }
+  g.maxflow();
+  EdgeLabels result = labels;
+  for (std::size_t r = 0; r < labels.size(); ++r)
+    for (std::size_t i = 0; i < labels[r].size(); ++i)
+      if (g.what_segment(offset[r] + int(i)) == Graph::SINK) result[r][i] = alpha;
+  return result;
+}
+
+}  // namespace
+
+double labeling_energy(const LabelingInput& in, const EdgeLabels& labels, const MrfOptions& o) {
+  double e = 0;
+  std::vector<char> used(in.directions.size(), 0);
+  for (std::size_t r = 0; r < labels.size(); ++r) {
+    const std::size_t m = labels[r].size();
+    for (std::size_t i = 0; i < m; ++i) {
+      e += data_term(in, r, i, labels[r][i], o);
+      used[labels[r][i]] = 1;
+      if (m >= 2) e += smooth_weight(in, r, i, o) * distance(in, labels[r][i], labels[r][(i + 1) % m]);
+    }
+  }
+  for (std::size_t l = 0; l < used.size(); ++l) if (used[l]) e += label_cost(in, l, o);
+  return e;
+}
+
+EdgeLabels label_edges(const LabelingInput& in, const MrfOptions& o) {
+  EdgeLabels labels(in.normals.size());
+  for (std::size_t r = 0; r < in.normals.size(); ++r) {
+    labels[r].resize(in.normals[r].size());
+    for (std::size_t i = 0; i < in.normals[r].size(); ++i) {
+      int best = 0;
+      for (std::size_t l = 1; l < in.directions.size(); ++l)
+        if (in.normals[r][i].dot(in.directions[l]) > in.normals[r][i].dot(in.directions[best])) best = int(l);
+      labels[r][i] = best;
+    }
+  }
+  if (in.directions.size() < 2) return labels;
+  double energy = labeling_energy(in, labels, o);
+  for (int cycle = 0; cycle < o.max_cycles; ++cycle) {
+    bool improved = false;
+    for (int alpha = 0; alpha < int(in.directions.size()); ++alpha) {
+      EdgeLabels candidate = expand(in, labels, alpha, o);
+      const double e = labeling_energy(in, candidate, o);
+      if (e < energy - 1e-9 * std::max(1.0, std::abs(energy))) {
+        energy = e;
+        labels.swap(candidate);
+        improved = true;
+      }
+    }
+    if (!improved) break;
+  }
+  return labels;
+}
+
+std::vector<std::pair<int, int>> label_runs(const std::vector<int>& labels) {
+  const int n = int(labels.size());
+  std::vector<std::pair<int, int>> runs;
+  if (n == 0) return runs;
+  int start = 0;
+  while (start < n && labels[start] == labels[(start + n - 1) % n]) ++start;
+  if (start == n) return {{0, n}};
+  for (int k = 0; k < n;) {
+    const int first = (start + k) % n;
+    int count = 1;
+    while (k + count < n && labels[(start + k + count) % n] == labels[first]) ++count;
+    runs.push_back({first, count});
+    k += count;
+  }
+  return runs;
+}
+
+}  // namespace lodforge

@@ -1,0 +1,68 @@
+#include "normals/smoothing.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+namespace lodforge {
+
+std::vector<Vec2> edge_normals(const Ring& ring) {
+  std::vector<Vec2> normals(ring.size());
+  for (std::size_t i = 0; i < ring.size(); ++i) normals[i] = outward_normal(edge_vector(ring, i));
+  return normals;
+}
+
+namespace {
+
+double angle_deg(const Vec2& a, const Vec2& b) {
+  return std::acos(std::clamp(a.dot(b), -1.0, 1.0)) * 180.0 / M_PI;
+}
+
+}  // namespace
+
+std::vector<Vec2> smooth_normals(const Ring& ring, double pixel_size, const SmoothingOptions& o) {
+  const std::size_t n = ring.size();
+  std::vector<Vec2> normals = edge_normals(ring);
+  if (n < 3) return normals;
+  // Arc length position of every edge midpoint.
+  std::vector<double> mid(n);
+  double s = 0;
+  for (std::size_t i = 0; i < n; ++i) {
+    const double len = edge_vector(ring, i).norm();
+    mid[i] = s + 0.5 * len;
+    s += len;
+  }
+  const double total = s;
+  const double floor_m = o.min_neighbourhood_px * pixel_size;
+  const double scale = std::max(1.0, floor_m / std::max(o.neighbourhood_m, 1e-12));
+  const double threshold = o.neighbourhood_m * scale;
+  const double sigma_d2 = std::pow(o.sigma_d_m * scale, 2);
+  const double sigma_a2 = o.sigma_a_deg * o.sigma_a_deg;
+  auto arc = [&](std::size_t i, std::size_t k) {
+    const double d = std::abs(mid[i] - mid[k]);
+    return std::min(d, total - d);
+  };
+  std::vector<Vec2> next(n);
+  for (int pass = 0; pass < o.passes; ++pass) {
+    for (std::size_t i = 0; i < n; ++i) {
+      Vec2 sum = normals[i];  // w(i, i) = 1
+      auto add = [&](std::size_t k) {
+        const double d = arc(i, k);
+        if (d >= threshold) return false;
+        const double w = std::exp(-d / sigma_d2 - angle_deg(normals[i], normals[k]) / sigma_a2);
+        sum += w * normals[k];
+        return true;
+      };
+      // Walk both ways along the ring until the neighbourhood ends (or the ring is exhausted).
+      std::size_t steps = 0;
+      for (std::size_t k = (i + 1) % n; k != i && steps < n / 2 && add(k); k = (k + 1) % n) ++steps;
+      steps = 0;
+      for (std::size_t k = (i + n - 1) % n; k != i && steps < (n - 1) / 2 && add(k); k = (k + n - 1) % n) ++steps;
+      const double len = sum.norm();
+      next[i] = len > 1e-12 ? Vec2(sum / len) : normals[i];
+    }
+    normals.swap(next);
+  }
+  return normals;
+}
+
+}  // namespace lodforge

@@ -1,0 +1,166 @@
+#include "pipeline/building.hpp"
+
+#include <chrono>
+#include <cmath>
+#include <stdexcept>
+
+#include "corners/corners.hpp"
+#include "deformation/deform.hpp"
+#include "directions/ransac.hpp"
+#include "directions/refine.hpp"
+#include "geometry/polygon.hpp"
+#include "normals/smoothing.hpp"
+#include "triangulation/triangulate.hpp"
+
+namespace lodforge {
+
+namespace {
+
+// A stage failure: which stage and why.
+struct StageError : std::runtime_error {
+  StageError(std::string stage_name, const std::string& why) : std::runtime_error(why), stage(std::move(stage_name)) {}
+  std::string stage;
+};
+
+using Clock = std::chrono::steady_clock;
+
+std::vector<Ring> translate(const std::vector<Ring>& rings, const Vec2& offset, double scale) {
+  std::vector<Ring> out = rings;
+  for (Ring& ring : out) for (Vec2& p : ring) p = (p - offset) / scale;
+  return out;
+}
+
+// The deformed positions of every ring vertex (pixel units in, pixel units out).
+std::vector<Ring> deform_rings(const std::vector<Ring>& rings_px, const EdgeLabels& labels,
+                               const std::vector<Vec2>& directions, const CoreOptions& o,
+                               const std::function<bool()>& over_budget, BuildingResult& result) {
+  TriangleMesh mesh;
+  try {
+    mesh = triangulate(rings_px, o.triangulation.size_bound_px, o.triangulation);
+  } catch (const std::exception& e) {
+    throw StageError("triangulation", e.what());
+  }
+  std::vector<Vec2> targets;
+  for (const BoundaryEdge& b : mesh.boundary) targets.push_back(directions[labels[b.ring][b.edge]]);
+  const DeformationResult d = deform(mesh, targets, o.deformation, over_budget);
+  if (d.stopped) throw StageError("deformation", "time budget of " + std::to_string(o.budget.max_seconds) + " s exceeded");
+  result.alignment_rms_deg = d.rms_deg;
+  result.alignment_max_deg = d.max_deg;
+  result.deformation_iterations = d.iterations;
+  std::vector<Ring> out = rings_px;
+  for (std::size_t r = 0; r < out.size(); ++r)
+    for (std::size_t i = 0; i < out[r].size(); ++i) out[r][i] = d.vertices[mesh.ring_vertex[r][i]];
+  return out;
+}
+
+PolygonWithHoles corner_polygon(const std::vector<Ring>& rings_px, const EdgeLabels& labels,
+                                const std::vector<Vec2>& directions, const CornerOptions& options, const Vec2& origin,
+                                double pixel_size) {
+  PolygonWithHoles footprint;
+  for (std::size_t r = 0; r < rings_px.size(); ++r) {
+    std::string problem;
+    Ring ring = extract_corners(rings_px[r], labels[r], directions, 1.0, options, &problem);
+    if (ring.empty()) throw StageError("corners", (r == 0 ? "outer ring: " : "hole " + std::to_string(r - 1) + ": ") + problem);
+    for (Vec2& p : ring) p = origin + p * pixel_size;
+    if (r == 0) footprint.outer = std::move(ring);
+    else footprint.holes.push_back(std::move(ring));
+  }
+  return footprint;
+}
+
+void run_chain(const std::vector<Ring>& rings, double pixel_size, const CoreOptions& o, BuildingResult& result,
+               const std::function<bool()>& over_budget) {
+  std::size_t edges = 0;
+  for (const Ring& r : rings) edges += r.size();
+  if (rings.empty() || rings[0].size() < 4) throw StageError("input", "contour has fewer than 4 edges");
+  if (edges > std::size_t(o.budget.max_edges))
+    throw StageError("input", "contour has " + std::to_string(edges) + " edges, more than budget.max_edges = " +
+                                  std::to_string(o.budget.max_edges));
+  LabelingInput input;
+  std::vector<Vec2> all_normals;
+  std::vector<double> all_lengths;
+  for (const Ring& ring : rings) {
+    input.normals.push_back(smooth_normals(ring, pixel_size, o.smoothing));
+    input.lengths.emplace_back();
+    for (std::size_t i = 0; i < ring.size(); ++i) input.lengths.back().push_back(edge_vector(ring, i).norm());
+    all_normals.insert(all_normals.end(), input.normals.back().begin(), input.normals.back().end());
+    all_lengths.insert(all_lengths.end(), input.lengths.back().begin(), input.lengths.back().end());
+  }
+  if (over_budget()) throw StageError("smoothing", "time budget exceeded");
+  for (const DominantDirection& d : detect_directions(all_normals, all_lengths, o.directions)) {
+    input.directions.push_back(d.normal);
+    input.support.push_back(d.support);
+  }
+  if (input.directions.size() < 2)
+    throw StageError("directions", "found " + std::to_string(input.directions.size()) + " dominant direction(s), need 2");
+  // Label, re-estimate the directions from the labeled runs, label again with them.
+  EdgeLabels labels = label_edges(input, o.labeling);
+  refine_directions(rings, labels, input.directions, pixel_size, o.refinement);
+  input.support.assign(input.directions.size(), 0.0);
+  for (std::size_t r = 0; r < labels.size(); ++r)
+    for (std::size_t i = 0; i < labels[r].size(); ++i) input.support[labels[r][i]] += input.lengths[r][i];
+  labels = label_edges(input, o.labeling);
+  refine_directions(rings, labels, input.directions, pixel_size, o.refinement);
+  if (over_budget()) throw StageError("labeling", "time budget exceeded");
+  result.directions = input.directions;
+  result.labels = labels;
+
+  // Corner lines are fitted in a local frame (pixels) for numerical range.
+  const Vec2 origin = rings[0][0];
+  const std::vector<Ring> rings_px = translate(rings, origin, pixel_size);
+  std::vector<Ring> fit_rings = rings_px;
+  if (o.corners.route == "deformed" && edges <= std::size_t(o.budget.max_deformation_edges))
+    fit_rings = deform_rings(rings_px, labels, input.directions, o, over_budget, result);
+  // Corners, validated; an invalid polygon is retried with coarser run absorption (short runs
+  // are where crossings come from) before the building is given up to the fallback.
+  CornerOptions corner_options = o.corners;
+  corner_options.max_corner_shift_m = o.corners.max_corner_shift_m / pixel_size;
+  std::string problem;
+  PolygonWithHoles footprint;
+  for (int attempt = 0; attempt <= o.corners.repair_attempts; ++attempt) {
+    footprint = corner_polygon(fit_rings, labels, input.directions, corner_options, origin, pixel_size);
+    problem = polygon_problem(footprint);
+    if (problem.empty()) break;
+    corner_options.min_run_px = std::max(2.0, 2 * corner_options.min_run_px);
+  }
+  if (!problem.empty()) throw StageError("validation", problem);
+  result.footprint = std::move(footprint);
+}
+
+}  // namespace
+
+PolygonWithHoles fallback_footprint(const std::vector<Ring>& rings, double tolerance) {
+  PolygonWithHoles simplified, raw;
+  for (std::size_t r = 0; r < rings.size(); ++r) {
+    Ring ring = remove_degenerate_vertices(douglas_peucker(rings[r], tolerance), 1e-9);
+    Ring plain = remove_degenerate_vertices(rings[r], 1e-9);
+    if (r == 0) { simplified.outer = std::move(ring); raw.outer = std::move(plain); }
+    else { simplified.holes.push_back(std::move(ring)); raw.holes.push_back(std::move(plain)); }
+  }
+  if (polygon_problem(simplified).empty()) return simplified;
+  return raw;
+}
+
+BuildingResult regularize_building(const std::vector<Ring>& rings, double pixel_size, const CoreOptions& o) {
+  BuildingResult result;
+  const auto start = Clock::now();
+  const auto over_budget = [&] {
+    return std::chrono::duration<double>(Clock::now() - start).count() > o.budget.max_seconds;
+  };
+  try {
+    run_chain(rings, pixel_size, o, result, over_budget);
+  } catch (const StageError& e) {
+    result.ok = false;
+    result.failed_stage = e.stage;
+    result.reason = e.what();
+  } catch (const std::exception& e) {
+    result.ok = false;
+    result.failed_stage = "internal";
+    result.reason = e.what();
+  }
+  if (!result.ok) result.footprint = fallback_footprint(rings, o.fallback.tolerance_m);
+  result.seconds = std::chrono::duration<double>(Clock::now() - start).count();
+  return result;
+}
+
+}  // namespace lodforge

@@ -1,0 +1,35 @@
+// The per-building chain: contour rings in, LOD0 polygon with a status out. Pure computation:
+// no I/O, no threads. Every failure is caught here and becomes a status with the fallback.
+#pragma once
+#include <string>
+#include <vector>
+
+#include "geometry/types.hpp"
+#include "labeling/mrf.hpp"
+#include "pipeline/core_options.hpp"
+
+namespace lodforge {
+
+struct BuildingResult {
+  PolygonWithHoles footprint;  // the LOD0 polygon (always valid)
+  bool ok = true;              // false: footprint is the fallback
+  std::string failed_stage;    // when !ok: which stage failed
+  std::string reason;          // when !ok: why
+  // Diagnostics.
+  std::vector<Vec2> directions;  // final dominant directions (unit normals)
+  EdgeLabels labels;             // per ring, per contour edge
+  double alignment_rms_deg = -1, alignment_max_deg = -1;  // after deformation, if run
+  int deformation_iterations = 0;
+  double seconds = 0;
+
+  std::string status() const { return ok ? "ok" : "fallback"; }
+};
+
+// rings: [0] outer counter-clockwise, then clockwise holes, in map metres (from
+// extract_contours). pixel_size: the raster's ground sampling distance in metres.
+BuildingResult regularize_building(const std::vector<Ring>& rings, double pixel_size, const CoreOptions& options);
+
+// The fallback footprint: Douglas–Peucker of the raw rings, or the raw rings if that is invalid.
+PolygonWithHoles fallback_footprint(const std::vector<Ring>& rings, double tolerance);
+
+}  // namespace lodforge

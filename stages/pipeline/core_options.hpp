@@ -1,0 +1,65 @@
+// Every option of the per-building core, declared once (see common/option.hpp).
+#pragma once
+#include "common/option.hpp"
+#include "contour/contour.hpp"
+#include "corners/corners.hpp"
+#include "deformation/deform.hpp"
+#include "directions/ransac.hpp"
+#include "directions/refine.hpp"
+#include "labeling/mrf.hpp"
+#include "normals/smoothing.hpp"
+#include "triangulation/triangulate.hpp"
+
+namespace lodforge {
+
+struct FallbackOptions {
+  double tolerance_m = 0.5;  // Douglas–Peucker tolerance of the fallback footprint
+
+  template <class V>
+  void visit(V& v) {
+    v("tolerance_m", tolerance_m, "Douglas-Peucker tolerance of the fallback footprint (m)", Check::at_least(0));
+  }
+};
+
+// Bounds on the work spent on one building, so a pathological contour never hangs a run.
+// Edge and iteration limits are deterministic; the time limit is a safety net (a building that
+// hits it is reported as failed, with the fallback footprint).
+struct BudgetOptions {
+  int max_edges = 200000;             // contours with more edges get the fallback
+  int max_deformation_edges = 20000;  // larger contours skip the deformation route
+  double max_seconds = 60.0;          // per building
+
+  template <class V>
+  void visit(V& v) {
+    v("max_edges", max_edges, "contours with more boundary edges get the fallback footprint", Check::at_least(3));
+    v("max_deformation_edges", max_deformation_edges, "contours with more edges are not deformed (they take the 'original' route)", Check::at_least(3));
+    v("max_seconds", max_seconds, "time limit per building (s); a building over it gets the fallback", Check::above(0));
+  }
+};
+
+struct CoreOptions {
+  SmoothingOptions smoothing;
+  RansacOptions directions;
+  MrfOptions labeling;
+  RefineOptions refinement;
+  TriangulationOptions triangulation;
+  DeformationOptions deformation;
+  CornerOptions corners;
+  FallbackOptions fallback;
+  BudgetOptions budget;
+
+  template <class V>
+  void visit(V& v) {
+    v.section("smoothing", smoothing);
+    v.section("directions", directions);
+    v.section("labeling", labeling);
+    v.section("refinement", refinement);
+    v.section("triangulation", triangulation);
+    v.section("deformation", deformation);
+    v.section("corners", corners);
+    v.section("fallback", fallback);
+    v.section("budget", budget);
+  }
+};
+
+}  // namespace lodforge

@@ -1,0 +1,126 @@
+#include <gtest/gtest.h>
+
+#include <array>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <gdal_priv.h>
+#include <ogrsf_frmts.h>
+
+#include "io/raster_writer.hpp"
+
+namespace fs = std::filesystem;
+
+namespace lodforge {
+namespace {
+
+struct CommandRun {
+  int code;
+  std::string output;  // stdout and stderr
+};
+
+CommandRun lodforge(const std::string& arguments) {
+  const std::string command = std::string(LODFORGE_BINARY) + " " + arguments + " 2>&1";
+  CommandRun run{-1, {}};
+  FILE* pipe = popen(command.c_str(), "r");
+  std::array<char, 4096> buffer;
+  while (std::size_t n = fread(buffer.data(), 1, buffer.size(), pipe)) run.output.append(buffer.data(), n);
+  const int status = pclose(pipe);
+  run.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  return run;
+}
+
+class Cli : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    dir = fs::temp_directory_path() / ("lodforge_cli_" + std::to_string(::getpid()) + "_" +
+                                       ::testing::UnitTest::GetInstance()->current_test_info()->name());
+    fs::remove_all(dir);
+    fs::create_directories(dir);
+  }
+  void TearDown() override { fs::remove_all(dir); }
+  std::string path(const std::string& name) const { return (dir / name).string(); }
+  fs::path dir;
+};
+
+TEST_F(Cli, MissingFileIsNamed) {
+  const CommandRun r = lodforge("regularize --mask " + path("nope.tif") + " --out " + path("out.gpkg"));
+  EXPECT_EQ(r.code, 1);
+  EXPECT_NE(r.output.find("nope.tif': file not found"), std::string::npos) << r.output;
+  EXPECT_FALSE(fs::exists(path("out.gpkg")));
+}
+
+TEST_F(Cli, NotARaster) {
+  std::ofstream(path("text.tif")) << "hello";
+  const CommandRun r = lodforge("regularize --mask " + path("text.tif") + " --out " + path("out.gpkg"));
+  EXPECT_EQ(r.code, 1);
+  EXPECT_NE(r.output.find("text.tif': not a raster GDAL can read"), std::string::npos) << r.output;
+  EXPECT_FALSE(fs::exists(path("out.gpkg")));
+}
+
+TEST_F(Cli, NoGeoreference) {
+  GDALAllRegister();
+  GDALDataset* d = GetGDALDriverManager()->GetDriverByName("GTiff")->Create(path("plain.tif").c_str(), 8, 8, 1, GDT_Byte, nullptr);
+  GDALClose(d);
+  const CommandRun r = lodforge("regularize --mask " + path("plain.tif") + " --out " + path("out.gpkg"));
+  EXPECT_EQ(r.code, 1);
+  EXPECT_NE(r.output.find("plain.tif': has no georeference"), std::string::npos) << r.output;
+  EXPECT_FALSE(fs::exists(path("out.gpkg")));
+}
+
+TEST_F(Cli, EmptyMaskAndWrongBands) {
+  RasterMeta meta;
+  meta.transform.c = {1000, 0.5, 0, 2000, 0, -0.5};
+  write_geotiff(path("empty.tif"), {cv::Mat::zeros(20, 20, CV_8U)}, meta);
+  CommandRun r = lodforge("regularize --mask " + path("empty.tif") + " --out " + path("out.gpkg"));
+  EXPECT_EQ(r.code, 1);
+  EXPECT_NE(r.output.find("empty.tif': no building pixel (value 6)"), std::string::npos) << r.output;
+  r = lodforge("regularize --mask " + path("empty.tif") + " --building-rgb 0,0,255 --out " + path("out.gpkg"));
+  EXPECT_EQ(r.code, 1);
+  EXPECT_NE(r.output.find("needs an RGB raster with 3 bands"), std::string::npos) << r.output;
+  EXPECT_FALSE(fs::exists(path("out.gpkg")));
+}
+
+TEST_F(Cli, UnwritableOutputAndBadOptions) {
+  CommandRun r = lodforge("regularize --mask x.tif --out " + path("missing/out.gpkg"));
+  EXPECT_EQ(r.code, 1);
+  EXPECT_NE(r.output.find("does not exist"), std::string::npos) << r.output;
+  r = lodforge("regularize --mask x.tif --out " + path("out.gpkg") + " --set labeling.kappa2=-1 --set smoothing.bogus=1");
+  EXPECT_EQ(r.code, 1);
+  EXPECT_NE(r.output.find("labeling.kappa2: must be >= 0"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("smoothing.bogus: unknown option"), std::string::npos) << r.output;
+  r = lodforge("regularize --frobnicate");
+  EXPECT_EQ(r.code, 1);
+  EXPECT_NE(r.output.find("unknown argument '--frobnicate'"), std::string::npos) << r.output;
+}
+
+long feature_count(const std::string& file) {
+  GDALAllRegister();
+  GDALDataset* d = static_cast<GDALDataset*>(GDALOpenEx(file.c_str(), GDAL_OF_VECTOR, nullptr, nullptr, nullptr));
+  if (!d) return -1;
+  const long n = long(d->GetLayer(0)->GetFeatureCount());
+  GDALClose(d);
+  return n;
+}
+
+TEST_F(Cli, SynthThenRegularizeClassAndColourGiveTheSameBuildings) {
+  CommandRun r = lodforge("synth --out " + path("city") + " --size-m 150 --seed 3");
+  ASSERT_EQ(r.code, 0) << r.output;
+  r = lodforge("regularize --mask " + path("city/seg_class.tif") + " --out " + path("a.gpkg") + " --threads 2");
+  ASSERT_EQ(r.code, 0) << r.output;
+  r = lodforge("regularize --mask " + path("city/seg_isprs.tif") + " --building-rgb 0,0,255 --out " + path("b.gpkg"));
+  ASSERT_EQ(r.code, 0) << r.output;
+  const long a = feature_count(path("a.gpkg"));
+  EXPECT_GT(a, 5);
+  EXPECT_EQ(a, feature_count(path("b.gpkg")));
+  for (const auto& entry : fs::directory_iterator(dir)) EXPECT_EQ(entry.path().string().find(".partial"), std::string::npos);
+}
+
+TEST_F(Cli, OptionsPrintsDefaults) {
+  const CommandRun r = lodforge("options");
+  EXPECT_EQ(r.code, 0);
+  EXPECT_NE(r.output.find("kappa2: 10"), std::string::npos);
+}
+
+}  // namespace
+}  // namespace lodforge

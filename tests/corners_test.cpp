@@ -1,0 +1,64 @@
+#include <gtest/gtest.h>
+
+#include "corners/corners.hpp"
+#include "geometry/polygon.hpp"
+
+namespace lodforge {
+namespace {
+
+// A ring along the boundary of an axis-aligned rectangle with unit edges, labeled by side.
+void rectangle_contour(int w, int h, Ring& ring, std::vector<int>& labels) {
+  for (int x = 0; x < w; ++x) { ring.emplace_back(x, 0); labels.push_back(0); }
+  for (int y = 0; y < h; ++y) { ring.emplace_back(w, y); labels.push_back(1); }
+  for (int x = w; x > 0; --x) { ring.emplace_back(x, h); labels.push_back(2); }
+  for (int y = h; y > 0; --y) { ring.emplace_back(0, y); labels.push_back(3); }
+}
+
+const std::vector<Vec2> axis_normals = {{0, -1}, {1, 0}, {0, 1}, {-1, 0}};
+
+TEST(Corners, RectangleGivesItsFourCorners) {
+  Ring ring;
+  std::vector<int> labels;
+  rectangle_contour(10, 6, ring, labels);
+  std::string problem;
+  const Ring out = extract_corners(ring, labels, axis_normals, 1.0, CornerOptions{}, &problem);
+  ASSERT_EQ(out.size(), 4u) << problem;
+  EXPECT_NEAR(signed_area(out), 60.0, 1e-9);
+}
+
+TEST(Corners, ShortRunsAreAbsorbed) {
+  Ring ring;
+  std::vector<int> labels;
+  rectangle_contour(10, 6, ring, labels);
+  labels[4] = 1;  // a one-edge outlier in the bottom wall
+  absorb_short_runs(ring, labels, 2.0);
+  EXPECT_EQ(labels[4], 0);
+}
+
+TEST(Corners, ParallelNeighboursGetAStep) {
+  // Two bottom walls at y = 0 and y = 1 with different labels of the same direction.
+  Ring ring = {{0, 0}, {5, 0}, {5, 1}, {10, 1}, {10, 6}, {0, 6}};
+  std::vector<int> labels = {0, 4, 4, 1, 2, 3};
+  std::vector<Vec2> normals = axis_normals;
+  normals.push_back({0, -1});
+  CornerOptions o;
+  o.min_run_px = 0;
+  std::string problem;
+  const Ring out = extract_corners(ring, labels, normals, 1.0, o, &problem);
+  ASSERT_FALSE(out.empty()) << problem;
+  EXPECT_EQ(ring_problem(out), "");
+  // The riser was labeled like the upper wall: the two parallel walls are joined by a step at
+  // the junction, keeping the notch (true area 55) instead of bridging it.
+  EXPECT_EQ(out.size(), 6u);
+  EXPECT_NEAR(signed_area(out), 55.0, 0.5);
+}
+
+TEST(Corners, TooFewRunsIsAProblem) {
+  Ring ring = {{0, 0}, {1, 0}, {1, 1}, {0, 1}};
+  std::string problem;
+  EXPECT_TRUE(extract_corners(ring, {0, 0, 0, 0}, axis_normals, 1.0, CornerOptions{}, &problem).empty());
+  EXPECT_NE(problem.find("straight runs"), std::string::npos);
+}
+
+}  // namespace
+}  // namespace lodforge

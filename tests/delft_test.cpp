@@ -1,0 +1,50 @@
+// End to end on real data: Delft, AHN3 classification == 6 as the segmentation.
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <opencv2/core.hpp>
+
+#include "geometry/polygon.hpp"
+#include "io/raster.hpp"
+#include "pipeline/building.hpp"
+#include "support/shapes.hpp"
+
+namespace lodforge {
+namespace {
+
+std::string delft(const std::string& name) { return test::shared_data() + "/delft-ahn3-bgt/derived/" + name; }
+
+class Delft : public ::testing::TestWithParam<const char*> {};
+
+TEST_P(Delft, EveryBuildingGetsAValidPolygonAndAStatus) {
+  ASSERT_TRUE(std::filesystem::exists(delft("top_class_50cm.tif"))) << "shared data missing at " << test::shared_data();
+  const MaskRaster raster = read_building_mask(delft("top_class_50cm.tif"), BuildingSelector{});
+  EXPECT_NEAR(raster.transform.pixel_size(), 0.5, 1e-12);
+  const ContourResult contours = extract_contours(raster.mask, raster.transform, ContourOptions{});
+  ASSERT_GT(contours.buildings.size(), 30u);
+  CoreOptions options;
+  options.corners.route = GetParam();
+  int ok = 0;
+  for (const BuildingContour& b : contours.buildings) {
+    const BuildingResult r = regularize_building(b.rings, 0.5, options);
+    EXPECT_EQ(polygon_problem(r.footprint), "") << "building at row " << b.first_row << " col " << b.first_col;
+    EXPECT_GT(area(r.footprint), 0);
+    EXPECT_TRUE(r.ok || (!r.failed_stage.empty() && !r.reason.empty()));
+    ok += r.ok;
+  }
+  // Most buildings are regularized, not left to the fallback.
+  EXPECT_GE(ok, int(0.85 * contours.buildings.size())) << ok << " of " << contours.buildings.size();
+}
+
+INSTANTIATE_TEST_SUITE_P(Routes, Delft, ::testing::Values("original", "deformed"));
+
+TEST(DelftColours, IsprsColoursGiveTheSameMask) {
+  const MaskRaster classes = read_building_mask(delft("top_class_50cm.tif"), BuildingSelector{});
+  BuildingSelector blue;
+  blue.rgb = std::array<int, 3>{0, 0, 255};
+  const MaskRaster colours = read_building_mask(delft("top_class_isprs_colours_50cm.tif"), blue);
+  EXPECT_EQ(cv::norm(classes.mask, colours.mask, cv::NORM_L1), 0.0);
+}
+
+}  // namespace
+}  // namespace lodforge

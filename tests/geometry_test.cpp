@@ -1,0 +1,60 @@
+#include <gtest/gtest.h>
+
+#include "geometry/polygon.hpp"
+
+namespace lodforge {
+namespace {
+
+Ring square(double s = 1.0) { return {{0, 0}, {s, 0}, {s, s}, {0, s}}; }
+
+TEST(Geometry, SignedAreaFollowsOrientation) {
+  EXPECT_DOUBLE_EQ(signed_area(square(2)), 4.0);
+  Ring cw = square(2);
+  std::reverse(cw.begin(), cw.end());
+  EXPECT_DOUBLE_EQ(signed_area(cw), -4.0);
+}
+
+TEST(Geometry, RingProblemFindsSelfIntersection) {
+  EXPECT_EQ(ring_problem(square()), "");
+  const Ring bowtie = {{0, 0}, {1, 1}, {1, 0}, {0, 1}};
+  EXPECT_NE(ring_problem(bowtie).find("crosses itself"), std::string::npos);
+  const Ring repeated = {{0, 0}, {1, 0}, {1, 0}, {0, 1}};
+  EXPECT_EQ(ring_problem(repeated), "zero-length edge");
+  const Ring touching = {{0, 0}, {4, 0}, {4, 4}, {2, 0}, {0, 4}};  // vertex 3 touches edge 0
+  EXPECT_NE(ring_problem(touching), "");
+}
+
+TEST(Geometry, PolygonProblemChecksHoles) {
+  PolygonWithHoles p{square(10), {{{2, 2}, {2, 4}, {4, 4}, {4, 2}}}};
+  EXPECT_EQ(polygon_problem(p), "");
+  EXPECT_NEAR(area(p), 96.0, 1e-12);
+  PolygonWithHoles ccw_hole{square(10), {{{2, 2}, {4, 2}, {4, 4}, {2, 4}}}};
+  EXPECT_EQ(polygon_problem(ccw_hole), "hole 0 is not clockwise");
+  PolygonWithHoles outside{square(10), {{{12, 2}, {12, 4}, {14, 4}, {14, 2}}}};
+  EXPECT_EQ(polygon_problem(outside), "hole 0 lies outside the outer ring");
+  PolygonWithHoles crossing{square(10), {{{8, 2}, {8, 4}, {12, 4}, {12, 2}}}};
+  EXPECT_NE(polygon_problem(crossing), "");
+}
+
+TEST(Geometry, RemoveDegenerateVertices) {
+  const Ring ring = {{0, 0}, {1, 0}, {2, 0}, {2, 0}, {2, 2}, {0, 2}, {0, 1}};
+  const Ring clean = remove_degenerate_vertices(ring, 1e-9);
+  ASSERT_EQ(clean.size(), 4u);
+  EXPECT_DOUBLE_EQ(signed_area(clean), 4.0);
+}
+
+TEST(Geometry, DouglasPeuckerKeepsCornersWithinTolerance) {
+  Ring ring;
+  for (int i = 0; i < 10; ++i) ring.emplace_back(i, (i % 2) * 0.1);
+  for (int i = 0; i < 10; ++i) ring.emplace_back(10, i);
+  for (int i = 10; i > 0; --i) ring.emplace_back(i, 10);
+  for (int i = 10; i > 0; --i) ring.emplace_back(0, i);
+  const Ring simple = douglas_peucker(ring, 0.2);
+  EXPECT_EQ(simple.size(), 4u);
+  EXPECT_GT(signed_area(simple), 0);
+  EXPECT_EQ(ring_problem(simple), "");
+  EXPECT_GT(douglas_peucker(ring, 0.05).size(), 4u);
+}
+
+}  // namespace
+}  // namespace lodforge

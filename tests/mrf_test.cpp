@@ -1,0 +1,143 @@
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <functional>
+
+#include "directions/refine.hpp"
+#include "labeling/mrf.hpp"
+
+namespace lodforge {
+namespace {
+
+Vec2 unit(double deg) { return {std::cos(deg * M_PI / 180), std::sin(deg * M_PI / 180)}; }
+
+LabelingInput one_ring(const std::vector<double>& normal_deg, const std::vector<double>& direction_deg,
+                       const std::vector<double>& support) {
+  LabelingInput in;
+  in.normals.emplace_back();
+  for (double a : normal_deg) in.normals[0].push_back(unit(a));
+  in.lengths.emplace_back(normal_deg.size(), 0.1);
+  for (double a : direction_deg) in.directions.push_back(unit(a));
+  in.support = support;
+  return in;
+}
+
+double exhaustive_minimum(const LabelingInput& in, const MrfOptions& o) {
+  const int n = int(in.normals[0].size()), l = int(in.directions.size());
+  EdgeLabels labels{std::vector<int>(n, 0)};
+  double best = 1e300;
+  std::function<void(int)> recurse = [&](int i) {
+    if (i == n) { best = std::min(best, labeling_energy(in, labels, o)); return; }
+    for (int k = 0; k < l; ++k) { labels[0][i] = k; recurse(i + 1); }
+  };
+  recurse(0);
+  return best;
+}
+
+TEST(Mrf, ExpansionReachesTheExhaustiveMinimumOnSmallProblems) {
+  MrfOptions o;
+  const std::vector<std::vector<double>> cases = {
+      {0, 5, 40, 85, 90, 95, 180, 185, 270},
+      {0, 0, 45, 90, 90, 135, 180, 225},
+      {10, 20, 80, 100, 170, 190, 260, 280, 350},
+  };
+  for (const auto& normals : cases) {
+    const LabelingInput in = one_ring(normals, {0, 90, 180, 270, 45}, {30, 30, 30, 30, 2});
+    const EdgeLabels labels = label_edges(in, o);
+    const double found = labeling_energy(in, labels, o);
+    const double minimum = exhaustive_minimum(in, o);
+    EXPECT_LE(found, minimum * 1.02 + 1e-9);
+    EXPECT_GE(found, minimum - 1e-9);
+  }
+}
+
+TEST(Mrf, LabelCostRemovesARareDirection) {
+  // 40 edges facing 0°, one facing 30° with its own weak label.
+  std::vector<double> normals(40, 0.0);
+  normals[20] = 30.0;
+  LabelingInput in = one_ring(normals, {0, 30, 180}, {40, 1, 1});
+  MrfOptions o;
+  o.kappa1 = 0;  // isolate the label term
+  EdgeLabels labels = label_edges(in, o);
+  for (int x : labels[0]) EXPECT_EQ(x, 0);
+  o.kappa2 = 0;
+  labels = label_edges(in, o);
+  EXPECT_EQ(labels[0][20], 1);
+}
+
+TEST(Mrf, SmoothnessRelabelsAnIsolatedOutlier) {
+  std::vector<double> normals(30, 90.0);
+  normals[15] = 20.0;  // one noisy edge inside a wall, nearer to the 0° label
+  LabelingInput in = one_ring(normals, {90, 0}, {29, 29});
+  MrfOptions o;
+  o.kappa2 = 0;
+  o.kappa1 = 5;
+  const EdgeLabels labels = label_edges(in, o);
+  EXPECT_EQ(labels[0][15], 0);
+}
+
+TEST(Mrf, RunsAreCyclic) {
+  const auto runs = label_runs({1, 1, 0, 0, 0, 1});
+  ASSERT_EQ(runs.size(), 2u);
+  EXPECT_EQ(runs[0], std::make_pair(2, 3));
+  EXPECT_EQ(runs[1], std::make_pair(5, 3));
+  EXPECT_EQ(label_runs({2, 2, 2}).size(), 1u);
+}
+
+// A staircase rising 1 in 2 from (0,0), closed by three long axis-aligned edges.
+void staircase(Ring& ring, std::vector<int>& labels) {
+  Vec2 p(0, 0);
+  for (int k = 0; k < 60; ++k) {
+    ring.push_back(p);
+    p += (k % 3 == 2) ? Vec2(0, 1) : Vec2(1, 0);
+    labels.push_back(0);
+  }
+  ring.push_back(p);
+  labels.push_back(1);
+  ring.push_back(Vec2(p.x(), 60));
+  labels.push_back(2);
+  ring.push_back(Vec2(0, 60));
+  labels.push_back(3);
+}
+
+TEST(Refine, StaircaseDirectionIsFittedExactly) {
+  Ring ring;
+  std::vector<int> labels;
+  staircase(ring, labels);
+  EdgeLabels all{labels};
+  std::vector<Vec2> directions = {unit(-90), unit(0), unit(90), unit(180)};
+  RefineOptions o;
+  o.snap_deg = 0;
+  refine_directions({ring}, all, directions, 1.0, o);
+  ASSERT_EQ(directions.size(), 4u);
+  const double expected = std::atan2(1.0, 2.0) * 180 / M_PI - 90;  // the wall's outward normal
+  EXPECT_NEAR(std::atan2(directions[0].y(), directions[0].x()) * 180 / M_PI, expected, 0.5);
+}
+
+TEST(Refine, NearPerpendicularDirectionsAreSnappedOthersStayFree) {
+  // A rectangle rotated 10° whose right wall leans 3° more, plus a 45° cut direction.
+  const double a = 10;
+  Ring ring;
+  std::vector<int> labels;
+  auto wall = [&](Vec2 from, double deg, int n, int label) {
+    for (int k = 0; k < n; ++k) { ring.push_back(from + k * unit(deg)); labels.push_back(label); }
+    return from + n * unit(deg);
+  };
+  Vec2 p(0, 0);
+  p = wall(p, a, 40, 0);
+  p = wall(p, a + 93, 20, 1);
+  p = wall(p, a + 135, 10, 2);
+  p = wall(p, a + 180, 32, 3);
+  p = wall(p, a + 270, 27, 4);
+  EdgeLabels all{labels};
+  std::vector<Vec2> directions = {unit(a - 90), unit(a), unit(a + 45), unit(a + 90), unit(a + 180)};
+  refine_directions({ring}, all, directions, 1.0, RefineOptions{});
+  ASSERT_EQ(directions.size(), 5u);
+  EXPECT_NEAR(directions[0].dot(directions[1]), 0.0, 1e-12);   // exactly perpendicular
+  EXPECT_NEAR(directions[0].dot(directions[3]), -1.0, 1e-12);  // exactly parallel
+  const double cut = std::atan2(directions[2].y(), directions[2].x()) * 180 / M_PI;
+  EXPECT_NEAR(cut, a + 45, 0.5);  // the cut is not snapped
+}
+
+}  // namespace
+}  // namespace lodforge

@@ -1,0 +1,86 @@
+#include "support/shapes.hpp"
+
+#include <Eigen/Geometry>
+#include <cmath>
+#include <cstdlib>
+#include <memory>
+#include <ogr_geometry.h>
+
+#include "synth/city.hpp"
+
+namespace lodforge::test {
+
+PolygonWithHoles rotated(const PolygonWithHoles& p, double angle_deg) {
+  Vec2 lo = p.outer.front(), hi = p.outer.front();
+  for (const Vec2& q : p.outer) { lo = lo.cwiseMin(q); hi = hi.cwiseMax(q); }
+  const Vec2 centre = 0.5 * (lo + hi);
+  const Eigen::Rotation2Dd rotation(angle_deg * M_PI / 180.0);
+  const Vec2 place(500000.0, 5000000.0);
+  auto apply = [&](Ring r) {
+    for (Vec2& q : r) q = place + rotation * (q - centre);
+    return r;
+  };
+  PolygonWithHoles out{apply(p.outer), {}};
+  for (const Ring& h : p.holes) out.holes.push_back(apply(h));
+  return out;
+}
+
+RasterizedShape rasterize_shape(const PolygonWithHoles& truth, double pixel_size, double noise_px,
+                                double corner_radius_px, std::uint64_t seed) {
+  Vec2 lo = truth.outer.front(), hi = truth.outer.front();
+  for (const Vec2& q : truth.outer) { lo = lo.cwiseMin(q); hi = hi.cwiseMax(q); }
+  const double margin = 5.0;
+  RasterizedShape s;
+  // Snap the origin to the pixel grid so results do not depend on sub-pixel placement luck.
+  const double x0 = std::floor((lo.x() - margin) / pixel_size) * pixel_size;
+  const double y0 = std::ceil((hi.y() + margin) / pixel_size) * pixel_size;
+  s.transform.c = {x0, pixel_size, 0, y0, 0, -pixel_size};
+  const int cols = int(std::ceil((hi.x() + margin - x0) / pixel_size));
+  const int rows = int(std::ceil((y0 - lo.y() + margin) / pixel_size));
+  cv::Mat mask = cv::Mat::zeros(rows, cols, CV_8U);
+  rasterize(mask, truth, s.transform);
+  if (noise_px > 0 || corner_radius_px > 0) mask = degrade_mask(mask, noise_px, corner_radius_px, seed);
+  s.mask = mask;
+  ContourOptions options;
+  s.buildings = extract_contours(mask, s.transform, options).buildings;
+  return s;
+}
+
+namespace {
+
+std::unique_ptr<OGRPolygon> to_ogr(const PolygonWithHoles& p) {
+  auto polygon = std::make_unique<OGRPolygon>();
+  auto add = [&](const Ring& r) {
+    OGRLinearRing ring;
+    for (const Vec2& q : r) ring.addPoint(q.x(), q.y());
+    ring.addPoint(r.front().x(), r.front().y());
+    polygon->addRing(&ring);
+  };
+  add(p.outer);
+  for (const Ring& h : p.holes) add(h);
+  return polygon;
+}
+
+}  // namespace
+
+double iou(const PolygonWithHoles& a, const PolygonWithHoles& b) {
+  auto pa = to_ogr(a), pb = to_ogr(b);
+  std::unique_ptr<OGRGeometry> inter(pa->Intersection(pb.get()));
+  std::unique_ptr<OGRGeometry> uni(pa->Union(pb.get()));
+  if (!inter || !uni) return 0;
+  auto area = [](const OGRGeometry* g) {
+    if (auto s = dynamic_cast<const OGRSurface*>(g)) return s->get_Area();
+    if (auto m = dynamic_cast<const OGRMultiSurface*>(g)) return m->get_Area();
+    if (auto c = dynamic_cast<const OGRGeometryCollection*>(g)) return c->get_Area();
+    return 0.0;
+  };
+  const double u = area(uni.get());
+  return u > 0 ? area(inter.get()) / u : 0;
+}
+
+std::string shared_data() {
+  if (const char* env = std::getenv("LODFORGE_SHARED_DATA")) return env;
+  return LODFORGE_DEFAULT_SHARED_DATA;
+}
+
+}  // namespace lodforge::test

@@ -1,0 +1,33 @@
+// Test helpers: rasterize a true polygon, degrade it like a segmentation, trace it back, and
+// compare polygons exactly (GEOS through OGR).
+#pragma once
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "contour/contour.hpp"
+#include "geometry/types.hpp"
+
+namespace lodforge::test {
+
+// A polygon rotated by angle_deg about its first vertex's bounding box centre, placed at
+// (500000, 5000000) in map metres.
+PolygonWithHoles rotated(const PolygonWithHoles& p, double angle_deg);
+
+struct RasterizedShape {
+  cv::Mat mask;
+  GeoTransform transform;
+  std::vector<BuildingContour> buildings;
+};
+
+// Rasterizes at pixel_size with a margin, optionally degrades (noise_px > 0 adds the synth
+// boundary wobble, corner rounding of corner_radius_px), and extracts the contours.
+RasterizedShape rasterize_shape(const PolygonWithHoles& truth, double pixel_size, double noise_px,
+                                double corner_radius_px, std::uint64_t seed);
+
+double iou(const PolygonWithHoles& a, const PolygonWithHoles& b);
+
+// Directory of ../shared/data (LODFORGE_SHARED_DATA overrides).
+std::string shared_data();
+
+}  // namespace lodforge::test
