@@ -73,6 +73,17 @@ TEST(Pipeline, FortyFiveDegreeCutKeepsItsCorner) {
   }
 }
 
+TEST(Pipeline, LongThinBuildingKeepsItsShortWalls) {
+  // Each 3 m end wall is under 1/16 of the contour: the paper's RANSAC stops before it.
+  const PolygonWithHoles thin = {{{0, 0}, {60, 0}, {60, 3}, {0, 3}}, {}};
+  for (std::uint64_t seed : {1, 2, 3}) {
+    const PolygonWithHoles truth = test::rotated(thin, 24.0);
+    const PolygonWithHoles lod0 = footprint_of(truth, 0.25, 0.5, seed, CoreOptions{});
+    EXPECT_EQ(lod0.outer.size(), 4u) << "seed " << seed;
+    EXPECT_GE(test::iou(lod0, truth), 0.95) << "seed " << seed;
+  }
+}
+
 TEST(Pipeline, ResultDoesNotDependOnTheMapOrigin) {
   const auto a = test::rasterize_shape(test::rotated(l_shape, 30.0), 0.25, 0.8, 4, 2.0);
   std::vector<Ring> shifted = a.buildings[0].rings;

@@ -38,6 +38,16 @@ Vec2 refine(Vec2 d, const std::vector<Vec2>& normals, const std::vector<double>&
   return d;
 }
 
+// True when d is within tolerance of a quarter turn (90°, 180°, 270°) of a found direction.
+bool on_lattice(const Vec2& d, const std::vector<DominantDirection>& found, double tolerance_deg) {
+  for (const DominantDirection& f : found) {
+    const double diff = std::atan2(cross(f.normal, d), f.normal.dot(d)) * 180.0 / M_PI;
+    const double off = std::abs(diff - 90.0 * std::round(diff / 90.0));
+    if (std::abs(diff) > 45.0 && off <= tolerance_deg) return true;
+  }
+  return false;
+}
+
 }  // namespace
 
 std::vector<DominantDirection> detect_directions(const std::vector<Vec2>& normals,
@@ -67,8 +77,13 @@ std::vector<DominantDirection> detect_directions(const std::vector<Vec2>& normal
       const double p_missing = std::pow(1.0 - best.support / remaining_weight, drawn);
       if (p_missing < o.missing_probability) break;
     }
-    if (best.support < o.min_support_fraction * total) break;
     const Vec2 d = refine(best.direction, normals, weights, remaining, cos_threshold);
+    // The paper stops below |n|/16; a short wall square to a found direction (the ends of a
+    // long thin building) is kept with less, noise rarely lines up like that.
+    const bool enough = best.support >= o.min_support_fraction * total ||
+                        (o.lattice_angle_deg > 0 && best.support >= o.lattice_min_support_m &&
+                         on_lattice(d, directions, o.lattice_angle_deg));
+    if (!enough) break;
     double support = 0;
     for (std::size_t k = 0; k < normals.size(); ++k) {
       if (remaining[k] && normals[k].dot(d) > cos_threshold) { remaining[k] = 0; support += weights[k]; }
