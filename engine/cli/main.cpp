@@ -15,6 +15,8 @@ struct Command {
 };
 
 const Command commands[] = {
+    {"run", "process an area described by a YAML job: tiles, checkpoints, resume, shards", lodforge::run_job},
+    {"config", "print the full default job (--defaults)", lodforge::run_config},
     {"regularize", "LOD0 footprints of every building in a segmentation raster", lodforge::run_regularize},
     {"synth", "generate a procedural demo city (segmentation, DSM, DTM, true footprints)", lodforge::run_synth},
     {"options", "print every stage option with its default", lodforge::run_options},

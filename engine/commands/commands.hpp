@@ -6,5 +6,7 @@ namespace lodforge {
 int run_synth(int argc, char** argv);
 int run_regularize(int argc, char** argv);
 int run_options(int argc, char** argv);
+int run_job(int argc, char** argv);
+int run_config(int argc, char** argv);
 
 }  // namespace lodforge

@@ -11,6 +11,9 @@
 
 namespace lodforge {
 
+template <class T> struct is_vector : std::false_type {};
+template <class T> struct is_vector<std::vector<T>> : std::true_type {};
+
 // Writes "key: value  # help" lines, nested by section.
 class OptionPrinter {
  public:
@@ -32,6 +35,11 @@ class OptionPrinter {
   static std::string format(const T& value) {
     std::ostringstream s;
     if constexpr (std::is_same_v<T, bool>) s << (value ? "true" : "false");
+    else if constexpr (is_vector<T>::value) {
+      s << '[';
+      for (std::size_t i = 0; i < value.size(); ++i) s << (i ? ", " : "") << format(value[i]);
+      s << ']';
+    } else if constexpr (std::is_same_v<T, std::string>) s << (value.empty() ? "\"\"" : value);
     else s << value;
     return s.str();
   }
@@ -47,6 +55,13 @@ class OptionValidator {
     std::string p;
     if constexpr (std::is_arithmetic_v<T> && !std::is_same_v<T, bool>) p = check.problem(double(value));
     else if constexpr (std::is_same_v<T, std::string>) p = check.problem(value);
+    else if constexpr (is_vector<T>::value) {
+      for (const auto& item : value) {
+        if constexpr (std::is_arithmetic_v<typename T::value_type>) p = check.problem(double(item));
+        else p = check.problem(item);
+        if (!p.empty()) break;
+      }
+    }
     if (!p.empty()) errors.push_back(prefix_ + name + ": " + p);
   }
   template <class S>
@@ -97,6 +112,17 @@ class OptionSetter {
       return false;
     } else if constexpr (std::is_same_v<T, std::string>) {
       value = text;
+      return true;
+    } else if constexpr (is_vector<T>::value) {
+      T parsed;
+      std::stringstream s(text);
+      std::string item;
+      while (std::getline(s, item, ',')) {
+        typename T::value_type v{};
+        if (!parse(item, v)) return false;
+        parsed.push_back(v);
+      }
+      value = parsed;
       return true;
     } else {
       std::istringstream s(text);

@@ -85,7 +85,7 @@ std::vector<Ring> trace_component(cv::Mat m) {
 }
 
 ContourResult extract_contours(const cv::Mat& mask, const GeoTransform& transform,
-                               const ContourOptions& options) {
+                               const ContourOptions& options, const ComponentFilter& keep) {
   CV_Assert(mask.type() == CV_8U);
   ContourResult result;
   cv::Mat binary = mask != 0;
@@ -103,6 +103,9 @@ ContourResult extract_contours(const cv::Mat& mask, const GeoTransform& transfor
   const double pixel_area = transform.pixel_size() * transform.pixel_size();
   std::vector<int> order;
   for (int k = 1; k < count; ++k) {
+    const cv::Rect box(stats.at<int>(k, cv::CC_STAT_LEFT), stats.at<int>(k, cv::CC_STAT_TOP),
+                       stats.at<int>(k, cv::CC_STAT_WIDTH), stats.at<int>(k, cv::CC_STAT_HEIGHT));
+    if (keep && !keep(box, first[k])) continue;
     if (stats.at<int>(k, cv::CC_STAT_AREA) * pixel_area < options.min_area_m2) {
       ++result.dropped_small;
       continue;

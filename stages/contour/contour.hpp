@@ -3,6 +3,7 @@
 // corners, mapped to map coordinates through the raster's geotransform.
 #pragma once
 #include <array>
+#include <functional>
 #include <opencv2/core/mat.hpp>
 #include <vector>
 
@@ -45,9 +46,13 @@ struct ContourResult {
   int dropped_small = 0;                   // components below min_area_m2
 };
 
-// mask: CV_8U, non-zero = building.
+// A component's pixel bounding box and first pixel, in mask coordinates.
+using ComponentFilter = std::function<bool(const cv::Rect& bbox, const cv::Point& first)>;
+
+// mask: CV_8U, non-zero = building. keep (optional) selects which components to trace; the others
+// are skipped and not counted.
 ContourResult extract_contours(const cv::Mat& mask, const GeoTransform& transform,
-                               const ContourOptions& options);
+                               const ContourOptions& options, const ComponentFilter& keep = {});
 
 // Traces one component given as a CV_8U 0/1 image; returns rings in pixel-corner coordinates
 // (x = column, y = row) oriented as map rings of a north-up raster: outer first.

@@ -1,0 +1,99 @@
+// A batch job: inputs, tiling, outputs, work directory, threads and every stage option, declared
+// once. `lodforge config --defaults` prints it; `lodforge run JOB.yaml` reads it.
+#pragma once
+#include <string>
+#include <vector>
+
+#include "commands/stage_options.hpp"
+#include "common/option.hpp"
+
+namespace lodforge {
+
+struct SegmentationInput {
+  std::string path;
+  std::vector<int> building_values{6};  // class values of buildings (one-band raster)
+  std::vector<int> building_rgb;        // or an RGB colour, e.g. [0, 0, 255]; overrides values
+
+  template <class V>
+  void visit(V& v) {
+    v("path", path, "segmentation raster (any GDAL format), georeferenced; required");
+    v("building_values", building_values, "class values that are buildings in a one-band raster", Check::between(-2147483648.0, 2147483647.0));
+    v("building_rgb", building_rgb, "building colour of an RGB raster, e.g. [0, 0, 255] (ISPRS); empty: use building_values", Check::between(0, 65535));
+  }
+};
+
+struct RasterInput {
+  std::string path;
+  template <class V>
+  void visit(V& v) { v("path", path, "raster path (any GDAL format); empty: not used"); }
+};
+
+struct InputOptions {
+  SegmentationInput segmentation;
+  RasterInput dsm, dtm, orthophoto;
+  std::string on_grid_mismatch = "resample";
+
+  template <class V>
+  void visit(V& v) {
+    v.section("segmentation", segmentation);
+    v.section("dsm", dsm);
+    v.section("dtm", dtm);
+    v.section("orthophoto", orthophoto);
+    v("on_grid_mismatch", on_grid_mismatch, "rasters on another grid or CRS than the segmentation: 'resample' them to its grid, or stop with an 'error'", Check::one_of({"resample", "error"}));
+  }
+};
+
+struct TilingOptions {
+  double tile_size_m = 250;     // tiles are squares of this side, in raster order
+  double halo_m = 20;           // read around a tile; grown until every building it owns is whole
+  double max_window_m = 4000;   // a building larger than this is reported, not processed
+
+  template <class V>
+  void visit(V& v) {
+    v("tile_size_m", tile_size_m, "side of a square tile (m)", Check::above(0));
+    v("halo_m", halo_m, "margin read around a tile (m); grown as needed so that every building it owns is whole", Check::at_least(0));
+    v("max_window_m", max_window_m, "largest window read for one tile (m); a building that does not fit is reported as failed", Check::above(0));
+  }
+};
+
+struct OutputOptions {
+  std::string dir = "out";
+  std::vector<std::string> formats{"gpkg"};
+
+  template <class V>
+  void visit(V& v) {
+    v("dir", dir, "output directory: one file per tile and format, the tile index and the run report");
+    v("formats", formats, "output formats", Check::one_of({"gpkg", "geojson"}));
+  }
+};
+
+struct Job {
+  InputOptions inputs;
+  TilingOptions tiling;
+  OutputOptions output;
+  std::string work_dir = "work";
+  int threads = 0;
+  std::string regularizer = "deformation";
+  StageOptions stages;
+
+  template <class V>
+  void visit(V& v) {
+    v.section("inputs", inputs);
+    v.section("tiling", tiling);
+    v.section("output", output);
+    v("work_dir", work_dir, "checkpoints of every tile and stage; a rerun skips what is complete");
+    v("threads", threads, "worker threads; 0 = all cores", Check::at_least(0));
+    v("regularizer", regularizer, "footprint method: 'deformation' (the paper's chain, route in stages.corners.route), 'douglas_peucker' or 'none' (raw contour)", Check::one_of({"deformation", "douglas_peucker", "none"}));
+    v.section("stages", stages);
+  }
+};
+
+// Reads and validates a job file; relative paths are taken from the file's directory.
+// overrides: "path=value" (e.g. "stages.labeling.kappa2=5"), applied after the file.
+// Throws InputError listing every problem with its key path, before any work starts.
+Job load_job(const std::string& path, const std::vector<std::string>& overrides);
+
+// The default job as commented YAML.
+std::string default_job_yaml();
+
+}  // namespace lodforge

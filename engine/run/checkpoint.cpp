@@ -1,0 +1,243 @@
+#include "run/checkpoint.hpp"
+
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <unistd.h>
+
+#include "io/errors.hpp"
+
+namespace lodforge {
+
+namespace fs = std::filesystem;
+
+namespace {
+
+constexpr std::uint32_t kMagic = 0x4c4f4446;  // "LODF"
+constexpr std::uint32_t kVersion = 1;
+
+class Writer {
+ public:
+  template <class T>
+  void pod(const T& v) { out_.write(reinterpret_cast<const char*>(&v), sizeof v); }
+  void text(const std::string& s) { pod<std::uint64_t>(s.size()); out_.write(s.data(), std::streamsize(s.size())); }
+  void ring(const Ring& r) {
+    pod<std::uint64_t>(r.size());
+    for (const Vec2& p : r) { pod(p.x()); pod(p.y()); }
+  }
+  void rings(const std::vector<Ring>& rs) {
+    pod<std::uint64_t>(rs.size());
+    for (const Ring& r : rs) ring(r);
+  }
+  std::string str() const { return out_.str(); }
+
+ private:
+  std::ostringstream out_;
+};
+
+class Reader {
+ public:
+  explicit Reader(std::string data) : data_(std::move(data)) {}
+  template <class T>
+  T pod() {
+    T v{};
+    if (pos_ + sizeof v > data_.size()) throw std::runtime_error("truncated");
+    std::memcpy(&v, data_.data() + pos_, sizeof v);
+    pos_ += sizeof v;
+    return v;
+  }
+  std::uint64_t count() {
+    const auto n = pod<std::uint64_t>();
+    if (n > data_.size()) throw std::runtime_error("corrupt count");
+    return n;
+  }
+  std::string text() {
+    const auto n = count();
+    if (pos_ + n > data_.size()) throw std::runtime_error("truncated");
+    std::string s = data_.substr(pos_, n);
+    pos_ += n;
+    return s;
+  }
+  Ring ring() {
+    Ring r(count());
+    for (Vec2& p : r) { p.x() = pod<double>(); p.y() = pod<double>(); }
+    return r;
+  }
+  std::vector<Ring> rings() {
+    std::vector<Ring> rs(count());
+    for (Ring& r : rs) r = ring();
+    return rs;
+  }
+  bool at_end() const { return pos_ == data_.size(); }
+
+ private:
+  std::string data_;
+  std::size_t pos_ = 0;
+};
+
+void write_atomically(const fs::path& path, const std::string& payload, std::uint64_t key) {
+  Writer header;
+  header.pod(kMagic);
+  header.pod(kVersion);
+  header.pod(key);
+  header.pod<std::uint64_t>(payload.size());
+  const fs::path temp = path.string() + ".tmp-" + std::to_string(getpid());
+  {
+    std::ofstream out(temp, std::ios::binary | std::ios::trunc);
+    out << header.str() << payload;
+    out.flush();
+    if (!out) {
+      std::error_code ec;
+      fs::remove(temp, ec);
+      throw InputError("'" + path.string() + "': cannot write checkpoint (disk full or not writable?)");
+    }
+  }
+  fs::rename(temp, path);
+}
+
+std::optional<Reader> read_checked(const fs::path& path, std::uint64_t key) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) return std::nullopt;
+  std::ostringstream buffer;
+  buffer << in.rdbuf();
+  try {
+    Reader r(buffer.str());
+    if (r.pod<std::uint32_t>() != kMagic || r.pod<std::uint32_t>() != kVersion || r.pod<std::uint64_t>() != key)
+      return std::nullopt;
+    const auto size = r.pod<std::uint64_t>();
+    std::string rest = buffer.str().substr(4 + 4 + 8 + 8);
+    if (rest.size() != size) return std::nullopt;
+    return Reader(rest);
+  } catch (const std::exception&) {
+    return std::nullopt;
+  }
+}
+
+}  // namespace
+
+std::string hex(std::uint64_t value) {
+  char buffer[17];
+  std::snprintf(buffer, sizeof buffer, "%016llx", static_cast<unsigned long long>(value));
+  return buffer;
+}
+
+CheckpointStore::CheckpointStore(std::string directory) : directory_(std::move(directory)) {
+  std::error_code ec;
+  fs::create_directories(directory_, ec);
+  if (ec || !fs::is_directory(directory_)) throw InputError("work_dir '" + directory_ + "': cannot create: " + ec.message());
+  if (access(directory_.c_str(), W_OK) != 0) throw InputError("work_dir '" + directory_ + "': not writable");
+}
+
+std::string CheckpointStore::path(const std::string& stage, const std::string& tile, std::uint64_t) const {
+  return (fs::path(directory_) / (tile + "." + stage)).string();
+}
+
+void CheckpointStore::save_contours(const std::string& tile, std::uint64_t key, const TileBuildings& t) const {
+  Writer w;
+  w.pod<std::int32_t>(t.dropped_small);
+  w.pod<std::int32_t>(t.window.x);
+  w.pod<std::int32_t>(t.window.y);
+  w.pod<std::int32_t>(t.window.width);
+  w.pod<std::int32_t>(t.window.height);
+  w.pod<std::uint64_t>(t.too_large.size());
+  for (const std::string& s : t.too_large) w.text(s);
+  w.pod<std::uint64_t>(t.buildings.size());
+  for (const BuildingContour& b : t.buildings) {
+    w.pod<std::int32_t>(b.first_row);
+    w.pod<std::int32_t>(b.first_col);
+    w.pod<std::int64_t>(b.pixel_count);
+    w.pod<std::int32_t>(b.bbox.x);
+    w.pod<std::int32_t>(b.bbox.y);
+    w.pod<std::int32_t>(b.bbox.width);
+    w.pod<std::int32_t>(b.bbox.height);
+    w.rings(b.rings);
+  }
+  write_atomically(path("contours", tile, key), w.str(), key);
+}
+
+std::optional<TileBuildings> CheckpointStore::load_contours(const std::string& tile, std::uint64_t key) const {
+  auto r = read_checked(path("contours", tile, key), key);
+  if (!r) return std::nullopt;
+  try {
+    TileBuildings t;
+    t.dropped_small = r->pod<std::int32_t>();
+    t.window.x = r->pod<std::int32_t>();
+    t.window.y = r->pod<std::int32_t>();
+    t.window.width = r->pod<std::int32_t>();
+    t.window.height = r->pod<std::int32_t>();
+    t.too_large.resize(r->count());
+    for (std::string& s : t.too_large) s = r->text();
+    t.buildings.resize(r->count());
+    for (BuildingContour& b : t.buildings) {
+      b.first_row = r->pod<std::int32_t>();
+      b.first_col = r->pod<std::int32_t>();
+      b.pixel_count = r->pod<std::int64_t>();
+      b.bbox.x = r->pod<std::int32_t>();
+      b.bbox.y = r->pod<std::int32_t>();
+      b.bbox.width = r->pod<std::int32_t>();
+      b.bbox.height = r->pod<std::int32_t>();
+      b.rings = r->rings();
+    }
+    if (!r->at_end()) return std::nullopt;
+    return t;
+  } catch (const std::exception&) {
+    return std::nullopt;
+  }
+}
+
+void CheckpointStore::save_buildings(const std::string& tile, std::uint64_t key, const std::vector<BuildingOutput>& value) const {
+  Writer w;
+  w.pod<std::uint64_t>(value.size());
+  for (const BuildingOutput& b : value) {
+    w.pod(b.id);
+    w.pod<std::int32_t>(b.first_row);
+    w.pod<std::int32_t>(b.first_col);
+    w.ring(b.footprint.outer);
+    w.rings(b.footprint.holes);
+    w.pod<std::uint8_t>(b.ok);
+    w.text(b.stage);
+    w.text(b.reason);
+  }
+  write_atomically(path("buildings", tile, key), w.str(), key);
+}
+
+std::optional<std::vector<BuildingOutput>> CheckpointStore::load_buildings(const std::string& tile, std::uint64_t key) const {
+  auto r = read_checked(path("buildings", tile, key), key);
+  if (!r) return std::nullopt;
+  try {
+    std::vector<BuildingOutput> value(r->count());
+    for (BuildingOutput& b : value) {
+      b.id = r->pod<std::int64_t>();
+      b.first_row = r->pod<std::int32_t>();
+      b.first_col = r->pod<std::int32_t>();
+      b.footprint.outer = r->ring();
+      b.footprint.holes = r->rings();
+      b.ok = r->pod<std::uint8_t>() != 0;
+      b.stage = r->text();
+      b.reason = r->text();
+    }
+    if (!r->at_end()) return std::nullopt;
+    return value;
+  } catch (const std::exception&) {
+    return std::nullopt;
+  }
+}
+
+void CheckpointStore::mark_done(const std::string& tile, std::uint64_t key, const std::string& summary) const {
+  Writer w;
+  w.text(summary);
+  write_atomically(path("done", tile, key), w.str(), key);
+}
+
+std::optional<std::string> CheckpointStore::done_summary(const std::string& tile, std::uint64_t key) const {
+  auto r = read_checked(path("done", tile, key), key);
+  if (!r) return std::nullopt;
+  try {
+    return r->text();
+  } catch (const std::exception&) {
+    return std::nullopt;
+  }
+}
+
+}  // namespace lodforge

@@ -1,0 +1,161 @@
+#include "run/tiles.hpp"
+
+#include <cstdio>
+#include <gdal_priv.h>
+#include <opencv2/imgproc.hpp>
+
+#include "io/errors.hpp"
+
+namespace lodforge {
+
+TileGrid::TileGrid(cv::Size raster_size, int tile_side_px)
+    : raster(raster_size), tile_px(std::max(1, tile_side_px)),
+      cols((raster_size.width + tile_px - 1) / tile_px), rows((raster_size.height + tile_px - 1) / tile_px) {}
+
+cv::Rect TileGrid::rect(int tile) const {
+  const int c = tile % cols, r = tile / cols;
+  return cv::Rect(c * tile_px, r * tile_px, tile_px, tile_px) & cv::Rect(0, 0, raster.width, raster.height);
+}
+
+std::string TileGrid::name(int tile) const {
+  char buffer[32];
+  std::snprintf(buffer, sizeof buffer, "c%04d_r%04d", tile % cols, tile / cols);
+  return buffer;
+}
+
+struct MaskWindowReader::Impl {
+  GDALDataset* dataset = nullptr;
+  BuildingSelector selector;
+  std::string path;
+};
+
+MaskWindowReader::MaskWindowReader(const std::string& path, const BuildingSelector& selector) : impl_(new Impl) {
+  GDALAllRegister();
+  impl_->selector = selector;
+  impl_->path = path;
+  impl_->dataset = static_cast<GDALDataset*>(GDALOpenEx(path.c_str(), GDAL_OF_RASTER | GDAL_OF_READONLY, nullptr, nullptr, nullptr));
+  if (!impl_->dataset) {
+    delete impl_;
+    throw InputError("'" + path + "': not a raster GDAL can read");
+  }
+  if (selector.rgb && impl_->dataset->GetRasterCount() < 3) {
+    GDALClose(impl_->dataset);
+    delete impl_;
+    throw InputError("'" + path + "': a building colour needs an RGB raster with 3 bands");
+  }
+}
+
+MaskWindowReader::~MaskWindowReader() {
+  GDALClose(impl_->dataset);
+  delete impl_;
+}
+
+cv::Size MaskWindowReader::size() const { return {impl_->dataset->GetRasterXSize(), impl_->dataset->GetRasterYSize()}; }
+
+cv::Mat MaskWindowReader::read(const cv::Rect& w) const {
+  auto band = [&](int b) {
+    cv::Mat m(w.height, w.width, CV_32S);
+    if (impl_->dataset->GetRasterBand(b)->RasterIO(GF_Read, w.x, w.y, w.width, w.height, m.data, w.width, w.height,
+                                                   GDT_Int32, 0, 0) != CE_None)
+      throw InputError("'" + impl_->path + "': cannot read band " + std::to_string(b) + ": " + CPLGetLastErrorMsg());
+    return m;
+  };
+  cv::Mat mask;
+  if (impl_->selector.rgb) {
+    mask = cv::Mat::ones(w.size(), CV_8U);
+    for (int b = 0; b < 3; ++b) {
+      cv::Mat match = band(b + 1) == (*impl_->selector.rgb)[b];
+      cv::bitwise_and(mask, match / 255, mask);
+    }
+  } else {
+    const cv::Mat values = band(1);
+    mask = cv::Mat::zeros(w.size(), CV_8U);
+    for (int v : impl_->selector.values) {
+      cv::Mat match = values == v;
+      cv::bitwise_or(mask, match / 255, mask);
+    }
+  }
+  return mask;
+}
+
+std::uint64_t fnv1a(const void* data, std::size_t size, std::uint64_t h) {
+  const auto* bytes = static_cast<const unsigned char*>(data);
+  for (std::size_t i = 0; i < size; ++i) {
+    h ^= bytes[i];
+    h *= 1099511628211ULL;
+  }
+  return h;
+}
+
+std::uint64_t fnv1a(const std::string& text, std::uint64_t seed) { return fnv1a(text.data(), text.size(), seed); }
+
+namespace {
+
+// Does bbox (window coordinates) touch a side of the window that is not the raster's edge?
+bool touches_inner_border(const cv::Rect& bbox, const cv::Rect& window, cv::Size raster) {
+  return (bbox.x == 0 && window.x > 0) || (bbox.y == 0 && window.y > 0) ||
+         (bbox.x + bbox.width == window.width && window.x + window.width < raster.width) ||
+         (bbox.y + bbox.height == window.height && window.y + window.height < raster.height);
+}
+
+}  // namespace
+
+TileWindow find_tile_window(const MaskWindowReader& reader, const TileGrid& grid, int tile, int halo_px,
+                            int max_window_px, int connectivity) {
+  const cv::Rect bounds(0, 0, grid.raster.width, grid.raster.height);
+  const cv::Rect tile_rect = grid.rect(tile);
+  TileWindow out;
+  out.window = (tile_rect + cv::Size(2 * halo_px, 2 * halo_px) - cv::Point(halo_px, halo_px)) & bounds;
+  while (true) {
+    out.mask = reader.read(out.window);
+    cv::Mat labels, stats, centroids;
+    const int count = cv::connectedComponentsWithStats(out.mask, labels, stats, centroids, connectivity == 4 ? 4 : 8, CV_32S);
+    cv::Rect grown = out.window;
+    for (int k = 1; k < count; ++k) {
+      const cv::Rect box(stats.at<int>(k, cv::CC_STAT_LEFT), stats.at<int>(k, cv::CC_STAT_TOP),
+                         stats.at<int>(k, cv::CC_STAT_WIDTH), stats.at<int>(k, cv::CC_STAT_HEIGHT));
+      const cv::Rect global = box + out.window.tl();
+      if ((global & tile_rect).empty() || !touches_inner_border(box, out.window, grid.raster)) continue;
+      // Possibly owned by this tile and not whole: read around it.
+      grown |= (global + cv::Size(2 * halo_px, 2 * halo_px) - cv::Point(halo_px, halo_px)) & bounds;
+    }
+    if (grown == out.window) break;
+    if (grown.width > max_window_px || grown.height > max_window_px) {
+      out.too_large.push_back("a building around tile " + grid.name(tile) + " reaches beyond a window of " +
+                              std::to_string(max_window_px) + " pixels (tiling.max_window_m); it is not modeled");
+      break;
+    }
+    out.window = grown;
+  }
+  const int rect[4] = {out.window.x, out.window.y, out.window.width, out.window.height};
+  out.hash = fnv1a(out.mask.data, out.mask.total(), fnv1a(rect, sizeof rect));
+  return out;
+}
+
+TileBuildings trace_tile(const TileWindow& w, const TileGrid& grid, int tile, const GeoTransform& transform,
+                         const ContourOptions& options) {
+  const cv::Rect tile_rect = grid.rect(tile);
+  const cv::Rect window = w.window;
+  GeoTransform local = transform;
+  local.c[0] = transform.c[0] + window.x * transform.c[1] + window.y * transform.c[2];
+  local.c[3] = transform.c[3] + window.x * transform.c[4] + window.y * transform.c[5];
+  const cv::Size raster = grid.raster;
+  const ContourResult contours = extract_contours(w.mask, local, options, [&](const cv::Rect& box, const cv::Point& first) {
+    // Owned (first pixel in the tile) and whole (else it was reported as too large).
+    return tile_rect.contains(first + window.tl()) && !touches_inner_border(box, window, raster);
+  });
+  TileBuildings out;
+  out.buildings = contours.buildings;
+  for (BuildingContour& b : out.buildings) {
+    b.first_row += window.y;
+    b.first_col += window.x;
+    b.bbox += window.tl();
+  }
+  out.dropped_small = contours.dropped_small;
+  out.too_large = w.too_large;
+  out.window = window;
+  out.mask_hash = w.hash;
+  return out;
+}
+
+}  // namespace lodforge

@@ -1,0 +1,68 @@
+// Tiling: the raster is split into square tiles in raster order. A building belongs to exactly
+// one tile, the one holding its first pixel in raster order (top row first, then leftmost), and
+// is processed whole: the window read around a tile grows until every building it owns lies
+// inside it, however far it crosses the tile's border.
+#pragma once
+#include <cstdint>
+#include <opencv2/core/mat.hpp>
+#include <string>
+#include <vector>
+
+#include "contour/contour.hpp"
+#include "io/raster.hpp"
+
+namespace lodforge {
+
+struct TileGrid {
+  cv::Size raster;  // pixels
+  int tile_px = 0;  // side of a tile
+  int cols = 0, rows = 0;
+  TileGrid(cv::Size raster_size, int tile_side_px);
+  int count() const { return cols * rows; }
+  cv::Rect rect(int tile) const;  // clipped to the raster
+  std::string name(int tile) const;  // "c0003_r0012"
+};
+
+// Reads windows of a segmentation raster as a 0/1 building mask. One per thread (GDAL dataset
+// handles are not shared between threads).
+class MaskWindowReader {
+ public:
+  MaskWindowReader(const std::string& path, const BuildingSelector& selector);
+  ~MaskWindowReader();
+  MaskWindowReader(const MaskWindowReader&) = delete;
+  MaskWindowReader& operator=(const MaskWindowReader&) = delete;
+  cv::Size size() const;
+  cv::Mat read(const cv::Rect& window) const;  // CV_8U, 1 = building
+
+ private:
+  struct Impl;
+  Impl* impl_;
+};
+
+struct TileBuildings {
+  std::vector<BuildingContour> buildings;  // first_row/first_col and bbox in raster pixels
+  int dropped_small = 0;
+  std::vector<std::string> too_large;      // buildings that do not fit max_window_px
+  cv::Rect window;                         // the window finally read
+  std::uint64_t mask_hash = 0;             // hash of the window's mask, for checkpoints
+};
+
+// The window around a tile that holds every building the tile owns, and its mask.
+struct TileWindow {
+  cv::Rect window;
+  cv::Mat mask;
+  std::vector<std::string> too_large;  // owned buildings that do not fit max_window_px
+  std::uint64_t hash = 0;              // of the mask and the window, for checkpoints
+};
+TileWindow find_tile_window(const MaskWindowReader& reader, const TileGrid& grid, int tile, int halo_px,
+                            int max_window_px, int connectivity);
+
+// Traces the buildings the tile owns in its window (contours in map coordinates).
+TileBuildings trace_tile(const TileWindow& window, const TileGrid& grid, int tile, const GeoTransform& transform,
+                         const ContourOptions& options);
+
+// FNV-1a, stable across runs and machines.
+std::uint64_t fnv1a(const void* data, std::size_t size, std::uint64_t seed = 1469598103934665603ULL);
+std::uint64_t fnv1a(const std::string& text, std::uint64_t seed = 1469598103934665603ULL);
+
+}  // namespace lodforge

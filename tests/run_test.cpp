@@ -1,0 +1,233 @@
+// The batch engine end to end: tiling, determinism, kill and resume, shards, job errors.
+#include <gtest/gtest.h>
+
+#include <array>
+#include <chrono>
+#include <csignal>
+#include <fcntl.h>
+#include <filesystem>
+#include <fstream>
+#include <gdal_priv.h>
+#include <map>
+#include <ogrsf_frmts.h>
+#include <sstream>
+#include <sys/wait.h>
+#include <thread>
+#include <unistd.h>
+
+#include "support/shapes.hpp"
+
+namespace fs = std::filesystem;
+
+namespace lodforge {
+namespace {
+
+struct Result {
+  int code;
+  std::string output;
+};
+
+Result lodforge(const std::string& arguments) {
+  const std::string command = std::string(LODFORGE_BINARY) + " " + arguments + " 2>&1";
+  Result result{-1, {}};
+  FILE* pipe = popen(command.c_str(), "r");
+  std::array<char, 4096> buffer;
+  while (std::size_t n = fread(buffer.data(), 1, buffer.size(), pipe)) result.output.append(buffer.data(), n);
+  const int status = pclose(pipe);
+  result.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  return result;
+}
+
+std::string slurp(const fs::path& p) {
+  std::ifstream in(p, std::ios::binary);
+  std::ostringstream s;
+  s << in.rdbuf();
+  return s.str();
+}
+
+// Every file under out/tiles plus the tile index, by relative name.
+std::map<std::string, std::string> output_bytes(const fs::path& out) {
+  std::map<std::string, std::string> files;
+  for (const auto& e : fs::directory_iterator(out / "tiles")) files["tiles/" + e.path().filename().string()] = slurp(e.path());
+  files["tile_index.geojson"] = slurp(out / "tile_index.geojson");
+  return files;
+}
+
+// id -> footprint WKT over every tile file.
+std::map<long, std::string> footprints(const fs::path& out) {
+  GDALAllRegister();
+  std::map<long, std::string> result;
+  for (const auto& e : fs::directory_iterator(out / "tiles")) {
+    GDALDataset* d = static_cast<GDALDataset*>(GDALOpenEx(e.path().c_str(), GDAL_OF_VECTOR, nullptr, nullptr, nullptr));
+    if (!d) continue;
+    OGRLayer* layer = d->GetLayer(0);
+    for (auto& f : *layer) {
+      char* wkt = nullptr;
+      f->GetGeometryRef()->exportToWkt(&wkt);
+      EXPECT_EQ(result.count(f->GetFieldAsInteger64("id")), 0u) << "building in two tiles";
+      result[long(f->GetFieldAsInteger64("id"))] = std::string(wkt) + " " + f->GetFieldAsString("status");
+      CPLFree(wkt);
+    }
+    GDALClose(d);
+  }
+  return result;
+}
+
+class Run : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    dir = fs::temp_directory_path() / ("lodforge_run_" + std::to_string(::getpid()) + "_" +
+                                       ::testing::UnitTest::GetInstance()->current_test_info()->name());
+    fs::remove_all(dir);
+    fs::create_directories(dir);
+  }
+  void TearDown() override { fs::remove_all(dir); }
+  // Writes a job; `extra` is appended verbatim.
+  fs::path job(const std::string& name, const std::string& segmentation, double tile_m, const std::string& extra = "") {
+    const fs::path p = dir / (name + ".yaml");
+    std::ofstream(p) << "inputs:\n  segmentation: {path: " << segmentation << "}\n"
+                     << "tiling: {tile_size_m: " << tile_m << "}\n"
+                     << "output: {dir: " << name << "_out}\nwork_dir: " << name << "_work\n" << extra;
+    return p;
+  }
+  fs::path dir;
+};
+
+TEST_F(Run, DelftSmallTilesGiveTheSameFootprintsAsOneTile) {
+  const std::string seg = test::shared_data() + "/delft-ahn3-bgt/derived/top_class_50cm.tif";
+  ASSERT_TRUE(fs::exists(seg));
+  Result r = lodforge("run " + job("small", seg, 32).string());
+  ASSERT_EQ(r.code, 0) << r.output;
+  r = lodforge("run " + job("whole", seg, 1000).string());
+  ASSERT_EQ(r.code, 0) << r.output;
+  const auto small = footprints(dir / "small_out"), whole = footprints(dir / "whole_out");
+  EXPECT_GT(whole.size(), 30u);
+  EXPECT_EQ(small, whole);
+}
+
+class SynthRun : public Run {
+ protected:
+  void SetUp() override {
+    Run::SetUp();
+    const Result r = lodforge("synth --out " + (dir / "city").string() + " --size-m 400 --seed 5");
+    ASSERT_EQ(r.code, 0) << r.output;
+    seg = (dir / "city" / "seg_class.tif").string();
+  }
+  std::string seg;
+};
+
+TEST_F(SynthRun, OutputsAreByteIdenticalForOneAndTwoThreads) {
+  Result r = lodforge("run " + job("one", seg, 60).string() + " --threads 1");
+  ASSERT_EQ(r.code, 0) << r.output;
+  r = lodforge("run " + job("two", seg, 60).string() + " --threads 2");
+  ASSERT_EQ(r.code, 0) << r.output;
+  const auto one = output_bytes(dir / "one_out"), two = output_bytes(dir / "two_out");
+  EXPECT_GT(one.size(), 10u);
+  EXPECT_TRUE(one == two);
+}
+
+TEST_F(Run, KilledRunResumesToTheSameBytes) {
+  // A city large enough that one thread takes a few seconds, so the run can be killed mid-way.
+  Result r = lodforge("synth --out " + (dir / "big").string() + " --size-m 900 --seed 8");
+  ASSERT_EQ(r.code, 0) << r.output;
+  const std::string seg = (dir / "big" / "seg_class.tif").string();
+  r = lodforge("run " + job("clean", seg, 50).string() + " --threads 1");
+  ASSERT_EQ(r.code, 0) << r.output;
+  const fs::path killed = job("killed", seg, 50);
+  for (int done_before_kill : {5, 60}) {
+    const pid_t pid = fork();
+    if (pid == 0) {
+      const int null = ::open("/dev/null", O_WRONLY);
+      dup2(null, 1);
+      dup2(null, 2);
+      execl(LODFORGE_BINARY, LODFORGE_BINARY, "run", killed.c_str(), "--threads", "1", nullptr);
+      _exit(127);
+    }
+    // Kill it (SIGKILL, no chance to clean up) once some tiles are complete.
+    bool alive = true;
+    for (int wait = 0; wait < 3000; ++wait) {
+      int count = 0;
+      if (fs::exists(dir / "killed_work"))
+        for (const auto& e : fs::directory_iterator(dir / "killed_work")) count += e.path().extension() == ".done";
+      int status = 0;
+      if (waitpid(pid, &status, WNOHANG) == pid) { alive = false; break; }
+      if (count >= done_before_kill) break;
+      std::this_thread::sleep_for(std::chrono::milliseconds(5));
+    }
+    if (alive) {
+      kill(pid, SIGKILL);
+      waitpid(pid, nullptr, 0);
+    }
+    EXPECT_TRUE(alive) << "the run finished before it could be killed; make the test city larger";
+  }
+  r = lodforge("run " + killed.string() + " --threads 2");
+  ASSERT_EQ(r.code, 0) << r.output;
+  EXPECT_NE(r.output.find("resumed"), std::string::npos);
+  EXPECT_TRUE(output_bytes(dir / "clean_out") == output_bytes(dir / "killed_out"));
+}
+
+TEST_F(SynthRun, RerunResumesAndAStageOptionRecomputesOnlyWhatDependsOnIt) {
+  const fs::path j = job("j", seg, 100);
+  ASSERT_EQ(lodforge("run " + j.string()).code, 0);
+  std::string report = slurp(dir / "j_out" / "report.json");
+  EXPECT_NE(report.find("\"tiles_resumed\": 0"), std::string::npos) << report;
+  ASSERT_EQ(lodforge("run " + j.string()).code, 0);
+  report = slurp(dir / "j_out" / "report.json");
+  EXPECT_NE(report.find("\"tiles_processed\": 0, \"tiles_resumed\": 16"), std::string::npos) << report;
+  ASSERT_EQ(lodforge("run " + j.string() + " --set stages.labeling.kappa2=5").code, 0);
+  report = slurp(dir / "j_out" / "report.json");
+  EXPECT_NE(report.find("\"checkpoints_reused\": {\"contours\": 16, \"buildings\": 0}"), std::string::npos) << report;
+}
+
+TEST_F(SynthRun, ShardsTogetherGiveTheSingleRunOutputs) {
+  ASSERT_EQ(lodforge("run " + job("single", seg, 60).string()).code, 0);
+  const fs::path sharded = job("sharded", seg, 60);
+  for (int k = 0; k < 3; ++k) {
+    const Result r = lodforge("run " + sharded.string() + " --shard " + std::to_string(k) + "/3");
+    ASSERT_EQ(r.code, 0) << r.output;
+    EXPECT_TRUE(fs::exists(dir / "sharded_out" / ("report.shard-" + std::to_string(k) + "-of-3.json")));
+  }
+  auto single = output_bytes(dir / "single_out"), parts = output_bytes(dir / "sharded_out");
+  single.erase("tile_index.geojson");
+  parts.erase("tile_index.geojson");
+  EXPECT_TRUE(single == parts);
+  EXPECT_EQ(lodforge("run " + sharded.string() + " --shard 3/3").code, 1);
+}
+
+TEST_F(Run, JobErrorsAreReportedTogetherWithTheirKeyPaths) {
+  const fs::path bad = dir / "bad.yaml";
+  std::ofstream(bad) << "inputs:\n  segmentation: {path: nowhere.tif, building_values: [six]}\n"
+                     << "tiling: {tile_size_m: -5, colour: red}\nthreads: 1.5\n"
+                     << "stages: {labeling: {kappa2: -1}, corners: {route: sideways}}\nextra: 1\n";
+  const Result r = lodforge("run " + bad.string());
+  EXPECT_EQ(r.code, 1);
+  for (const char* expected : {"inputs.segmentation.building_values[0]: expected an integer", "tiling.tile_size_m: must be > 0",
+                               "tiling.colour: unknown key", "threads: expected an integer", "stages.labeling.kappa2: must be >= 0",
+                               "stages.corners.route: must be one of: original, deformed", "extra: unknown key",
+                               "inputs.segmentation.path: '"})
+    EXPECT_NE(r.output.find(expected), std::string::npos) << expected << "\n" << r.output;
+  EXPECT_FALSE(fs::exists(dir / "out"));
+
+  std::ofstream(dir / "broken.yaml") << "inputs: {segmentation: [unclosed\n";
+  const Result broken = lodforge("run " + (dir / "broken.yaml").string());
+  EXPECT_EQ(broken.code, 1);
+  EXPECT_NE(broken.output.find("broken.yaml': not valid YAML: line"), std::string::npos) << broken.output;
+  const Result missing = lodforge("run " + (dir / "none.yaml").string());
+  EXPECT_NE(missing.output.find("none.yaml': job file not found"), std::string::npos) << missing.output;
+}
+
+TEST_F(Run, DefaultJobIsPrintedAndReadsBackUnchanged) {
+  const Result r = lodforge("config --defaults");
+  ASSERT_EQ(r.code, 0);
+  EXPECT_NE(r.output.find("tile_size_m: 250"), std::string::npos);
+  EXPECT_NE(r.output.find("    kappa2: 10"), std::string::npos) << r.output;
+  // The printed defaults are a valid job once a segmentation is given.
+  std::string text = r.output;
+  text.replace(text.find("path: \"\""), 8, "path: " + test::shared_data() + "/delft-ahn3-bgt/derived/top_class_50cm.tif");
+  std::ofstream(dir / "defaults.yaml") << text;
+  const Result run = lodforge("run " + (dir / "defaults.yaml").string());
+  EXPECT_EQ(run.code, 0) << run.output;
+}
+
+}  // namespace
+}  // namespace lodforge
