@@ -64,13 +64,25 @@ TEST(Ransac, FortyFiveDegreeCutYieldsAFifthDirection) {
 }
 
 TEST(Ransac, SupportBelowOneSixteenthStops) {
-  // 100 normals along +x, 5 along +y: the +y set is under n/16 and is not a direction.
+  // 100 normals along +x, 5 at 45°: the 45° set is under n/16 and is not a direction.
   std::vector<Vec2> normals(100, Vec2(1, 0));
-  normals.insert(normals.end(), 5, Vec2(0, 1));
+  normals.insert(normals.end(), 5, Vec2(1, 1).normalized());
   const auto d = detect_directions(normals, std::vector<double>(normals.size(), 1.0), RansacOptions{});
   ASSERT_EQ(d.size(), 1u);
   EXPECT_NEAR(d[0].normal.x(), 1.0, 1e-12);
   EXPECT_DOUBLE_EQ(d[0].support, 100.0);
+}
+
+TEST(Ransac, ShortWallSquareToAFoundDirectionIsKept) {
+  // The same 5 normals at 90° (5 m of wall) are a quarter turn of +x: kept with less support.
+  std::vector<Vec2> normals(100, Vec2(1, 0));
+  normals.insert(normals.end(), 5, Vec2(0, 1));
+  const auto d = detect_directions(normals, std::vector<double>(normals.size(), 1.0), RansacOptions{});
+  ASSERT_EQ(d.size(), 2u);
+  EXPECT_NEAR(d[1].normal.y(), 1.0, 1e-12);
+  RansacOptions strict;
+  strict.lattice_angle_deg = 0;  // the paper's rule alone
+  EXPECT_EQ(detect_directions(normals, std::vector<double>(normals.size(), 1.0), strict).size(), 1u);
 }
 
 }  // namespace
