@@ -119,7 +119,7 @@ TEST(Refine, NearPerpendicularDirectionsAreSnappedOthersStayFree) {
   const double a = 10;
   Ring ring;
   std::vector<int> labels;
-  auto wall = [&](Vec2 from, double deg, int n, int label) {
+  auto wall = [&](Vec2 from, double deg, int n, int label) -> Vec2 {
     for (int k = 0; k < n; ++k) { ring.push_back(from + k * unit(deg)); labels.push_back(label); }
     return from + n * unit(deg);
   };

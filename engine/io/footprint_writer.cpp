@@ -82,7 +82,7 @@ void write_footprints(const std::string& path, const FootprintLayer& layer, cons
   }
   field("vertex_count", OFTInteger);
   field("area_m2", OFTReal);
-  ds->StartTransaction();
+  const bool transaction = ds->StartTransaction() == OGRERR_NONE;  // GeoPackage yes, GeoJSON no
   for (const FootprintRecord& r : records) {
     OGRFeature feature(l->GetLayerDefn());
     feature.SetField("id", static_cast<GIntBig>(r.id));
@@ -111,7 +111,7 @@ void write_footprints(const std::string& path, const FootprintLayer& layer, cons
     feature.SetGeometry(&polygon);
     if (l->CreateFeature(&feature) != OGRERR_NONE) fail("cannot write feature " + std::to_string(r.id));
   }
-  if (ds->CommitTransaction() != OGRERR_NONE) fail("cannot commit");
+  if (transaction && ds->CommitTransaction() != OGRERR_NONE) fail("cannot commit");
   GDALClose(ds);
   if (CPLGetLastErrorType() == CE_Failure) {
     fs::remove(temp);
