@@ -11,6 +11,7 @@
 #include <map>
 #include <ogrsf_frmts.h>
 #include <sstream>
+#include <sys/resource.h>
 #include <sys/wait.h>
 #include <thread>
 #include <unistd.h>
@@ -192,6 +193,47 @@ TEST_F(SynthRun, ShardsTogetherGiveTheSingleRunOutputs) {
   parts.erase("tile_index.geojson");
   EXPECT_TRUE(single == parts);
   EXPECT_EQ(lodforge("run " + sharded.string() + " --shard 3/3").code, 1);
+}
+
+// Peak memory of a child process run (KiB).
+long peak_rss_kib(const std::string& arguments) {
+  const pid_t pid = fork();
+  if (pid == 0) {
+    const int null = ::open("/dev/null", O_WRONLY);
+    dup2(null, 1);
+    dup2(null, 2);
+    std::vector<std::string> words;
+    std::istringstream in(arguments);
+    for (std::string w; in >> w;) words.push_back(w);
+    std::vector<char*> argv{const_cast<char*>(LODFORGE_BINARY)};
+    for (std::string& w : words) argv.push_back(w.data());
+    argv.push_back(nullptr);
+    execv(LODFORGE_BINARY, argv.data());
+    _exit(127);
+  }
+  int status = 0;
+  struct rusage usage {};
+  wait4(pid, &status, 0, &usage);
+  EXPECT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == 0) << arguments;
+  return usage.ru_maxrss;
+}
+
+TEST_F(Run, MemoryIsBoundedByTheTilesInFlightNotByTheArea) {
+  // Two cities, the second four times the area; the raster is only ever read in windows and
+  // GDAL's cache is capped, so peak memory must not grow with the area.
+  for (const char* size : {"500", "1000"})
+    ASSERT_EQ(lodforge("synth --out " + (dir / size).string() + " --size-m " + size + " --seed 2").code, 0);
+  const std::string extra = "tiling: {tile_size_m: 100, gdal_cache_mb: 8}\n";
+  auto job_for = [&](const char* size) {
+    const fs::path p = dir / (std::string(size) + ".yaml");
+    std::ofstream(p) << "inputs: {segmentation: {path: " << (dir / size / "seg_class.tif").string() << "}}\n"
+                     << extra << "output: {dir: " << size << "_out}\nwork_dir: " << size << "_work\n";
+    return p.string();
+  };
+  const long small = peak_rss_kib("run " + job_for("500") + " --threads 2");
+  const long large = peak_rss_kib("run " + job_for("1000") + " --threads 2");
+  // The 1000 m raster decoded whole would be 4000 x 4000 x 4 bytes = 62,500 KiB more.
+  EXPECT_LT(large, small + 20000) << "peak RSS " << small << " KiB at 1x, " << large << " KiB at 4x";
 }
 
 TEST_F(Run, JobErrorsAreReportedTogetherWithTheirKeyPaths) {

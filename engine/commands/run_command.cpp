@@ -291,6 +291,7 @@ int run_job(int argc, char** argv) {
   for (double c : seg.transform.c) transform_text += std::to_string(c) + ",";
 
   CPLSetConfigOption("OGR_CURRENT_DATE", "2000-01-01T00:00:00.000Z");  // byte-identical GeoPackages
+  GDALSetCacheMax64(std::int64_t(job.tiling.gdal_cache_mb) * 1024 * 1024);
   FootprintLayer layer;
   layer.crs_wkt = seg.crs_wkt;
 

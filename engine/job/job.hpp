@@ -47,12 +47,14 @@ struct TilingOptions {
   double tile_size_m = 250;     // tiles are squares of this side, in raster order
   double halo_m = 20;           // read around a tile; grown until every building it owns is whole
   double max_window_m = 4000;   // a building larger than this is reported, not processed
+  int gdal_cache_mb = 256;      // GDAL's raster block cache; with the tiles in flight, bounds memory
 
   template <class V>
   void visit(V& v) {
     v("tile_size_m", tile_size_m, "side of a square tile (m)", Check::above(0));
     v("halo_m", halo_m, "margin read around a tile (m); grown as needed so that every building it owns is whole", Check::at_least(0));
     v("max_window_m", max_window_m, "largest window read for one tile (m); a building that does not fit is reported as failed", Check::above(0));
+    v("gdal_cache_mb", gdal_cache_mb, "GDAL raster block cache (MB); memory is this plus the windows of the tiles in flight", Check::at_least(1));
   }
 };
 
