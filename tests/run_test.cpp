@@ -59,6 +59,7 @@ std::map<long, std::string> footprints(const fs::path& out) {
   GDALAllRegister();
   std::map<long, std::string> result;
   for (const auto& e : fs::directory_iterator(out / "tiles")) {
+    if (e.path().extension() != ".gpkg") continue;
     GDALDataset* d = static_cast<GDALDataset*>(GDALOpenEx(e.path().c_str(), GDAL_OF_VECTOR, nullptr, nullptr, nullptr));
     if (!d) continue;
     OGRLayer* layer = d->GetLayer(0);

@@ -22,6 +22,9 @@
 #include "geometry/polygon.hpp"
 #include "io/errors.hpp"
 #include "io/footprint_writer.hpp"
+#include "io/height_reader.hpp"
+#include "io/model_writers.hpp"
+#include "lod1/solid.hpp"
 #include "io/raster.hpp"
 #include "job/job.hpp"
 #include "pipeline/building.hpp"
@@ -135,6 +138,7 @@ struct TileResult {
   bool skipped = false;  // complete from an earlier run
   bool contours_reused = false, buildings_reused = false;  // stage checkpoints found
   std::vector<BuildingOutput> buildings;
+  std::vector<Heights> heights;  // per building, when a DSM is given
   int dropped_small = 0;
   std::vector<std::string> too_large;
   std::string summary;  // kept in the done marker, replayed on resume
@@ -165,26 +169,81 @@ std::vector<BuildingOutput> regularize_tile(const TileBuildings& tile, const Job
 }
 
 std::string make_summary(const TileResult& r) {
-  int ok = 0;
+  int ok = 0, lod1 = 0;
   for (const BuildingOutput& b : r.buildings) ok += b.ok;
+  for (const Heights& h : r.heights) lod1 += h.ok;
   std::ostringstream s;
-  s << r.buildings.size() << ' ' << ok << ' ' << r.buildings.size() - ok << ' ' << r.dropped_small << '\n';
+  s << r.buildings.size() << ' ' << ok << ' ' << r.buildings.size() - ok << ' ' << r.dropped_small << ' ' << lod1 << '\n';
   for (const BuildingOutput& b : r.buildings)
     if (!b.ok) s << "failed\t" << b.id << '\t' << b.stage << '\t' << b.reason << '\n';
+  for (std::size_t i = 0; i < r.heights.size(); ++i)
+    if (!r.heights[i].ok) s << "failed\t" << r.buildings[i].id << "\theights\t" << r.heights[i].reason << " (LOD0 only)\n";
   for (const std::string& t : r.too_large) s << "too_large\t" << t << '\n';
   return s.str();
 }
 
+std::string serialize_heights(const std::vector<Heights>& heights) {
+  std::ostringstream s;
+  s.precision(17);
+  for (const Heights& h : heights) s << h.ok << '\t' << h.roof << '\t' << h.ground << '\t' << h.roof_samples << '\t' << h.ground_samples << '\t' << h.reason << '\n';
+  return s.str();
+}
+
+std::optional<std::vector<Heights>> parse_heights(const std::string& text, std::size_t count) {
+  std::vector<Heights> out;
+  std::istringstream in(text);
+  std::string line;
+  while (std::getline(in, line)) {
+    std::istringstream f(line);
+    Heights h;
+    std::string ok;
+    std::getline(f, ok, '\t');
+    f >> h.roof >> h.ground >> h.roof_samples >> h.ground_samples;
+    f.get();
+    std::getline(f, h.reason);
+    h.ok = ok == "1";
+    out.push_back(h);
+  }
+  if (out.size() != count) return std::nullopt;
+  return out;
+}
+
+BuildingModel model_of(const BuildingOutput& b, const Heights* h, const std::string& tile, const Job& job) {
+  BuildingModel m;
+  m.id = b.id;
+  m.tile = tile;
+  m.footprint = b.footprint;
+  m.regularizer = b.ok ? job.regularizer : "douglas_peucker";
+  m.stage = b.stage;
+  m.reason = b.reason;
+  if (h && h->ok) {
+    m.solid = extrude(b.footprint, h->ground, h->roof);
+    if (const std::string problem = shell_problem(m.solid); problem.empty()) {
+      m.has_lod1 = true;
+      m.ground = h->ground;
+      m.roof = h->roof;
+    } else {
+      m.reason += (m.reason.empty() ? "" : "; ") + std::string("lod1: invalid shell: ") + problem;
+    }
+  } else if (h) {
+    if (b.ok) m.stage = "heights";
+    m.reason += (m.reason.empty() ? "" : "; ") + std::string("heights: ") + h->reason;
+  }
+  m.status = !b.ok ? "fallback" : (m.has_lod1 || !h ? "ok" : "lod0_only");
+  return m;
+}
+
 struct Totals {
   std::size_t buildings = 0, ok = 0, fallback = 0, dropped_small = 0, tiles_processed = 0, tiles_skipped = 0, tiles_empty = 0;
-  std::size_t contours_reused = 0, buildings_reused = 0;
+  std::size_t contours_reused = 0, buildings_reused = 0, lod1 = 0;
   std::vector<std::string> failed_json, too_large, tile_json, index_features;
 };
 
 void account(const std::string& summary, const std::string& tile, Totals& t, std::size_t& buildings_in_tile) {
   std::istringstream in(summary);
-  std::size_t n = 0, ok = 0, fb = 0, dropped = 0;
-  in >> n >> ok >> fb >> dropped;
+  std::size_t n = 0, ok = 0, fb = 0, dropped = 0, lod1 = 0;
+  in >> n >> ok >> fb >> dropped >> lod1;
+  t.lod1 += lod1;
   buildings_in_tile = n;
   t.buildings += n;
   t.ok += ok;
@@ -269,6 +328,11 @@ int run_job(int argc, char** argv) {
   for (const auto& entry : fs::directory_iterator(out_dir / "tiles"))
     if (entry.path().filename().string().find(".partial") != std::string::npos) fs::remove(entry.path(), ec);
 
+  const GridSpec grid_spec{seg.size, seg.transform, seg.crs_wkt};
+  const std::string dsm_source = job.inputs.dsm.path.empty() ? "" : aligned_source(job.inputs.dsm.path, grid_spec, (fs::path(job.work_dir) / "dsm.aligned.vrt").string());
+  const std::string dtm_source = job.inputs.dtm.path.empty() ? "" : aligned_source(job.inputs.dtm.path, grid_spec, (fs::path(job.work_dir) / "dtm.aligned.vrt").string());
+  if (!dsm_source.empty() && dsm_source != job.inputs.dsm.path) spdlog::info("{}: resampled onto the segmentation's grid ({})", job.inputs.dsm.path, dsm_source);
+  if (!dtm_source.empty() && dtm_source != job.inputs.dtm.path) spdlog::info("{}: resampled onto the segmentation's grid ({})", job.inputs.dtm.path, dtm_source);
   const double pixel = seg.transform.pixel_size();
   const TileGrid grid(seg.size, int(std::lround(job.tiling.tile_size_m / pixel)));
   const int halo_px = int(std::ceil(job.tiling.halo_m / pixel));
@@ -284,8 +348,10 @@ int run_job(int argc, char** argv) {
   key_job.threads = 0;
   key_job.work_dir.clear();
   const std::string contour_options = options_text(key_job.stages.contour);
+  const std::string heights_options = options_text(key_job.stages.heights) + file_identity(job.inputs.dsm.path) + file_identity(job.inputs.dtm.path);
   const std::string core_options = job.regularizer + "\n" + options_text(key_job.stages.core);
-  const std::uint64_t job_key = fnv1a(file_identity(job.inputs.segmentation.path) + "\n" + options_text(key_job) + "\n" +
+  const std::uint64_t job_key = fnv1a(file_identity(job.inputs.segmentation.path) + "\n" + file_identity(job.inputs.dsm.path) + "\n" +
+                                      file_identity(job.inputs.dtm.path) + "\n" + options_text(key_job) + "\n" +
                                       std::to_string(grid.tile_px) + "/" + std::to_string(halo_px) + "/" + std::to_string(max_window_px));
   std::string transform_text;
   for (double c : seg.transform.c) transform_text += std::to_string(c) + ",";
@@ -340,6 +406,25 @@ int run_job(int argc, char** argv) {
                   store.save_buildings(r->name, buildings_key, *buildings);
                 }
                 r->buildings = std::move(*buildings);
+                if (!dsm_source.empty()) {
+                  const std::uint64_t heights_key = fnv1a(heights_options, buildings_key);
+                  std::optional<std::vector<Heights>> heights;
+                  if (auto blob = store.load_blob("heights", r->name, heights_key)) heights = parse_heights(*blob, r->buildings.size());
+                  if (!heights) {
+                    const int margin = int(std::ceil((job.stages.heights.ring_outer_m + job.stages.core.corners.max_corner_shift_m) / pixel)) + 2;
+                    const cv::Rect area = (contours->window + cv::Size(2 * margin, 2 * margin) - cv::Point(margin, margin)) &
+                                          cv::Rect(0, 0, seg.size.width, seg.size.height);
+                    const HeightRaster dsm = HeightWindowReader(dsm_source).read(area, seg.transform);
+                    std::optional<HeightRaster> dtm;
+                    if (!dtm_source.empty()) dtm = HeightWindowReader(dtm_source).read(area, seg.transform);
+                    heights.emplace(r->buildings.size());
+                    tbb::parallel_for(std::size_t(0), r->buildings.size(), [&](std::size_t i) {
+                      (*heights)[i] = building_heights(r->buildings[i].footprint, dsm, dtm ? &*dtm : nullptr, job.stages.heights);
+                    });
+                    store.save_blob("heights", r->name, heights_key, serialize_heights(*heights));
+                  }
+                  r->heights = std::move(*heights);
+                }
                 r->dropped_small = contours->dropped_small;
                 r->too_large = contours->too_large;
                 r->summary = make_summary(*r);
@@ -349,22 +434,16 @@ int run_job(int argc, char** argv) {
           tbb::make_filter<std::shared_ptr<TileResult>, void>(
               tbb::filter_mode::serial_in_order, [&](std::shared_ptr<TileResult> r) {
                 std::vector<std::string> outputs;
+                const cv::Rect tile_rect = grid.rect(r->tile);
+                WriterContext context{seg.crs_wkt, r->name, seg.transform.to_map(tile_rect.x, tile_rect.y + tile_rect.height)};
                 if (!r->buildings.empty() || r->skipped) {
                   for (const std::string& format : job.output.formats) {
-                    const std::string relative = "tiles/" + r->name + "." + format;
+                    const std::string relative = "tiles/" + r->name + extension_of(format);
                     if (!r->skipped) {
-                      std::vector<FootprintRecord> records;
-                      for (const BuildingOutput& b : r->buildings) {
-                        FootprintRecord rec;
-                        rec.id = long(b.id);
-                        rec.polygon = b.footprint;
-                        rec.status = b.ok ? "ok" : "fallback";
-                        rec.failed_stage = b.stage;
-                        rec.reason = b.reason;
-                        rec.regularizer = b.ok ? job.regularizer : "douglas_peucker";
-                        records.push_back(std::move(rec));
-                      }
-                      write_footprints((out_dir / relative).string(), layer, records);
+                      const auto writer = make_model_writer(format, (out_dir / relative).string(), context);
+                      for (std::size_t i = 0; i < r->buildings.size(); ++i)
+                        writer->add(model_of(r->buildings[i], r->heights.empty() ? nullptr : &r->heights[i], r->name, job));
+                      writer->finish();
                     }
                     if (fs::exists(out_dir / relative)) outputs.push_back(relative);
                   }
@@ -411,7 +490,7 @@ int run_job(int argc, char** argv) {
   report << "{\n  \"job\": \"" << json_escape(fs::absolute(job_path).string()) << "\",\n  \"shard\": \"" << shard.index << "/" << shard.count
          << "\",\n  \"tiles\": " << tiles.size() << ", \"tiles_processed\": " << totals.tiles_processed << ", \"tiles_resumed\": "
          << totals.tiles_skipped << ", \"tiles_empty\": " << totals.tiles_empty << ",\n  \"checkpoints_reused\": {\"contours\": " << totals.contours_reused << ", \"buildings\": " << totals.buildings_reused << "},\n  \"buildings\": " << totals.buildings
-         << ", \"ok\": " << totals.ok << ", \"fallback\": " << totals.fallback << ", \"dropped_small\": " << totals.dropped_small
+         << ", \"ok\": " << totals.ok << ", \"fallback\": " << totals.fallback << ", \"lod1\": " << totals.lod1 << ", \"dropped_small\": " << totals.dropped_small
          << ", \"too_large\": " << totals.too_large.size() << ",\n  \"seconds\": " << elapsed << ",\n  \"failed_buildings\": [";
   for (std::size_t i = 0; i < totals.failed_json.size(); ++i) report << (i ? ",\n    " : "\n    ") << totals.failed_json[i];
   report << "],\n  \"too_large_buildings\": [";
@@ -420,8 +499,8 @@ int run_job(int argc, char** argv) {
   for (std::size_t i = 0; i < totals.tile_json.size(); ++i) report << (i ? ",\n    " : "\n    ") << totals.tile_json[i];
   report << "]\n}\n";
   write_text_atomically(out_dir / ("report" + suffix + ".json"), report.str());
-  spdlog::info("{} tiles ({} computed, {} resumed from {}), {} buildings: {} ok, {} fallback; {} small components dropped{}; {:.1f} s",
-               tiles.size(), totals.tiles_processed, totals.tiles_skipped, job.work_dir, totals.buildings, totals.ok, totals.fallback,
+  spdlog::info("{} tiles ({} computed, {} resumed from {}), {} buildings: {} ok, {} fallback, {} with LOD1; {} small components dropped{}; {:.1f} s",
+               tiles.size(), totals.tiles_processed, totals.tiles_skipped, job.work_dir, totals.buildings, totals.ok, totals.fallback, totals.lod1,
                totals.dropped_small, totals.too_large.empty() ? "" : "; " + std::to_string(totals.too_large.size()) + " too large (see report)",
                elapsed);
   spdlog::info("outputs in {} (tile_index{}.geojson, report{}.json)", out_dir.string(), suffix, suffix);

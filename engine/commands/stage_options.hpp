@@ -6,6 +6,7 @@
 #include <vector>
 
 #include "contour/contour.hpp"
+#include "heights/heights.hpp"
 #include "pipeline/core_options.hpp"
 
 namespace lodforge {
@@ -13,11 +14,13 @@ namespace lodforge {
 struct StageOptions {
   ContourOptions contour;
   CoreOptions core;
+  HeightOptions heights;
 
   template <class V>
   void visit(V& v) {
     v.section("contour", contour);
     core.visit(v);
+    v.section("heights", heights);
   }
 };
 

@@ -79,6 +79,7 @@ int run_synth(int argc, char** argv) {
   layer.crs_wkt = meta.crs_wkt;
   layer.write_status = false;
   layer.write_heights = true;
+  layer.kind_field = "kind";
   write_footprints((out / "footprints.gpkg").string(), layer, truth);
   spdlog::info("wrote {} true footprints and rasters of {} x {} pixels to {}", truth.size(), classes.cols, classes.rows,
                out.string());

@@ -75,10 +75,10 @@ void write_footprints(const std::string& path, const FootprintLayer& layer, cons
     field("reason", OFTString);
     field("regularizer", OFTString);
   }
+  if (!layer.kind_field.empty()) field(layer.kind_field.c_str(), OFTString);
   if (layer.write_heights) {
-    field("kind", OFTString);
-    field("roof_height", OFTReal);
     field("ground_height", OFTReal);
+    field("roof_height", OFTReal);
   }
   field("vertex_count", OFTInteger);
   field("area_m2", OFTReal);
@@ -92,10 +92,13 @@ void write_footprints(const std::string& path, const FootprintLayer& layer, cons
       feature.SetField("reason", r.reason.c_str());
       feature.SetField("regularizer", r.regularizer.c_str());
     }
-    if (layer.write_heights) {
-      feature.SetField("kind", r.kind.c_str());
+    if (!layer.kind_field.empty()) feature.SetField(layer.kind_field.c_str(), r.kind.c_str());
+    if (layer.write_heights && r.has_heights) {
       feature.SetField("roof_height", r.roof_height);
       feature.SetField("ground_height", r.ground_height);
+    } else if (layer.write_heights) {
+      feature.SetFieldNull(feature.GetFieldIndex("roof_height"));
+      feature.SetFieldNull(feature.GetFieldIndex("ground_height"));
     }
     int vertices = int(r.polygon.outer.size());
     for (const Ring& h : r.polygon.holes) vertices += int(h.size());

@@ -14,7 +14,8 @@ struct FootprintRecord {
   PolygonWithHoles polygon;
   std::string status, failed_stage, reason;
   std::string regularizer;
-  std::string kind;              // for synthetic truth; empty otherwise
+  std::string kind;              // synthetic truth: the shape; run outputs: the tile
+  bool has_heights = true;       // false: the heights are written as null
   double roof_height = 0, ground_height = 0;  // written when write_heights
 };
 
@@ -22,7 +23,8 @@ struct FootprintLayer {
   std::string name = "footprints";
   std::string crs_wkt;
   bool write_status = true;   // status, stage, reason, regularizer
-  bool write_heights = false; // roof_height, ground_height, kind (synthetic truth)
+  bool write_heights = false; // roof_height, ground_height
+  std::string kind_field;     // name of the field holding `kind` ("kind", "tile"); empty: none
 };
 
 // Checks up front that path can be written (directory exists and is writable, extension known).

@@ -60,12 +60,12 @@ struct TilingOptions {
 
 struct OutputOptions {
   std::string dir = "out";
-  std::vector<std::string> formats{"gpkg"};
+  std::vector<std::string> formats{"citygml", "cityjson", "obj", "gpkg"};
 
   template <class V>
   void visit(V& v) {
     v("dir", dir, "output directory: one file per tile and format, the tile index and the run report");
-    v("formats", formats, "output formats", Check::one_of({"gpkg", "geojson"}));
+    v("formats", formats, "output formats, one file per tile each: citygml (2.0), cityjson (2.0), obj, gpkg, geojson", Check::one_of({"citygml", "cityjson", "obj", "gpkg", "geojson"}));
   }
 };
 

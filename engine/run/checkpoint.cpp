@@ -224,6 +224,24 @@ std::optional<std::vector<BuildingOutput>> CheckpointStore::load_buildings(const
   }
 }
 
+void CheckpointStore::save_blob(const std::string& stage, const std::string& tile, std::uint64_t key, const std::string& payload) const {
+  Writer w;
+  w.text(payload);
+  write_atomically(path(stage, tile, key), w.str(), key);
+}
+
+std::optional<std::string> CheckpointStore::load_blob(const std::string& stage, const std::string& tile, std::uint64_t key) const {
+  auto r = read_checked(path(stage, tile, key), key);
+  if (!r) return std::nullopt;
+  try {
+    std::string payload = r->text();
+    if (!r->at_end()) return std::nullopt;
+    return payload;
+  } catch (const std::exception&) {
+    return std::nullopt;
+  }
+}
+
 void CheckpointStore::mark_done(const std::string& tile, std::uint64_t key, const std::string& summary) const {
   Writer w;
   w.text(summary);

@@ -30,6 +30,9 @@ class CheckpointStore {
   std::optional<TileBuildings> load_contours(const std::string& tile, std::uint64_t key) const;
   void save_buildings(const std::string& tile, std::uint64_t key, const std::vector<BuildingOutput>& value) const;
   std::optional<std::vector<BuildingOutput>> load_buildings(const std::string& tile, std::uint64_t key) const;
+  // Any other stage's payload (serialized by the caller).
+  void save_blob(const std::string& stage, const std::string& tile, std::uint64_t key, const std::string& payload) const;
+  std::optional<std::string> load_blob(const std::string& stage, const std::string& tile, std::uint64_t key) const;
   // A tile whose outputs were written under this key is complete; its summary is kept with it.
   void mark_done(const std::string& tile, std::uint64_t key, const std::string& summary) const;
   std::optional<std::string> done_summary(const std::string& tile, std::uint64_t key) const;

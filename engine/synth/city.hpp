@@ -8,6 +8,7 @@
 
 #include "common/option.hpp"
 #include "contour/contour.hpp"
+#include "geometry/rasterize.hpp"
 #include "geometry/types.hpp"
 
 namespace lodforge {
@@ -52,10 +53,6 @@ struct SynthCity {
 
 // Pure: the same options give the same city.
 SynthCity generate_city(const SynthOptions& options);
-
-// Burns a polygon into image (pixel centres inside get outer_value, inside holes hole_value).
-void rasterize(cv::Mat& image, const PolygonWithHoles& polygon, const GeoTransform& transform, double outer_value = 1,
-               double hole_value = 0);
 
 // Degrades a clean 0/1 mask like a segmentation network's output: rounded corners, a smooth
 // boundary wobble of about noise_px pixels. Seeded.

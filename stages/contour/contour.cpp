@@ -9,8 +9,6 @@
 
 namespace lodforge {
 
-double GeoTransform::pixel_size() const { return std::sqrt(std::abs(c[1] * c[5] - c[2] * c[4])); }
-
 namespace {
 
 // Fills one pixel of every 2x2 block whose pixels touch only diagonally, until none is left,

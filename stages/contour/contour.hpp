@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "common/option.hpp"
+#include "geometry/geotransform.hpp"
 #include "geometry/types.hpp"
 
 namespace lodforge {
@@ -23,15 +24,6 @@ struct ContourOptions {
     v("min_area_m2", min_area_m2, "components smaller than this are dropped (m^2)", Check::at_least(0));
     v("min_hole_area_m2", min_hole_area_m2, "holes smaller than this are filled (m^2)", Check::at_least(0));
   }
-};
-
-// GDAL's affine geotransform: x = c0 + col*c1 + row*c2, y = c3 + col*c4 + row*c5.
-struct GeoTransform {
-  std::array<double, 6> c{0, 1, 0, 0, 0, -1};
-  Vec2 to_map(double col, double row) const {
-    return {c[0] + col * c[1] + row * c[2], c[3] + col * c[4] + row * c[5]};
-  }
-  double pixel_size() const;  // sqrt of the pixel's area, the ground sampling distance
 };
 
 struct BuildingContour {

@@ -1,0 +1,83 @@
+#include "io/height_reader.hpp"
+
+#include <cmath>
+#include <gdal_priv.h>
+#include <gdal_utils.h>
+#include <ogr_spatialref.h>
+
+#include "io/errors.hpp"
+
+namespace lodforge {
+
+std::string aligned_source(const std::string& path, const GridSpec& grid, const std::string& vrt_path) {
+  GDALAllRegister();
+  GDALDatasetH source = GDALOpen(path.c_str(), GA_ReadOnly);
+  if (!source) throw InputError("'" + path + "': not a raster GDAL can read");
+  std::array<double, 6> gt{};
+  GDALGetGeoTransform(source, gt.data());
+  const bool same_grid = GDALGetRasterXSize(source) == grid.size.width && GDALGetRasterYSize(source) == grid.size.height &&
+                         gt == grid.transform.c;
+  if (same_grid) {
+    GDALClose(source);
+    return path;
+  }
+  const Vec2 a = grid.transform.to_map(0, 0), b = grid.transform.to_map(grid.size.width, grid.size.height);
+  std::vector<std::string> words = {"-of", "VRT", "-r", "bilinear", "-te", std::to_string(std::min(a.x(), b.x())),
+                                    std::to_string(std::min(a.y(), b.y())), std::to_string(std::max(a.x(), b.x())),
+                                    std::to_string(std::max(a.y(), b.y())), "-ts", std::to_string(grid.size.width),
+                                    std::to_string(grid.size.height)};
+  if (!grid.crs_wkt.empty()) { words.push_back("-t_srs"); words.push_back(grid.crs_wkt); }
+  std::vector<char*> argv;
+  for (std::string& w : words) argv.push_back(w.data());
+  argv.push_back(nullptr);
+  GDALWarpAppOptions* options = GDALWarpAppOptionsNew(argv.data(), nullptr);
+  int error = 0;
+  GDALDatasetH warped = GDALWarp(vrt_path.c_str(), nullptr, 1, &source, options, &error);
+  GDALWarpAppOptionsFree(options);
+  GDALClose(source);
+  if (!warped || error) throw InputError("'" + path + "': cannot resample onto the segmentation's grid: " + CPLGetLastErrorMsg());
+  GDALClose(warped);
+  return vrt_path;
+}
+
+struct HeightWindowReader::Impl {
+  GDALDataset* dataset = nullptr;
+  std::string path;
+};
+
+HeightWindowReader::HeightWindowReader(const std::string& path) : impl_(new Impl) {
+  GDALAllRegister();
+  impl_->path = path;
+  impl_->dataset = static_cast<GDALDataset*>(GDALOpenEx(path.c_str(), GDAL_OF_RASTER | GDAL_OF_READONLY, nullptr, nullptr, nullptr));
+  if (!impl_->dataset) {
+    delete impl_;
+    throw InputError("'" + path + "': not a raster GDAL can read");
+  }
+}
+
+HeightWindowReader::~HeightWindowReader() {
+  GDALClose(impl_->dataset);
+  delete impl_;
+}
+
+HeightRaster HeightWindowReader::read(const cv::Rect& w, const GeoTransform& grid) const {
+  HeightRaster r;
+  r.values.create(w.height, w.width, CV_32F);
+  GDALRasterBand* band = impl_->dataset->GetRasterBand(1);
+  if (band->RasterIO(GF_Read, w.x, w.y, w.width, w.height, r.values.data, w.width, w.height, GDT_Float32, 0, 0) != CE_None)
+    throw InputError("'" + impl_->path + "': cannot read: " + CPLGetLastErrorMsg());
+  int has_nodata = 0;
+  const double nodata = band->GetNoDataValue(&has_nodata);
+  r.valid = cv::Mat::ones(w.height, w.width, CV_8U);
+  for (int y = 0; y < w.height; ++y)
+    for (int x = 0; x < w.width; ++x) {
+      const float v = r.values.at<float>(y, x);
+      if (!std::isfinite(v) || (has_nodata && float(nodata) == v)) r.valid.at<uint8_t>(y, x) = 0;
+    }
+  r.transform = grid;
+  r.transform.c[0] = grid.c[0] + w.x * grid.c[1] + w.y * grid.c[2];
+  r.transform.c[3] = grid.c[3] + w.x * grid.c[4] + w.y * grid.c[5];
+  return r;
+}
+
+}  // namespace lodforge

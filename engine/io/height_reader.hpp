@@ -1,0 +1,36 @@
+// Reads windows of a DSM or DTM on the segmentation's grid. A raster on another grid or CRS is
+// resampled on the fly through a GDAL warped VRT (bilinear), made once per run.
+#pragma once
+#include <opencv2/core/mat.hpp>
+#include <string>
+
+#include "heights/heights.hpp"
+
+namespace lodforge {
+
+struct GridSpec {
+  cv::Size size;
+  GeoTransform transform;
+  std::string crs_wkt;
+};
+
+// When the raster at path is not on grid, writes a warped VRT of it onto grid at vrt_path and
+// returns that path; else returns path unchanged.
+std::string aligned_source(const std::string& path, const GridSpec& grid, const std::string& vrt_path);
+
+// One per thread.
+class HeightWindowReader {
+ public:
+  explicit HeightWindowReader(const std::string& path);
+  ~HeightWindowReader();
+  HeightWindowReader(const HeightWindowReader&) = delete;
+  HeightWindowReader& operator=(const HeightWindowReader&) = delete;
+  // The window in the source's pixels; nodata and non-finite values are marked invalid.
+  HeightRaster read(const cv::Rect& window, const GeoTransform& grid_transform) const;
+
+ private:
+  struct Impl;
+  Impl* impl_;
+};
+
+}  // namespace lodforge

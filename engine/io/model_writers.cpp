@@ -1,0 +1,337 @@
+#include "io/model_writers.hpp"
+
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <ogr_spatialref.h>
+#include <sstream>
+#include <unistd.h>
+
+#include "geometry/polygon.hpp"
+#include "io/errors.hpp"
+#include "io/footprint_writer.hpp"
+#include "triangulation/triangulate.hpp"
+
+namespace lodforge {
+
+namespace fs = std::filesystem;
+
+std::string epsg_of(const std::string& wkt) {
+  OGRSpatialReference srs;
+  if (wkt.empty() || srs.importFromWkt(wkt.c_str()) != OGRERR_NONE) return {};
+  srs.AutoIdentifyEPSG();
+  const char* name = srs.GetAuthorityName(nullptr);
+  const char* code = srs.GetAuthorityCode(nullptr);
+  return name && code && std::string(name) == "EPSG" ? std::string("EPSG:") + code : std::string();
+}
+
+std::string extension_of(const std::string& format) {
+  if (format == "citygml") return ".gml";
+  if (format == "cityjson") return ".city.json";
+  if (format == "obj") return ".obj";
+  if (format == "gpkg") return ".gpkg";
+  return ".geojson";
+}
+
+namespace {
+
+// A text file written to a temporary name and renamed when complete.
+class AtomicText {
+ public:
+  explicit AtomicText(std::string path) : path_(std::move(path)), temp_(path_ + ".partial-" + std::to_string(getpid())) {
+    out_.open(temp_, std::ios::trunc);
+    if (!out_) throw InputError("'" + path_ + "': cannot create");
+    out_.precision(3);
+    out_ << std::fixed;
+  }
+  ~AtomicText() {
+    if (!done_) {
+      out_.close();
+      std::error_code ec;
+      fs::remove(temp_, ec);
+    }
+  }
+  std::ostream& out() { return out_; }
+  void commit() {
+    out_.flush();
+    if (!out_) throw InputError("'" + path_ + "': writing failed (disk full?)");
+    out_.close();
+    fs::rename(temp_, path_);
+    done_ = true;
+  }
+
+ private:
+  std::string path_, temp_;
+  std::ofstream out_;
+  bool done_ = false;
+};
+
+std::string gml_id(std::int64_t id) { return "lodforge_b" + std::to_string(id); }
+
+std::string xml_escape(const std::string& s) {
+  std::string out;
+  for (char c : s) {
+    switch (c) {
+      case '&': out += "&amp;"; break;
+      case '<': out += "&lt;"; break;
+      case '>': out += "&gt;"; break;
+      case '"': out += "&quot;"; break;
+      default: out += c;
+    }
+  }
+  return out;
+}
+
+// CityGML 2.0: bldg:Building with lod0FootPrint, lod1Solid and measuredHeight.
+class CityGmlWriter : public ModelWriter {
+ public:
+  CityGmlWriter(const std::string& path, const WriterContext& c) : file_(path) {
+    const std::string epsg = epsg_of(c.crs_wkt);
+    srs_ = epsg.empty() ? "" : " srsName=\"" + epsg + "\"";
+    auto& o = file_.out();
+    o << "<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n"
+      << "<core:CityModel xmlns:core=\"http://www.opengis.net/citygml/2.0\" xmlns:bldg=\"http://www.opengis.net/citygml/building/2.0\""
+         " xmlns:gen=\"http://www.opengis.net/citygml/generics/2.0\" xmlns:gml=\"http://www.opengis.net/gml\""
+         " xmlns:xlink=\"http://www.w3.org/1999/xlink\" xmlns:xsi=\"http://www.w3.org/2001/XMLSchema-instance\""
+         " xsi:schemaLocation=\"http://www.opengis.net/citygml/building/2.0 http://schemas.opengis.net/citygml/building/2.0/building.xsd"
+         " http://www.opengis.net/citygml/generics/2.0 http://schemas.opengis.net/citygml/generics/2.0/generics.xsd\">\n"
+      << "  <gml:name>lodforge tile " << xml_escape(c.tile) << "</gml:name>\n";
+  }
+  void add(const BuildingModel& m) override {
+    auto& o = file_.out();
+    o << "  <core:cityObjectMember>\n    <bldg:Building gml:id=\"" << gml_id(m.id) << "\">\n";
+    attribute("status", m.status);
+    if (!m.stage.empty()) attribute("failed_stage", m.stage);
+    if (!m.reason.empty()) attribute("reason", m.reason);
+    attribute("regularizer", m.regularizer);
+    attribute("tile", m.tile);
+    if (m.has_lod1) {
+      o << "      <gen:doubleAttribute name=\"ground_height\"><gen:value>" << m.ground << "</gen:value></gen:doubleAttribute>\n";
+      o << "      <bldg:measuredHeight uom=\"m\">" << (m.roof - m.ground) << "</bldg:measuredHeight>\n";
+    }
+    const double z = m.has_lod1 ? m.ground : 0.0;
+    o << "      <bldg:lod0FootPrint>\n        <gml:MultiSurface" << srs_ << " srsDimension=\"3\">\n          <gml:surfaceMember>\n";
+    Face footprint;
+    for (const Ring* r = &m.footprint.outer; r; r = nullptr) {
+      Ring3 ring;
+      for (const Vec2& p : *r) ring.emplace_back(p.x(), p.y(), z);
+      footprint.rings.push_back(ring);
+    }
+    for (const Ring& h : m.footprint.holes) {
+      Ring3 ring;
+      for (const Vec2& p : h) ring.emplace_back(p.x(), p.y(), z);
+      footprint.rings.push_back(ring);
+    }
+    polygon(footprint, 12);
+    o << "          </gml:surfaceMember>\n        </gml:MultiSurface>\n      </bldg:lod0FootPrint>\n";
+    if (m.has_lod1) {
+      o << "      <bldg:lod1Solid>\n        <gml:Solid" << srs_ << " srsDimension=\"3\">\n          <gml:exterior>\n            <gml:CompositeSurface>\n";
+      for (const Face& f : m.solid.faces) {
+        o << "              <gml:surfaceMember>\n";
+        polygon(f, 16);
+        o << "              </gml:surfaceMember>\n";
+      }
+      o << "            </gml:CompositeSurface>\n          </gml:exterior>\n        </gml:Solid>\n      </bldg:lod1Solid>\n";
+    }
+    o << "    </bldg:Building>\n  </core:cityObjectMember>\n";
+  }
+  void finish() override {
+    file_.out() << "</core:CityModel>\n";
+    file_.commit();
+  }
+
+ private:
+  void attribute(const char* name, const std::string& value) {
+    file_.out() << "      <gen:stringAttribute name=\"" << name << "\"><gen:value>" << xml_escape(value) << "</gen:value></gen:stringAttribute>\n";
+  }
+  void polygon(const Face& f, int indent) {
+    auto& o = file_.out();
+    const std::string pad(indent, ' ');
+    o << pad << "<gml:Polygon>\n";
+    for (std::size_t r = 0; r < f.rings.size(); ++r) {
+      o << pad << (r == 0 ? "  <gml:exterior>" : "  <gml:interior>") << "<gml:LinearRing><gml:posList>";
+      for (const Vec3& p : f.rings[r]) o << p.x() << ' ' << p.y() << ' ' << p.z() << ' ';
+      const Vec3& first = f.rings[r].front();
+      o << first.x() << ' ' << first.y() << ' ' << first.z();
+      o << "</gml:posList></gml:LinearRing>" << (r == 0 ? "</gml:exterior>\n" : "</gml:interior>\n");
+    }
+    o << pad << "</gml:Polygon>\n";
+  }
+  AtomicText file_;
+  std::string srs_;
+};
+
+// CityJSON 2.0: integer vertices with a transform (mm), Solid LOD1 and MultiSurface LOD0.
+class CityJsonWriter : public ModelWriter {
+ public:
+  CityJsonWriter(const std::string& path, const WriterContext& c) : file_(path), origin_(c.origin) {
+    const std::string epsg = epsg_of(c.crs_wkt);
+    auto& o = file_.out();
+    o << "{\"type\": \"CityJSON\", \"version\": \"2.0\",\n \"transform\": {\"scale\": [0.001, 0.001, 0.001], \"translate\": ["
+      << origin_.x() << ", " << origin_.y() << ", 0.0]},\n \"metadata\": {\"title\": \"lodforge tile " << c.tile << "\"";
+    if (!epsg.empty()) o << ", \"referenceSystem\": \"https://www.opengis.net/def/crs/EPSG/0/" << epsg.substr(5) << "\"";
+    o << "},\n \"CityObjects\": {";
+  }
+  void add(const BuildingModel& m) override {
+    auto& o = file_.out();
+    o << (first_ ? "\n" : ",\n") << "  \"" << gml_id(m.id) << "\": {\"type\": \"Building\", \"attributes\": {\"status\": \""
+      << m.status << "\", \"regularizer\": \"" << m.regularizer << "\", \"tile\": \"" << m.tile << "\"";
+    first_ = false;
+    if (!m.stage.empty()) o << ", \"failed_stage\": \"" << json(m.stage) << "\", \"reason\": \"" << json(m.reason) << "\"";
+    if (m.has_lod1) o << ", \"measuredHeight\": " << (m.roof - m.ground) << ", \"ground_height\": " << m.ground << ", \"roof_height\": " << m.roof;
+    o << "}, \"geometry\": [";
+    const double z = m.has_lod1 ? m.ground : 0.0;
+    o << "{\"type\": \"MultiSurface\", \"lod\": \"0\", \"boundaries\": [[";
+    ring(m.footprint.outer, z);
+    for (const Ring& h : m.footprint.holes) { o << ", "; ring(h, z); }
+    o << "]]}";
+    if (m.has_lod1) {
+      o << ", {\"type\": \"Solid\", \"lod\": \"1\", \"boundaries\": [[";
+      for (std::size_t f = 0; f < m.solid.faces.size(); ++f) {
+        o << (f ? ", [" : "[");
+        for (std::size_t r = 0; r < m.solid.faces[f].rings.size(); ++r) {
+          o << (r ? ", " : "");
+          ring3(m.solid.faces[f].rings[r]);
+        }
+        o << "]";
+      }
+      o << "]]}";
+    }
+    o << "]}";
+  }
+  void finish() override {
+    auto& o = file_.out();
+    o << "\n },\n \"vertices\": [";
+    for (std::size_t i = 0; i < vertices_.size(); ++i) {
+      const auto& v = vertices_[i];
+      o << (i ? ", " : "") << (i % 4 == 0 ? "\n  " : "") << '[' << v[0] << ", " << v[1] << ", " << v[2] << ']';
+    }
+    o << "\n ]\n}\n";
+    file_.commit();
+  }
+
+ private:
+  static std::string json(const std::string& s) {
+    std::string out;
+    for (char c : s) { if (c == '"' || c == '\\') out += '\\'; out += c; }
+    return out;
+  }
+  std::size_t index(const Vec3& p) {
+    const std::array<long long, 3> q{std::llround((p.x() - origin_.x()) * 1000), std::llround((p.y() - origin_.y()) * 1000), std::llround(p.z() * 1000)};
+    auto [it, inserted] = lookup_.try_emplace(q, vertices_.size());
+    if (inserted) vertices_.push_back(q);
+    return it->second;
+  }
+  void ring3(const Ring3& r) {
+    auto& o = file_.out();
+    o << '[';
+    for (std::size_t i = 0; i < r.size(); ++i) o << (i ? ", " : "") << index(r[i]);
+    o << ']';
+  }
+  void ring(const Ring& r, double z) {
+    Ring3 lifted;
+    for (const Vec2& p : r) lifted.emplace_back(p.x(), p.y(), z);
+    ring3(lifted);
+  }
+  AtomicText file_;
+  Vec2 origin_;
+  bool first_ = true;
+  std::vector<std::array<long long, 3>> vertices_;
+  std::map<std::array<long long, 3>, std::size_t> lookup_;
+};
+
+// Wavefront OBJ: one object per building, coordinates relative to the tile origin so that single
+// precision holds; the origin is in the header. Faces with holes are triangulated.
+class ObjWriter : public ModelWriter {
+ public:
+  ObjWriter(const std::string& path, const WriterContext& c) : file_(path), origin_(c.origin) {
+    file_.out() << "# lodforge OBJ, tile " << c.tile << ", CRS " << (epsg_of(c.crs_wkt).empty() ? "unknown" : epsg_of(c.crs_wkt)) << "\n"
+                << "# origin " << origin_.x() << " " << origin_.y() << " 0.000 (add to every vertex)\n";
+  }
+  void add(const BuildingModel& m) override {
+    if (!m.has_lod1) return;  // OBJ carries the LOD1 blocks only
+    auto& o = file_.out();
+    o << "o " << gml_id(m.id) << "\n";
+    for (const Face& f : m.solid.faces) {
+      if (f.rings.size() == 1 && f.rings[0].size() <= 4) {
+        std::vector<std::size_t> ids;
+        for (const Vec3& p : f.rings[0]) ids.push_back(vertex(p));
+        face(ids);
+        continue;
+      }
+      // A top or bottom face with holes (or many vertices): constrained triangulation in 2D.
+      std::vector<Ring> rings;
+      for (const Ring3& r : f.rings) {
+        Ring flat;
+        for (const Vec3& p : r) flat.emplace_back(p.x() - origin_.x(), p.y() - origin_.y());
+        if (signed_area(flat) * (&r == &f.rings[0] ? 1 : -1) < 0) std::reverse(flat.begin(), flat.end());
+        rings.push_back(flat);
+      }
+      const bool downward = signed_area([&] { Ring flat; for (const Vec3& p : f.rings[0]) flat.emplace_back(p.x(), p.y()); return flat; }()) < 0;
+      TriangulationOptions plain;
+      plain.max_vertices = 0;  // no refinement: the input vertices only
+      const TriangleMesh mesh = triangulate(rings, 1e9, plain);
+      const double z = f.rings[0].front().z();
+      for (const auto& t : mesh.triangles) {
+        std::vector<std::size_t> ids;
+        for (int k : t) ids.push_back(vertex(Vec3(mesh.vertices[k].x() + origin_.x(), mesh.vertices[k].y() + origin_.y(), z)));
+        if (downward) std::reverse(ids.begin(), ids.end());
+        face(ids);
+      }
+    }
+  }
+  void finish() override { file_.commit(); }
+
+ private:
+  std::size_t vertex(const Vec3& p) {
+    file_.out() << "v " << p.x() - origin_.x() << ' ' << p.y() - origin_.y() << ' ' << p.z() << '\n';
+    return ++count_;
+  }
+  void face(const std::vector<std::size_t>& ids) {
+    file_.out() << 'f';
+    for (std::size_t id : ids) file_.out() << ' ' << id;
+    file_.out() << '\n';
+  }
+  AtomicText file_;
+  Vec2 origin_;
+  std::size_t count_ = 0;
+};
+
+// GeoPackage / GeoJSON footprints with attributes, for GIS users.
+class FootprintModelWriter : public ModelWriter {
+ public:
+  FootprintModelWriter(std::string path, const WriterContext& c) : path_(std::move(path)) { layer_.crs_wkt = c.crs_wkt; layer_.write_heights = true; layer_.kind_field = "tile"; }
+  void add(const BuildingModel& m) override {
+    FootprintRecord r;
+    r.id = long(m.id);
+    r.polygon = m.footprint;
+    r.status = m.status;
+    r.failed_stage = m.stage;
+    r.reason = m.reason;
+    r.regularizer = m.regularizer;
+    r.kind = m.tile;
+    r.has_heights = m.has_lod1;
+    r.roof_height = m.roof;
+    r.ground_height = m.ground;
+    records_.push_back(std::move(r));
+  }
+  void finish() override { write_footprints(path_, layer_, records_); }
+
+ private:
+  std::string path_;
+  FootprintLayer layer_;
+  std::vector<FootprintRecord> records_;
+};
+
+}  // namespace
+
+std::unique_ptr<ModelWriter> make_model_writer(const std::string& format, const std::string& path, const WriterContext& context) {
+  if (format == "citygml") return std::make_unique<CityGmlWriter>(path, context);
+  if (format == "cityjson") return std::make_unique<CityJsonWriter>(path, context);
+  if (format == "obj") return std::make_unique<ObjWriter>(path, context);
+  return std::make_unique<FootprintModelWriter>(path, context);
+}
+
+}  // namespace lodforge

@@ -1,0 +1,44 @@
+// Writers of a tile's building models, one per format behind one small interface. Each streams
+// its file (no document is built in memory) to a temporary name and renames it on finish().
+#pragma once
+#include <cstdint>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "geometry/types.hpp"
+#include "lod1/solid.hpp"
+
+namespace lodforge {
+
+struct BuildingModel {
+  std::int64_t id = 0;
+  std::string tile;
+  PolygonWithHoles footprint;   // LOD0
+  bool has_lod1 = false;        // heights known
+  double ground = 0, roof = 0;  // when has_lod1
+  Solid solid;                  // when has_lod1
+  std::string status, stage, reason, regularizer;
+};
+
+struct WriterContext {
+  std::string crs_wkt;
+  std::string tile;
+  Vec2 origin = Vec2::Zero();  // the tile's lower-left corner: OBJ and CityJSON are relative to it
+};
+
+class ModelWriter {
+ public:
+  virtual ~ModelWriter() = default;
+  virtual void add(const BuildingModel& model) = 0;
+  virtual void finish() = 0;  // completes and moves the file into place
+};
+
+// format: citygml, cityjson, obj, gpkg, geojson. The file extension follows the format.
+std::unique_ptr<ModelWriter> make_model_writer(const std::string& format, const std::string& path, const WriterContext& context);
+std::string extension_of(const std::string& format);  // ".gml", ".city.json", ".obj", ".gpkg", ".geojson"
+
+// "EPSG:28992" for a CRS with an EPSG code, else empty.
+std::string epsg_of(const std::string& wkt);
+
+}  // namespace lodforge

@@ -1,0 +1,15 @@
+// Exact polygon rasterization: a pixel belongs to a polygon when its centre lies inside.
+#pragma once
+#include <opencv2/core/mat.hpp>
+
+#include "geometry/geotransform.hpp"
+#include "geometry/types.hpp"
+
+namespace lodforge {
+
+// Sets the pixels of image (any type) whose centres lie inside the outer ring to outer_value,
+// then those inside a hole to hole_value.
+void rasterize(cv::Mat& image, const PolygonWithHoles& polygon, const GeoTransform& transform, double outer_value = 1,
+               double hole_value = 0);
+
+}  // namespace lodforge

@@ -1,0 +1,270 @@
+// Heights, LOD1 shells and the model files (CityGML, CityJSON, OBJ, GeoPackage).
+#include <gtest/gtest.h>
+
+#include <array>
+#include <filesystem>
+#include <fstream>
+#include <gdal_priv.h>
+#include <map>
+#include <ogrsf_frmts.h>
+#include <sstream>
+
+#include "geometry/polygon.hpp"
+#include "heights/heights.hpp"
+#include "io/height_reader.hpp"
+#include "io/raster_writer.hpp"
+#include "lod1/solid.hpp"
+#include "support/shapes.hpp"
+
+namespace fs = std::filesystem;
+
+namespace lodforge {
+namespace {
+
+TEST(Solid, ExtrudedPolygonWithHoleIsAValidClosedOutwardShell) {
+  const PolygonWithHoles p{{{0, 0}, {10, 0}, {10, 8}, {0, 8}}, {{{3, 3}, {3, 5}, {6, 5}, {6, 3}}}};
+  const Solid s = extrude(p, 2.0, 14.0);
+  EXPECT_EQ(s.faces.size(), 2u + 4u + 4u);
+  EXPECT_EQ(shell_problem(s), "");
+  EXPECT_NEAR(volume(s), (80.0 - 6.0) * 12.0, 1e-9);
+}
+
+TEST(Solid, BrokenShellsAreCaught) {
+  const PolygonWithHoles p{{{0, 0}, {10, 0}, {10, 8}, {0, 8}}, {}};
+  Solid open = extrude(p, 0, 5);
+  open.faces.pop_back();
+  EXPECT_NE(shell_problem(open).find("not closed"), std::string::npos);
+  Solid flipped = extrude(p, 0, 5);
+  std::reverse(flipped.faces[3].rings[0].begin(), flipped.faces[3].rings[0].end());
+  EXPECT_NE(shell_problem(flipped).find("same direction"), std::string::npos);
+  Solid inward = extrude(p, 0, 5);
+  for (Face& f : inward.faces) for (Ring3& r : f.rings) std::reverse(r.begin(), r.end());
+  EXPECT_NE(shell_problem(inward).find("inward"), std::string::npos);
+  Solid warped = extrude(p, 0, 5);
+  warped.faces[1].rings[0][0].z() += 0.5;
+  EXPECT_NE(shell_problem(warped), "");
+}
+
+HeightRaster constant_raster(float value, float nodata_value, bool all_nodata) {
+  HeightRaster r;
+  r.transform.c = {0, 0.5, 0, 20, 0, -0.5};
+  r.values = cv::Mat(40, 40, CV_32F, cv::Scalar(value));
+  r.valid = cv::Mat(40, 40, CV_8U, cv::Scalar(all_nodata ? 0 : 1));
+  (void)nodata_value;
+  return r;
+}
+
+TEST(Heights, StatisticsAndNodata) {
+  const PolygonWithHoles square{{{5, 5}, {15, 5}, {15, 15}, {5, 15}}, {}};
+  HeightRaster dsm = constant_raster(2.0f, -9999, false);
+  // Roof 12 m inside the square, with one hot pixel (a chimney) of 40 m.
+  for (int y = 10; y < 30; ++y)
+    for (int x = 10; x < 30; ++x) dsm.values.at<float>(y, x) = 12.0f;
+  dsm.values.at<float>(20, 20) = 40.0f;
+  HeightOptions o;
+  Heights h = building_heights(square, dsm, nullptr, o);
+  ASSERT_TRUE(h.ok) << h.reason;
+  EXPECT_EQ(h.roof_samples, 400);
+  EXPECT_NEAR(h.roof, (399 * 12.0 + 40.0) / 400, 1e-9);  // the paper's mean
+  EXPECT_NEAR(h.ground, 2.0, 1e-9);                      // the ring around it, no DTM
+  o.roof = "median";
+  EXPECT_NEAR(building_heights(square, dsm, nullptr, o).roof, 12.0, 1e-9);
+  const HeightRaster empty = constant_raster(0, -9999, true);
+  h = building_heights(square, empty, nullptr, o);
+  EXPECT_FALSE(h.ok);
+  EXPECT_EQ(h.reason, "no valid DSM value inside the footprint");
+  const HeightRaster dtm = constant_raster(1.5f, -9999, false);
+  h = building_heights(square, dsm, &dtm, o);
+  EXPECT_NEAR(h.ground, 1.5, 1e-9);
+}
+
+std::string delft(const std::string& name) { return test::shared_data() + "/delft-ahn3-bgt/" + name; }
+
+// The BGT footprints by lokaalid, oriented as the core expects.
+std::map<std::string, PolygonWithHoles> bgt_footprints() {
+  GDALAllRegister();
+  std::map<std::string, PolygonWithHoles> out;
+  GDALDataset* d = static_cast<GDALDataset*>(GDALOpenEx(delft("derived/bgt_pand_buildings.geojson").c_str(), GDAL_OF_VECTOR, nullptr, nullptr, nullptr));
+  for (auto& f : *d->GetLayer(0)) {
+    const OGRGeometry* g = f->GetGeometryRef();
+    const OGRPolygon* poly = wkbFlatten(g->getGeometryType()) == wkbMultiPolygon ? g->toMultiPolygon()->getGeometryRef(0) : g->toPolygon();
+    auto ring = [](const OGRLinearRing* r, bool outer) {
+      Ring out;
+      for (int i = 0; i + 1 < r->getNumPoints(); ++i) out.emplace_back(r->getX(i), r->getY(i));
+      if ((signed_area(out) > 0) != outer) std::reverse(out.begin(), out.end());
+      return out;
+    };
+    PolygonWithHoles p{ring(poly->getExteriorRing(), true), {}};
+    for (int k = 0; k < poly->getNumInteriorRings(); ++k) p.holes.push_back(ring(poly->getInteriorRing(k), false));
+    out[f->GetFieldAsString("lokaalid")] = p;
+  }
+  GDALClose(d);
+  return out;
+}
+
+double median(std::vector<double> v) {
+  std::sort(v.begin(), v.end());
+  return v[v.size() / 2];
+}
+
+TEST(Heights, AgreeWith3dfierOnTheDelftFootprints) {
+  const auto footprints = bgt_footprints();
+  ASSERT_GT(footprints.size(), 100u);
+  GDALAllRegister();
+  GDALDataset* seg = static_cast<GDALDataset*>(GDALOpen(delft("derived/dsm_50cm.tif").c_str(), GA_ReadOnly));
+  GeoTransform grid;
+  seg->GetGeoTransform(grid.c.data());
+  const cv::Rect all(0, 0, seg->GetRasterXSize(), seg->GetRasterYSize());
+  GDALClose(seg);
+  const HeightRaster dsm = HeightWindowReader(delft("derived/dsm_50cm.tif")).read(all, grid);
+  const HeightRaster dtm = HeightWindowReader(delft("derived/dtm_50cm.tif")).read(all, grid);
+  HeightOptions o;
+  o.roof = "percentile";  // 3dfier's 90th percentile
+  std::ifstream csv(delft("reference/reference_lod1_heights_3dfier.csv"));
+  std::string line;
+  std::getline(csv, line);
+  std::vector<double> roof_error, ground_error;
+  while (std::getline(csv, line)) {
+    std::vector<std::string> f;
+    std::stringstream s(line);
+    for (std::string x; std::getline(s, x, ',');) f.push_back(x);
+    auto it = footprints.find(f[1]);
+    if (it == footprints.end()) continue;
+    const Heights h = building_heights(it->second, dsm, &dtm, o);
+    if (!h.ok) continue;
+    roof_error.push_back(std::abs(h.roof - std::stod(f[6])));
+    ground_error.push_back(std::abs(h.ground - std::stod(f[5])));
+  }
+  ASSERT_GT(roof_error.size(), 140u);
+  EXPECT_LT(median(roof_error), 1.0);
+  EXPECT_LT(median(ground_error), 1.0);
+  std::cout << "matched " << roof_error.size() << ", median |roof - 3dfier| = " << median(roof_error)
+            << " m, median |ground - 3dfier| = " << median(ground_error) << " m\n";
+}
+
+}  // namespace
+}  // namespace lodforge
+
+namespace lodforge {
+namespace {
+
+struct Output {
+  int code;
+  std::string text;
+};
+
+Output shell(const std::string& command) {
+  Output o{-1, {}};
+  FILE* pipe = popen((command + " 2>&1").c_str(), "r");
+  std::array<char, 4096> buffer;
+  while (std::size_t n = fread(buffer.data(), 1, buffer.size(), pipe)) o.text.append(buffer.data(), n);
+  const int status = pclose(pipe);
+  o.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  return o;
+}
+
+std::string slurp_file(const fs::path& p) {
+  std::ifstream in(p);
+  std::ostringstream s;
+  s << in.rdbuf();
+  return s.str();
+}
+
+class ModelFiles : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    dir = fs::temp_directory_path() / ("lodforge_models_" + std::to_string(::getpid()) + "_" +
+                                       ::testing::UnitTest::GetInstance()->current_test_info()->name());
+    fs::remove_all(dir);
+    fs::create_directories(dir);
+  }
+  void TearDown() override { fs::remove_all(dir); }
+  fs::path dir;
+};
+
+std::vector<fs::path> files_with(const fs::path& d, const std::string& suffix) {
+  std::vector<fs::path> out;
+  for (const auto& e : fs::directory_iterator(d))
+    if (e.path().string().size() > suffix.size() && e.path().string().compare(e.path().string().size() - suffix.size(), suffix.size(), suffix) == 0)
+      out.push_back(e.path());
+  std::sort(out.begin(), out.end());
+  return out;
+}
+
+TEST_F(ModelFiles, DelftOutputsValidateAgainstTheOfficialSchemasAndEveryShellIsClosed) {
+  const std::string data = test::shared_data();
+  std::ofstream(dir / "job.yaml") << "inputs:\n  segmentation: {path: " << data << "/delft-ahn3-bgt/derived/top_class_50cm.tif}\n"
+                                  << "  dsm: {path: " << data << "/delft-ahn3-bgt/derived/dsm_50cm.tif}\n"
+                                  << "  dtm: {path: " << data << "/delft-ahn3-bgt/derived/dtm_50cm.tif}\n"
+                                  << "tiling: {tile_size_m: 64}\noutput: {dir: out}\nwork_dir: work\n"
+                                  << "stages: {heights: {roof: percentile}}\n";
+  const Output run = shell(std::string(LODFORGE_BINARY) + " run " + (dir / "job.yaml").string());
+  ASSERT_EQ(run.code, 0) << run.text;
+  const std::string report = slurp_file(dir / "out" / "report.json");
+  EXPECT_NE(report.find("\"buildings\": 55, \"ok\": 53, \"fallback\": 2, \"lod1\": 55"), std::string::npos) << report;
+
+  const auto gml = files_with(dir / "out" / "tiles", ".gml");
+  ASSERT_GT(gml.size(), 5u);
+  std::string all;
+  for (const fs::path& p : gml) all += " " + p.string();
+  const Output xml = shell("XML_CATALOG_FILES=" + data + "/citygml2-schemas/catalog.xml xmllint --noout --nonet --schema " + data +
+                           "/citygml2-schemas/citygml/profiles/base/2.0/CityGML.xsd" + all);
+  EXPECT_EQ(xml.code, 0) << xml.text;
+  for (const fs::path& p : gml) EXPECT_NE(xml.text.find(p.string() + " validates"), std::string::npos) << p;
+
+  std::string cityjson;
+  for (const fs::path& p : files_with(dir / "out" / "tiles", ".city.json")) cityjson += " " + p.string();
+  const Output cj = shell("/usr/bin/python3 " + std::string(LODFORGE_SOURCE_DIR) + "/scripts/validate/cityjson.py " + data +
+                          "/cityjson2-schemas/cityjson.min.schema.json" + cityjson);
+  EXPECT_EQ(cj.code, 0) << cj.text;
+
+  // OBJ: one object per building with LOD1, all faces referring to existing vertices.
+  int objects = 0;
+  for (const fs::path& p : files_with(dir / "out" / "tiles", ".obj")) {
+    std::ifstream in(p);
+    int vertices = 0;
+    for (std::string line; std::getline(in, line);) {
+      if (line.rfind("o ", 0) == 0) ++objects;
+      if (line.rfind("v ", 0) == 0) ++vertices;
+      if (line.rfind("f ", 0) == 0) {
+        std::istringstream f(line.substr(2));
+        for (int id; f >> id;) EXPECT_TRUE(id >= 1 && id <= vertices) << p << ": " << line;
+      }
+    }
+  }
+  EXPECT_EQ(objects, 55);
+}
+
+TEST_F(ModelFiles, BuildingWithoutHeightsIsReportedAndStillWrittenAsLod0) {
+  ASSERT_EQ(shell(std::string(LODFORGE_BINARY) + " synth --out " + (dir / "city").string() + " --size-m 150 --seed 4").code, 0);
+  // A DSM that is nodata everywhere.
+  GDALAllRegister();
+  GDALDataset* seg = static_cast<GDALDataset*>(GDALOpen((dir / "city" / "seg_class.tif").c_str(), GA_ReadOnly));
+  RasterMeta meta;
+  seg->GetGeoTransform(meta.transform.c.data());
+  meta.crs_wkt = seg->GetProjectionRef();
+  meta.has_nodata = true;
+  meta.nodata = -9999;
+  const cv::Mat nodata(seg->GetRasterYSize(), seg->GetRasterXSize(), CV_32F, cv::Scalar(-9999));
+  GDALClose(seg);
+  write_geotiff((dir / "empty_dsm.tif").string(), {nodata}, meta);
+  std::ofstream(dir / "job.yaml") << "inputs:\n  segmentation: {path: city/seg_class.tif}\n  dsm: {path: empty_dsm.tif}\n"
+                                  << "tiling: {tile_size_m: 1000}\noutput: {dir: out, formats: [citygml, gpkg]}\nwork_dir: work\n";
+  const Output run = shell(std::string(LODFORGE_BINARY) + " run " + (dir / "job.yaml").string());
+  ASSERT_EQ(run.code, 0) << run.text;
+  const std::string report = slurp_file(dir / "out" / "report.json");
+  EXPECT_NE(report.find("\"lod1\": 0"), std::string::npos) << report;
+  EXPECT_NE(report.find("no valid DSM value inside the footprint (LOD0 only)"), std::string::npos) << report;
+  const std::string gml = slurp_file(dir / "out" / "tiles" / "c0000_r0000.gml");
+  const auto count = [&gml](const std::string& what) {
+    std::size_t n = 0;
+    for (std::size_t at = gml.find(what); at != std::string::npos; at = gml.find(what, at + 1)) ++n;
+    return n;
+  };
+  EXPECT_GT(count("<bldg:lod0FootPrint>"), 5u);
+  EXPECT_EQ(count("<bldg:lod1Solid>"), 0u);
+  EXPECT_EQ(count("<gen:value>lod0_only</gen:value>"), count("<bldg:Building "));
+}
+
+}  // namespace
+}  // namespace lodforge
