@@ -268,3 +268,49 @@ TEST_F(ModelFiles, BuildingWithoutHeightsIsReportedAndStillWrittenAsLod0) {
 
 }  // namespace
 }  // namespace lodforge
+
+namespace lodforge {
+namespace {
+
+TEST_F(ModelFiles, DsmOnAnotherGridIsResampledOrRefusedAsConfigured) {
+  const std::string data = test::shared_data();
+  const std::string dsm = data + "/delft-ahn3-bgt/derived/dsm_50cm.tif";
+  // The same DSM at 1 m pixels with a shifted origin: another grid.
+  const Output warp = shell("gdalwarp -q -tr 1 1 -te 84810 447415 85070 447640 -r average " + dsm + " " + (dir / "dsm_1m.tif").string());
+  ASSERT_EQ(warp.code, 0) << warp.text;
+  auto job = [&](const std::string& name, const std::string& raster, const std::string& extra) {
+    std::ofstream(dir / (name + ".yaml")) << "inputs:\n  segmentation: {path: " << data << "/delft-ahn3-bgt/derived/top_class_50cm.tif}\n"
+                                          << "  dsm: {path: " << raster << "}\n" << extra
+                                          << "tiling: {tile_size_m: 1000}\noutput: {dir: " << name << "_out, formats: [gpkg]}\nwork_dir: " << name << "_work\n";
+    return (dir / (name + ".yaml")).string();
+  };
+  const Output refused = shell(std::string(LODFORGE_BINARY) + " run " + job("strict", (dir / "dsm_1m.tif").string(), "  on_grid_mismatch: error\n"));
+  EXPECT_EQ(refused.code, 1);
+  EXPECT_NE(refused.text.find("inputs.dsm.path: '" + (dir / "dsm_1m.tif").string() + "': is on another grid"), std::string::npos) << refused.text;
+  EXPECT_FALSE(fs::exists(dir / "strict_out" / "report.json"));
+
+  ASSERT_EQ(shell(std::string(LODFORGE_BINARY) + " run " + job("same", dsm, "")).code, 0);
+  const Output resampled = shell(std::string(LODFORGE_BINARY) + " run " + job("warped", (dir / "dsm_1m.tif").string(), ""));
+  ASSERT_EQ(resampled.code, 0) << resampled.text;
+  EXPECT_NE(resampled.text.find("resampled onto the segmentation's grid"), std::string::npos) << resampled.text;
+  // Roof heights from the resampled DSM stay close to those from the original.
+  auto roofs = [](const fs::path& file) {
+    GDALAllRegister();
+    std::map<long, double> out;
+    GDALDataset* d = static_cast<GDALDataset*>(GDALOpenEx(file.c_str(), GDAL_OF_VECTOR, nullptr, nullptr, nullptr));
+    EXPECT_NE(d, nullptr) << file;
+    if (!d) return out;
+    for (auto& f : *d->GetLayer(0)) out[long(f->GetFieldAsInteger64("id"))] = f->GetFieldAsDouble("roof_height");
+    GDALClose(d);
+    return out;
+  };
+  const auto a = roofs(dir / "same_out" / "tiles" / "c0000_r0000.gpkg"), b = roofs(dir / "warped_out" / "tiles" / "c0000_r0000.gpkg");
+  ASSERT_EQ(a.size(), b.size());
+  std::vector<double> differences;
+  for (const auto& [id, roof] : a) differences.push_back(std::abs(roof - b.at(id)));
+  std::sort(differences.begin(), differences.end());
+  EXPECT_LT(differences[differences.size() / 2], 0.5);
+}
+
+}  // namespace
+}  // namespace lodforge
