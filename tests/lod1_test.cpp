@@ -7,6 +7,8 @@
 #include <gdal_priv.h>
 #include <map>
 #include <ogrsf_frmts.h>
+#include <opencv2/core.hpp>
+#include <opencv2/imgcodecs.hpp>
 #include <sstream>
 
 #include "geometry/polygon.hpp"
@@ -233,6 +235,17 @@ TEST_F(ModelFiles, DelftOutputsValidateAgainstTheOfficialSchemasAndEveryShellIsC
     }
   }
   EXPECT_EQ(objects, 55);
+
+  // A quick-look picture per tile with buildings: the tile's size, outlines drawn in red.
+  for (const fs::path& p : gml) {
+    const fs::path png = fs::path(p).replace_extension(".png");
+    const cv::Mat image = cv::imread(png.string());
+    ASSERT_FALSE(image.empty()) << png;
+    EXPECT_LE(image.cols, 128);  // 64 m tiles at 0.5 m
+    cv::Mat red;
+    cv::inRange(image, cv::Scalar(0, 0, 150), cv::Scalar(120, 120, 255), red);
+    EXPECT_GT(cv::countNonZero(red), 10) << png;
+  }
 }
 
 TEST_F(ModelFiles, BuildingWithoutHeightsIsReportedAndStillWrittenAsLod0) {

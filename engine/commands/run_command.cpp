@@ -4,6 +4,7 @@
 #include <filesystem>
 #include <fstream>
 #include <gdal_priv.h>
+#include <opencv2/imgproc.hpp>
 #include <iostream>
 #include <map>
 #include <mutex>
@@ -24,6 +25,7 @@
 #include "io/footprint_writer.hpp"
 #include "io/height_reader.hpp"
 #include "io/model_writers.hpp"
+#include "io/quicklook.hpp"
 #include "lod1/solid.hpp"
 #include "io/raster.hpp"
 #include "job/job.hpp"
@@ -142,6 +144,7 @@ struct TileResult {
   int dropped_small = 0;
   std::vector<std::string> too_large;
   std::string summary;  // kept in the done marker, replayed on resume
+  cv::Mat quicklook_background;  // the tile's picture, when output.quicklook
   double seconds = 0;
 };
 
@@ -231,6 +234,27 @@ BuildingModel model_of(const BuildingOutput& b, const Heights* h, const std::str
   }
   m.status = !b.ok ? "fallback" : (m.has_lod1 || !h ? "ok" : "lod0_only");
   return m;
+}
+
+// The orthophoto's window on the segmentation's grid as a BGR picture (first three bands, or grey).
+cv::Mat read_orthophoto(const std::string& path, const cv::Rect& w) {
+  GDALDataset* d = static_cast<GDALDataset*>(GDALOpen(path.c_str(), GA_ReadOnly));
+  if (!d) throw InputError("'" + path + "': not a raster GDAL can read");
+  const int bands = std::min(3, d->GetRasterCount());
+  std::vector<cv::Mat> channels;
+  for (int b = bands; b >= 1; --b) {  // BGR
+    cv::Mat m(w.height, w.width, CV_8U);
+    if (d->GetRasterBand(b)->RasterIO(GF_Read, w.x, w.y, w.width, w.height, m.data, w.width, w.height, GDT_Byte, 0, 0) != CE_None) {
+      GDALClose(d);
+      throw InputError("'" + path + "': cannot read: " + CPLGetLastErrorMsg());
+    }
+    channels.push_back(m);
+  }
+  GDALClose(d);
+  while (channels.size() < 3) channels.push_back(channels.front().clone());
+  cv::Mat out;
+  cv::merge(channels, out);
+  return out;
 }
 
 struct Totals {
@@ -332,6 +356,7 @@ int run_job(int argc, char** argv) {
   const std::string dsm_source = job.inputs.dsm.path.empty() ? "" : aligned_source(job.inputs.dsm.path, grid_spec, (fs::path(job.work_dir) / "dsm.aligned.vrt").string());
   const std::string dtm_source = job.inputs.dtm.path.empty() ? "" : aligned_source(job.inputs.dtm.path, grid_spec, (fs::path(job.work_dir) / "dtm.aligned.vrt").string());
   if (!dsm_source.empty() && dsm_source != job.inputs.dsm.path) spdlog::info("{}: resampled onto the segmentation's grid ({})", job.inputs.dsm.path, dsm_source);
+  const std::string ortho_source = job.inputs.orthophoto.path.empty() ? "" : aligned_source(job.inputs.orthophoto.path, grid_spec, (fs::path(job.work_dir) / "orthophoto.aligned.vrt").string());
   if (!dtm_source.empty() && dtm_source != job.inputs.dtm.path) spdlog::info("{}: resampled onto the segmentation's grid ({})", job.inputs.dtm.path, dtm_source);
   const double pixel = seg.transform.pixel_size();
   const TileGrid grid(seg.size, int(std::lround(job.tiling.tile_size_m / pixel)));
@@ -425,6 +450,18 @@ int run_job(int argc, char** argv) {
                   }
                   r->heights = std::move(*heights);
                 }
+                if (job.output.quicklook && !r->buildings.empty()) {
+                  const cv::Rect tile_rect = grid.rect(tile);
+                  if (!job.inputs.orthophoto.path.empty()) {
+                    r->quicklook_background = read_orthophoto(ortho_source, tile_rect);
+                  } else if (!dsm_source.empty()) {
+                    const HeightRaster dsm = HeightWindowReader(dsm_source).read(tile_rect, seg.transform);
+                    r->quicklook_background = hillshade(dsm.values, dsm.valid, pixel);
+                  } else {
+                    cv::Mat grey = MaskWindowReader(job.inputs.segmentation.path, selector).read(tile_rect) * 120 + 40;
+                    cv::cvtColor(grey, r->quicklook_background, cv::COLOR_GRAY2BGR);
+                  }
+                }
                 r->dropped_small = contours->dropped_small;
                 r->too_large = contours->too_large;
                 r->summary = make_summary(*r);
@@ -448,6 +485,15 @@ int run_job(int argc, char** argv) {
                     if (fs::exists(out_dir / relative)) outputs.push_back(relative);
                   }
                 }
+                if (!r->skipped && !r->quicklook_background.empty()) {
+                  std::vector<QuicklookOutline> outlines;
+                  for (const BuildingOutput& b : r->buildings) outlines.push_back({b.footprint, b.ok});
+                  GeoTransform t = seg.transform;
+                  t.c[0] = seg.transform.to_map(tile_rect.x, tile_rect.y).x();
+                  t.c[3] = seg.transform.to_map(tile_rect.x, tile_rect.y).y();
+                  write_quicklook((out_dir / ("tiles/" + r->name + ".png")).string(), r->quicklook_background, t, outlines);
+                }
+                if (fs::exists(out_dir / ("tiles/" + r->name + ".png"))) outputs.push_back("tiles/" + r->name + ".png");
                 if (!r->skipped) store.mark_done(r->name, fnv1a(r->name, job_key), r->summary);
                 std::size_t count = 0;
                 account(r->summary, r->name, totals, count);

@@ -61,10 +61,12 @@ struct TilingOptions {
 struct OutputOptions {
   std::string dir = "out";
   std::vector<std::string> formats{"citygml", "cityjson", "obj", "gpkg"};
+  bool quicklook = true;
 
   template <class V>
   void visit(V& v) {
     v("dir", dir, "output directory: one file per tile and format, the tile index and the run report");
+    v("quicklook", quicklook, "a PNG per tile: LOD0 outlines over the orthophoto, or over a hillshade of the DSM");
     v("formats", formats, "output formats, one file per tile each: citygml (2.0), cityjson (2.0), obj, gpkg, geojson", Check::one_of({"citygml", "cityjson", "obj", "gpkg", "geojson"}));
   }
 };

@@ -1,0 +1,54 @@
+#include "io/quicklook.hpp"
+
+#include <cmath>
+#include <filesystem>
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
+#include <unistd.h>
+
+#include "io/errors.hpp"
+
+namespace lodforge {
+
+cv::Mat hillshade(const cv::Mat& dsm, const cv::Mat& valid, double pixel_size) {
+  cv::Mat filled = dsm.clone();
+  filled.setTo(0, valid == 0);
+  cv::Mat dx, dy;
+  cv::Sobel(filled, dx, CV_32F, 1, 0, 3, 1.0 / (8 * pixel_size));
+  cv::Sobel(filled, dy, CV_32F, 0, 1, 3, 1.0 / (8 * pixel_size));
+  const double zenith = M_PI / 4, azimuth = 7 * M_PI / 4;  // 45° high, from the north-west
+  cv::Mat shade(dsm.size(), CV_8U);
+  for (int y = 0; y < dsm.rows; ++y)
+    for (int x = 0; x < dsm.cols; ++x) {
+      const double gx = dx.at<float>(y, x), gy = -dy.at<float>(y, x);  // rows grow southwards
+      const double slope = std::atan(std::hypot(gx, gy));
+      const double aspect = std::atan2(gy, -gx);
+      const double v = std::cos(zenith) * std::cos(slope) + std::sin(zenith) * std::sin(slope) * std::cos(azimuth - aspect);
+      shade.at<uint8_t>(y, x) = valid.at<uint8_t>(y, x) ? uint8_t(std::clamp(40 + 215 * v, 0.0, 255.0)) : 0;
+    }
+  cv::Mat colour;
+  cv::cvtColor(shade, colour, cv::COLOR_GRAY2BGR);
+  return colour;
+}
+
+void write_quicklook(const std::string& path, cv::Mat image, const GeoTransform& t, const std::vector<QuicklookOutline>& outlines) {
+  constexpr int shift = 3;
+  auto draw = [&](const Ring& ring, const cv::Scalar& colour) {
+    std::vector<cv::Point> points;
+    for (const Vec2& p : ring) {
+      const Vec2 q = t.to_pixel(p);
+      points.emplace_back(int(std::lround(q.x() * (1 << shift))), int(std::lround(q.y() * (1 << shift))));
+    }
+    cv::polylines(image, std::vector<std::vector<cv::Point>>{points}, true, colour, 1, cv::LINE_AA, shift);
+  };
+  for (const QuicklookOutline& o : outlines) {
+    const cv::Scalar colour = o.ok ? cv::Scalar(40, 40, 230) : cv::Scalar(0, 220, 255);  // BGR: red, yellow
+    draw(o.footprint.outer, colour);
+    for (const Ring& h : o.footprint.holes) draw(h, colour);
+  }
+  const std::string temp = path + ".partial-" + std::to_string(getpid()) + ".png";
+  if (!cv::imwrite(temp, image)) throw InputError("'" + path + "': cannot write the quick-look image");
+  std::filesystem::rename(temp, path);
+}
+
+}  // namespace lodforge
