@@ -268,7 +268,7 @@ TEST_F(ModelFiles, BuildingWithoutHeightsIsReportedAndStillWrittenAsLod0) {
   const std::string report = slurp_file(dir / "out" / "report.json");
   EXPECT_NE(report.find("\"lod1\": 0"), std::string::npos) << report;
   EXPECT_NE(report.find("no valid DSM value inside the footprint (LOD0 only)"), std::string::npos) << report;
-  const std::string gml = slurp_file(dir / "out" / "tiles" / "c0000_r0000.gml");
+  const std::string gml = slurp_file(dir / "out" / "tiles" / "r0000_c0000.gml");
   const auto count = [&gml](const std::string& what) {
     std::size_t n = 0;
     for (std::size_t at = gml.find(what); at != std::string::npos; at = gml.find(what, at + 1)) ++n;
@@ -317,12 +317,89 @@ TEST_F(ModelFiles, DsmOnAnotherGridIsResampledOrRefusedAsConfigured) {
     GDALClose(d);
     return out;
   };
-  const auto a = roofs(dir / "same_out" / "tiles" / "c0000_r0000.gpkg"), b = roofs(dir / "warped_out" / "tiles" / "c0000_r0000.gpkg");
+  const auto a = roofs(dir / "same_out" / "tiles" / "r0000_c0000.gpkg"), b = roofs(dir / "warped_out" / "tiles" / "r0000_c0000.gpkg");
   ASSERT_EQ(a.size(), b.size());
   std::vector<double> differences;
   for (const auto& [id, roof] : a) differences.push_back(std::abs(roof - b.at(id)));
   std::sort(differences.begin(), differences.end());
   EXPECT_LT(differences[differences.size() / 2], 0.5);
+}
+
+}  // namespace
+}  // namespace lodforge
+
+namespace lodforge {
+namespace {
+
+std::map<long, std::string> gpkg_footprints(const fs::path& file) {
+  GDALAllRegister();
+  std::map<long, std::string> out;
+  GDALDataset* d = static_cast<GDALDataset*>(GDALOpenEx(file.c_str(), GDAL_OF_VECTOR, nullptr, nullptr, nullptr));
+  EXPECT_NE(d, nullptr) << file;
+  if (!d) return out;
+  for (auto& f : *d->GetLayer(0)) {
+    char* wkt = nullptr;
+    f->GetGeometryRef()->exportToWkt(&wkt);
+    out[long(f->GetFieldAsInteger64("id"))] = wkt;
+    CPLFree(wkt);
+  }
+  GDALClose(d);
+  return out;
+}
+
+// Absolute OBJ vertices (mm) as a sorted list.
+std::vector<std::array<long long, 3>> obj_vertices(const fs::path& file) {
+  std::ifstream in(file);
+  double ox = 0, oy = 0;
+  std::vector<std::array<long long, 3>> out;
+  for (std::string line; std::getline(in, line);) {
+    if (line.rfind("# origin ", 0) == 0) std::istringstream(line.substr(9)) >> ox >> oy;
+    if (line.rfind("v ", 0) == 0) {
+      double x, y, z;
+      std::istringstream(line.substr(2)) >> x >> y >> z;
+      out.push_back({std::llround((x + ox) * 1000), std::llround((y + oy) * 1000), std::llround(z * 1000)});
+    }
+  }
+  std::sort(out.begin(), out.end());
+  out.erase(std::unique(out.begin(), out.end()), out.end());  // distinct points (triangles repeat them)
+  return out;
+}
+
+TEST_F(ModelFiles, MergedTilesEqualOneTileAndValidate) {
+  const std::string data = test::shared_data();
+  auto job = [&](const std::string& name, double tile) {
+    std::ofstream(dir / (name + ".yaml")) << "inputs:\n  segmentation: {path: " << data << "/delft-ahn3-bgt/derived/top_class_50cm.tif}\n"
+                                          << "  dsm: {path: " << data << "/delft-ahn3-bgt/derived/dsm_50cm.tif}\n"
+                                          << "tiling: {tile_size_m: " << tile << "}\noutput: {dir: " << name << "_out}\nwork_dir: " << name << "_work\n";
+    const Output r = shell(std::string(LODFORGE_BINARY) + " run " + (dir / (name + ".yaml")).string());
+    EXPECT_EQ(r.code, 0) << r.text;
+  };
+  job("tiled", 64);
+  job("whole", 1000);
+  const Output merge = shell(std::string(LODFORGE_BINARY) + " merge " + (dir / "tiled_out").string());
+  ASSERT_EQ(merge.code, 0) << merge.text;
+  const fs::path merged = dir / "tiled_out" / "merged";
+  EXPECT_EQ(gpkg_footprints(merged / "lodforge.gpkg"), gpkg_footprints(dir / "whole_out" / "tiles" / "r0000_c0000.gpkg"));
+  // The same points to the millimetre (each file rounds relative to its own origin).
+  const auto merged_points = obj_vertices(merged / "lodforge.obj"), whole_points = obj_vertices(dir / "whole_out" / "tiles" / "r0000_c0000.obj");
+  ASSERT_EQ(merged_points.size(), whole_points.size());
+  for (std::size_t i = 0; i < merged_points.size(); ++i)
+    for (int k = 0; k < 3; ++k) EXPECT_LE(std::llabs(merged_points[i][k] - whole_points[i][k]), 1) << i;
+  const Output xml = shell("XML_CATALOG_FILES=" + data + "/citygml2-schemas/catalog.xml xmllint --noout --nonet --schema " + data +
+                           "/citygml2-schemas/citygml/profiles/base/2.0/CityGML.xsd " + (merged / "lodforge.gml").string());
+  EXPECT_EQ(xml.code, 0) << xml.text;
+  const Output cj = shell("/usr/bin/python3 " + std::string(LODFORGE_SOURCE_DIR) + "/scripts/validate/cityjson.py " + data +
+                          "/cityjson2-schemas/cityjson.min.schema.json " + (merged / "lodforge.city.json").string());
+  EXPECT_EQ(cj.code, 0) << cj.text;
+  const std::string gml = slurp_file(merged / "lodforge.gml"), whole = slurp_file(dir / "whole_out" / "tiles" / "r0000_c0000.gml");
+  const auto buildings = [](const std::string& text) {
+    std::size_t n = 0;
+    for (std::size_t at = text.find("<bldg:Building "); at != std::string::npos; at = text.find("<bldg:Building ", at + 1)) ++n;
+    return n;
+  };
+  EXPECT_EQ(buildings(gml), 55u);
+  EXPECT_EQ(buildings(gml), buildings(whole));
+  EXPECT_EQ(gml.find("<?xml"), gml.rfind("<?xml"));  // one header
 }
 
 }  // namespace

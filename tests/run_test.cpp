@@ -194,6 +194,9 @@ TEST_F(SynthRun, ShardsTogetherGiveTheSingleRunOutputs) {
   parts.erase("tile_index.geojson");
   EXPECT_TRUE(single == parts);
   EXPECT_EQ(lodforge("run " + sharded.string() + " --shard 3/3").code, 1);
+  // Merging the shards' tile indexes gives the single run's index.
+  ASSERT_EQ(lodforge("merge " + (dir / "sharded_out").string()).code, 0);
+  EXPECT_EQ(slurp(dir / "sharded_out" / "tile_index.geojson"), slurp(dir / "single_out" / "tile_index.geojson"));
 }
 
 // Peak memory of a child process run (KiB).

@@ -8,5 +8,6 @@ int run_regularize(int argc, char** argv);
 int run_options(int argc, char** argv);
 int run_job(int argc, char** argv);
 int run_config(int argc, char** argv);
+int run_merge(int argc, char** argv);
 
 }  // namespace lodforge

@@ -19,7 +19,7 @@ cv::Rect TileGrid::rect(int tile) const {
 
 std::string TileGrid::name(int tile) const {
   char buffer[32];
-  std::snprintf(buffer, sizeof buffer, "c%04d_r%04d", tile % cols, tile / cols);
+  std::snprintf(buffer, sizeof buffer, "r%04d_c%04d", tile / cols, tile % cols);  // sorts in tile order
   return buffer;
 }
 

@@ -20,7 +20,7 @@ struct TileGrid {
   TileGrid(cv::Size raster_size, int tile_side_px);
   int count() const { return cols * rows; }
   cv::Rect rect(int tile) const;  // clipped to the raster
-  std::string name(int tile) const;  // "c0003_r0012"
+  std::string name(int tile) const;  // "r0012_c0003": row, column; names sort in tile order
 };
 
 // Reads windows of a segmentation raster as a 0/1 building mask. One per thread (GDAL dataset

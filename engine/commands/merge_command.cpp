@@ -1,0 +1,301 @@
+// lodforge merge OUT_DIR: combines a run's per-tile files into one file per format (and the
+// shards' tile indexes into one), streaming, in tile order.
+#include <filesystem>
+#include <fstream>
+#include <gdal_priv.h>
+#include <iostream>
+#include <map>
+#include <ogrsf_frmts.h>
+#include <regex>
+#include <spdlog/spdlog.h>
+#include <sstream>
+
+#include "cli/args.hpp"
+#include "commands/commands.hpp"
+#include "io/errors.hpp"
+#include "io/model_writers.hpp"
+
+namespace lodforge {
+
+namespace fs = std::filesystem;
+
+namespace {
+
+std::vector<fs::path> tile_files(const fs::path& tiles, const std::string& extension) {
+  std::vector<fs::path> out;
+  for (const auto& e : fs::directory_iterator(tiles)) {
+    const std::string name = e.path().filename().string();
+    if (name.size() > extension.size() && name.compare(name.size() - extension.size(), extension.size(), extension) == 0 &&
+        name.find(".partial") == std::string::npos)
+      out.push_back(e.path());
+  }
+  std::sort(out.begin(), out.end());  // tile names sort in tile order
+  return out;
+}
+
+class Output {
+ public:
+  explicit Output(fs::path path) : path_(std::move(path)), temp_(path_.string() + ".partial") {
+    out_.open(temp_, std::ios::trunc);
+    if (!out_) throw InputError("'" + path_.string() + "': cannot create");
+  }
+  std::ofstream& out() { return out_; }
+  void commit() {
+    out_.close();
+    if (!out_) throw InputError("'" + path_.string() + "': writing failed");
+    fs::rename(temp_, path_);
+  }
+
+ private:
+  fs::path path_, temp_;
+  std::ofstream out_;
+};
+
+// CityGML: one header, every tile's cityObjectMember blocks, one footer.
+void merge_citygml(const std::vector<fs::path>& files, const fs::path& target) {
+  Output o(target);
+  for (std::size_t k = 0; k < files.size(); ++k) {
+    std::ifstream in(files[k]);
+    std::string line;
+    bool body = false;
+    while (std::getline(in, line)) {
+      if (line == "</core:CityModel>") break;
+      if (line.rfind("  <core:cityObjectMember>", 0) == 0) body = true;
+      if (body || k == 0) o.out() << line << '\n';
+    }
+  }
+  o.out() << "</core:CityModel>\n";
+  o.commit();
+}
+
+long long millimetres(const std::string& text) { return std::llround(std::stod(text) * 1000.0); }
+
+// Millimetres as metres with three decimals, exactly (no floating point on the way).
+std::string metres(long long mm) {
+  char buffer[32];
+  std::snprintf(buffer, sizeof buffer, "%s%lld.%03lld", mm < 0 ? "-" : "", std::llabs(mm) / 1000, std::llabs(mm) % 1000);
+  return buffer;
+}
+
+// OBJ: vertices moved to the first tile's origin, face indices offset.
+void merge_obj(const std::vector<fs::path>& files, const fs::path& target) {
+  Output o(target);
+  long long ox = 0, oy = 0;
+  std::size_t offset = 0;
+  const std::regex origin(R"(# origin (\S+) (\S+) )");
+  for (std::size_t k = 0; k < files.size(); ++k) {
+    std::ifstream in(files[k]);
+    std::string line;
+    long long tx = 0, ty = 0;
+    std::size_t count = 0;
+    while (std::getline(in, line)) {
+      std::smatch m;
+      if (std::regex_search(line, m, origin)) {
+        tx = millimetres(m[1]);
+        ty = millimetres(m[2]);
+        if (k == 0) {
+          ox = tx;
+          oy = ty;
+          o.out() << "# lodforge OBJ, merged from " << files.size() << " tiles\n" << line << '\n';
+        }
+      } else if (line.rfind("v ", 0) == 0) {
+        std::istringstream v(line.substr(2));
+        std::string x, y, z;
+        v >> x >> y >> z;
+        o.out() << "v " << metres(millimetres(x) + tx - ox) << ' ' << metres(millimetres(y) + ty - oy) << ' ' << z << '\n';
+        ++count;
+      } else if (line.rfind("f ", 0) == 0) {
+        std::istringstream f(line.substr(2));
+        o.out() << 'f';
+        for (std::size_t id; f >> id;) o.out() << ' ' << id + offset;
+        o.out() << '\n';
+      } else if (line.rfind("o ", 0) == 0) {
+        o.out() << line << '\n';
+      }
+    }
+    offset += count;
+  }
+  o.commit();
+}
+
+// CityJSON: CityObjects concatenated, vertices re-indexed onto one transform.
+void merge_cityjson(const std::vector<fs::path>& files, const fs::path& target) {
+  Output o(target);
+  std::map<std::array<long long, 3>, std::size_t> index;
+  std::vector<std::array<long long, 3>> vertices;
+  long long ox = 0, oy = 0;
+  bool first_object = true;
+  const std::regex translate(R"("translate": \[(\S+), (\S+), )");
+  for (std::size_t k = 0; k < files.size(); ++k) {
+    std::ifstream in(files[k]);
+    std::stringstream whole;
+    whole << in.rdbuf();
+    const std::string text = whole.str();
+    std::smatch m;
+    if (!std::regex_search(text, m, translate)) throw InputError("'" + files[k].string() + "': not a lodforge CityJSON tile");
+    const long long tx = millimetres(m[1]), ty = millimetres(m[2]);
+    if (k == 0) {
+      ox = tx;
+      oy = ty;
+      const std::size_t objects = text.find("\"CityObjects\": {");
+      o.out() << text.substr(0, objects) << "\"CityObjects\": {";
+    }
+    // This tile's vertices, moved onto the first tile's translate.
+    std::vector<std::size_t> remap;
+    const std::size_t at = text.find("\"vertices\": [");
+    std::istringstream numbers(text.substr(at + 13));
+    std::string token;
+    std::vector<long long> values;
+    for (char c; numbers.get(c);) {
+      if (std::isdigit(static_cast<unsigned char>(c)) || c == '-') token += c;
+      else if (!token.empty()) { values.push_back(std::stoll(token)); token.clear(); }
+    }
+    for (std::size_t i = 0; i + 2 < values.size(); i += 3) {
+      const std::array<long long, 3> v{values[i] + tx - ox, values[i + 1] + ty - oy, values[i + 2]};
+      auto [it, inserted] = index.try_emplace(v, vertices.size());
+      if (inserted) vertices.push_back(v);
+      remap.push_back(it->second);
+    }
+    // Every CityObject line, its boundary indices renumbered.
+    std::istringstream lines(text);
+    std::string line;
+    const std::regex number(R"(\d+)");
+    while (std::getline(lines, line)) {
+      if (line.rfind("  \"lodforge_b", 0) != 0) continue;
+      if (!line.empty() && line.back() == ',') line.pop_back();
+      std::string rewritten;
+      std::size_t pos = 0;
+      for (std::size_t b = line.find("\"boundaries\": "); b != std::string::npos; b = line.find("\"boundaries\": ", pos)) {
+        const std::size_t start = b + 14;
+        std::size_t end = start;
+        for (int depth = 0; end < line.size(); ++end) {
+          if (line[end] == '[') ++depth;
+          if (line[end] == ']' && --depth == 0) break;
+        }
+        rewritten += line.substr(pos, start - pos);
+        const std::string inner = line.substr(start, end + 1 - start);
+        std::string renumbered;
+        std::size_t last = 0;
+        for (std::sregex_iterator it(inner.begin(), inner.end(), number), stop; it != stop; ++it) {
+          renumbered += inner.substr(last, std::size_t(it->position()) - last) + std::to_string(remap.at(std::stoul(it->str())));
+          last = std::size_t(it->position() + it->length());
+        }
+        rewritten += renumbered + inner.substr(last);
+        pos = end + 1;
+      }
+      rewritten += line.substr(pos);
+      o.out() << (first_object ? "\n" : ",\n") << rewritten;
+      first_object = false;
+    }
+  }
+  o.out() << "\n },\n \"vertices\": [";
+  for (std::size_t i = 0; i < vertices.size(); ++i)
+    o.out() << (i ? ", " : "") << (i % 4 == 0 ? "\n  " : "") << '[' << vertices[i][0] << ", " << vertices[i][1] << ", " << vertices[i][2] << ']';
+  o.out() << "\n ]\n}\n";
+  o.commit();
+}
+
+// GeoPackage / GeoJSON through OGR: the first tile's layer definition, every feature appended.
+void merge_ogr(const std::vector<fs::path>& files, const fs::path& target, const std::string& driver_name) {
+  GDALAllRegister();
+  CPLSetConfigOption("OGR_CURRENT_DATE", "2000-01-01T00:00:00.000Z");
+  const fs::path temp = target.parent_path() / (target.stem().string() + ".partial" + target.extension().string());
+  fs::remove(temp);
+  GDALDataset* out = GetGDALDriverManager()->GetDriverByName(driver_name.c_str())->Create(temp.c_str(), 0, 0, 0, GDT_Unknown, nullptr);
+  if (!out) throw InputError("'" + target.string() + "': cannot create");
+  OGRLayer* layer = nullptr;
+  for (const fs::path& f : files) {
+    GDALDataset* in = static_cast<GDALDataset*>(GDALOpenEx(f.c_str(), GDAL_OF_VECTOR, nullptr, nullptr, nullptr));
+    if (!in) { GDALClose(out); throw InputError("'" + f.string() + "': cannot read"); }
+    OGRLayer* source = in->GetLayer(0);
+    if (!layer) {
+      layer = out->CreateLayer("footprints", source->GetSpatialRef(), wkbPolygon, nullptr);
+      for (int i = 0; i < source->GetLayerDefn()->GetFieldCount(); ++i) layer->CreateField(source->GetLayerDefn()->GetFieldDefn(i));
+    }
+    const bool transaction = out->StartTransaction() == OGRERR_NONE;
+    for (auto& feature : *source) {
+      OGRFeature copy(layer->GetLayerDefn());
+      copy.SetFrom(feature.get());
+      copy.SetFID(OGRNullFID);
+      if (layer->CreateFeature(&copy) != OGRERR_NONE) {
+        GDALClose(in);
+        GDALClose(out);
+        fs::remove(temp);
+        throw InputError("'" + target.string() + "': cannot write a feature: " + CPLGetLastErrorMsg());
+      }
+    }
+    if (transaction) out->CommitTransaction();
+    GDALClose(in);
+  }
+  GDALClose(out);
+  fs::rename(temp, target);
+}
+
+// The shards' tile indexes, as one.
+void merge_indexes(const fs::path& dir) {
+  std::vector<fs::path> parts;
+  for (const auto& e : fs::directory_iterator(dir))
+    if (e.path().filename().string().rfind("tile_index.shard-", 0) == 0) parts.push_back(e.path());
+  if (parts.empty()) return;
+  std::sort(parts.begin(), parts.end());
+  std::vector<std::pair<std::string, std::string>> features;  // (tile name, feature)
+  std::string header;
+  const std::regex tile(R"re("tile": "([^"]+)")re");
+  for (const fs::path& p : parts) {
+    std::ifstream in(p);
+    std::string line;
+    std::getline(in, line);
+    header = line;
+    while (std::getline(in, line)) {
+      std::smatch m;
+      if (line.rfind("{\"type\": \"Feature\"", 0) != 0 || !std::regex_search(line, m, tile)) continue;
+      if (line.back() == ',') line.pop_back();
+      features.push_back({m[1], line});
+    }
+  }
+  std::sort(features.begin(), features.end());
+  Output o(dir / "tile_index.geojson");
+  o.out() << header << '\n';
+  for (std::size_t i = 0; i < features.size(); ++i) o.out() << features[i].second << (i + 1 < features.size() ? ",\n" : "\n");
+  o.out() << "]}\n";
+  o.commit();
+}
+
+}  // namespace
+
+int run_merge(int argc, char** argv) {
+  Args args("merge", "Combines the per-tile files of a run (all shards) into one file per format in OUT_DIR/merged/,\n"
+                     "and the shards' tile indexes into OUT_DIR/tile_index.geojson.\nusage: lodforge merge OUT_DIR [options]");
+  args.value("formats", "F[,F...]", "formats to merge (default: every format found)").flag("help", "show this help");
+  if (argc < 3 || std::string(argv[2]) == "--help") {
+    if (argc >= 3) { std::cout << args.help(); return 0; }
+    throw InputError("lodforge merge: give the run's output directory: lodforge merge OUT_DIR");
+  }
+  const fs::path dir = argv[2];
+  args.parse(argc, argv, 3);
+  if (!fs::is_directory(dir / "tiles")) throw InputError("'" + dir.string() + "': no tiles/ directory; is it a lodforge run's output.dir?");
+  std::vector<std::string> formats = {"citygml", "cityjson", "obj", "gpkg", "geojson"};
+  if (auto f = args.get("formats")) {
+    formats.clear();
+    std::stringstream s(*f);
+    for (std::string x; std::getline(s, x, ',');) formats.push_back(x);
+  }
+  merge_indexes(dir);
+  fs::create_directories(dir / "merged");
+  for (const std::string& format : formats) {
+    const std::string extension = extension_of(format);
+    const auto files = tile_files(dir / "tiles", extension);
+    if (files.empty()) continue;
+    const fs::path target = dir / "merged" / ("lodforge" + extension);
+    if (format == "citygml") merge_citygml(files, target);
+    else if (format == "cityjson") merge_cityjson(files, target);
+    else if (format == "obj") merge_obj(files, target);
+    else if (format == "gpkg") merge_ogr(files, target, "GPKG");
+    else if (format == "geojson") merge_ogr(files, target, "GeoJSON");
+    else throw InputError("lodforge merge: --formats: unknown format '" + format + "'");
+    spdlog::info("{}: {} tiles", target.string(), files.size());
+  }
+  return 0;
+}
+
+}  // namespace lodforge
