@@ -8,36 +8,19 @@
 #include <ogrsf_frmts.h>
 
 #include "io/raster_writer.hpp"
+#include "support/process.hpp"
 
 namespace fs = std::filesystem;
 
 namespace lodforge {
 namespace {
 
-struct CommandRun {
-  int code;
-  std::string output;  // stdout and stderr
-};
-
-CommandRun lodforge(const std::string& arguments) {
-  const std::string command = std::string(LODFORGE_BINARY) + " " + arguments + " 2>&1";
-  CommandRun run{-1, {}};
-  FILE* pipe = popen(command.c_str(), "r");
-  std::array<char, 4096> buffer;
-  while (std::size_t n = fread(buffer.data(), 1, buffer.size(), pipe)) run.output.append(buffer.data(), n);
-  const int status = pclose(pipe);
-  run.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  return run;
-}
+using CommandRun = test::CommandOutput;
+using test::lodforge;
 
 class Cli : public ::testing::Test {
  protected:
-  void SetUp() override {
-    dir = fs::temp_directory_path() / ("lodforge_cli_" + std::to_string(::getpid()) + "_" +
-                                       ::testing::UnitTest::GetInstance()->current_test_info()->name());
-    fs::remove_all(dir);
-    fs::create_directories(dir);
-  }
+  void SetUp() override { dir = test::fresh_test_directory("lodforge_cli"); }
   void TearDown() override { fs::remove_all(dir); }
   std::string path(const std::string& name) const { return (dir / name).string(); }
   fs::path dir;

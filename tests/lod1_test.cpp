@@ -16,6 +16,7 @@
 #include "io/height_reader.hpp"
 #include "io/raster_writer.hpp"
 #include "lod1/solid.hpp"
+#include "support/process.hpp"
 #include "support/shapes.hpp"
 
 namespace fs = std::filesystem;
@@ -150,36 +151,14 @@ TEST(Heights, AgreeWith3dfierOnTheDelftFootprints) {
 namespace lodforge {
 namespace {
 
-struct Output {
-  int code;
-  std::string text;
-};
+using Output = test::CommandOutput;
+using test::shell;
 
-Output shell(const std::string& command) {
-  Output o{-1, {}};
-  FILE* pipe = popen((command + " 2>&1").c_str(), "r");
-  std::array<char, 4096> buffer;
-  while (std::size_t n = fread(buffer.data(), 1, buffer.size(), pipe)) o.text.append(buffer.data(), n);
-  const int status = pclose(pipe);
-  o.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  return o;
-}
-
-std::string slurp_file(const fs::path& p) {
-  std::ifstream in(p);
-  std::ostringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
+std::string slurp_file(const fs::path& p) { return test::slurp(p); }
 
 class ModelFiles : public ::testing::Test {
  protected:
-  void SetUp() override {
-    dir = fs::temp_directory_path() / ("lodforge_models_" + std::to_string(::getpid()) + "_" +
-                                       ::testing::UnitTest::GetInstance()->current_test_info()->name());
-    fs::remove_all(dir);
-    fs::create_directories(dir);
-  }
+  void SetUp() override { dir = test::fresh_test_directory("lodforge_models"); }
   void TearDown() override { fs::remove_all(dir); }
   fs::path dir;
 };
@@ -201,7 +180,7 @@ TEST_F(ModelFiles, DelftOutputsValidateAgainstTheOfficialSchemasAndEveryShellIsC
                                   << "tiling: {tile_size_m: 64}\noutput: {dir: out}\nwork_dir: work\n"
                                   << "stages: {heights: {roof: percentile}}\n";
   const Output run = shell(std::string(LODFORGE_BINARY) + " run " + (dir / "job.yaml").string());
-  ASSERT_EQ(run.code, 0) << run.text;
+  ASSERT_EQ(run.code, 0) << run.output;
   const std::string report = slurp_file(dir / "out" / "report.json");
   EXPECT_NE(report.find("\"buildings\": 55, \"ok\": 53, \"fallback\": 2, \"lod1\": 55"), std::string::npos) << report;
 
@@ -211,14 +190,14 @@ TEST_F(ModelFiles, DelftOutputsValidateAgainstTheOfficialSchemasAndEveryShellIsC
   for (const fs::path& p : gml) all += " " + p.string();
   const Output xml = shell("XML_CATALOG_FILES=" + data + "/citygml2-schemas/catalog.xml xmllint --noout --nonet --schema " + data +
                            "/citygml2-schemas/citygml/profiles/base/2.0/CityGML.xsd" + all);
-  EXPECT_EQ(xml.code, 0) << xml.text;
-  for (const fs::path& p : gml) EXPECT_NE(xml.text.find(p.string() + " validates"), std::string::npos) << p;
+  EXPECT_EQ(xml.code, 0) << xml.output;
+  for (const fs::path& p : gml) EXPECT_NE(xml.output.find(p.string() + " validates"), std::string::npos) << p;
 
   std::string cityjson;
   for (const fs::path& p : files_with(dir / "out" / "tiles", ".city.json")) cityjson += " " + p.string();
   const Output cj = shell("/usr/bin/python3 " + std::string(LODFORGE_SOURCE_DIR) + "/scripts/validate/cityjson.py " + data +
                           "/cityjson2-schemas/cityjson.min.schema.json" + cityjson);
-  EXPECT_EQ(cj.code, 0) << cj.text;
+  EXPECT_EQ(cj.code, 0) << cj.output;
 
   // OBJ: one object per building with LOD1, all faces referring to existing vertices.
   int objects = 0;
@@ -264,7 +243,7 @@ TEST_F(ModelFiles, BuildingWithoutHeightsIsReportedAndStillWrittenAsLod0) {
   std::ofstream(dir / "job.yaml") << "inputs:\n  segmentation: {path: city/seg_class.tif}\n  dsm: {path: empty_dsm.tif}\n"
                                   << "tiling: {tile_size_m: 1000}\noutput: {dir: out, formats: [citygml, gpkg]}\nwork_dir: work\n";
   const Output run = shell(std::string(LODFORGE_BINARY) + " run " + (dir / "job.yaml").string());
-  ASSERT_EQ(run.code, 0) << run.text;
+  ASSERT_EQ(run.code, 0) << run.output;
   const std::string report = slurp_file(dir / "out" / "report.json");
   EXPECT_NE(report.find("\"lod1\": 0"), std::string::npos) << report;
   EXPECT_NE(report.find("no valid DSM value inside the footprint (LOD0 only)"), std::string::npos) << report;
@@ -290,7 +269,7 @@ TEST_F(ModelFiles, DsmOnAnotherGridIsResampledOrRefusedAsConfigured) {
   const std::string dsm = data + "/delft-ahn3-bgt/derived/dsm_50cm.tif";
   // The same DSM at 1 m pixels with a shifted origin: another grid.
   const Output warp = shell("gdalwarp -q -tr 1 1 -te 84810 447415 85070 447640 -r average " + dsm + " " + (dir / "dsm_1m.tif").string());
-  ASSERT_EQ(warp.code, 0) << warp.text;
+  ASSERT_EQ(warp.code, 0) << warp.output;
   auto job = [&](const std::string& name, const std::string& raster, const std::string& extra) {
     std::ofstream(dir / (name + ".yaml")) << "inputs:\n  segmentation: {path: " << data << "/delft-ahn3-bgt/derived/top_class_50cm.tif}\n"
                                           << "  dsm: {path: " << raster << "}\n" << extra
@@ -299,13 +278,13 @@ TEST_F(ModelFiles, DsmOnAnotherGridIsResampledOrRefusedAsConfigured) {
   };
   const Output refused = shell(std::string(LODFORGE_BINARY) + " run " + job("strict", (dir / "dsm_1m.tif").string(), "  on_grid_mismatch: error\n"));
   EXPECT_EQ(refused.code, 1);
-  EXPECT_NE(refused.text.find("inputs.dsm.path: '" + (dir / "dsm_1m.tif").string() + "': is on another grid"), std::string::npos) << refused.text;
+  EXPECT_NE(refused.output.find("inputs.dsm.path: '" + (dir / "dsm_1m.tif").string() + "': is on another grid"), std::string::npos) << refused.output;
   EXPECT_FALSE(fs::exists(dir / "strict_out" / "report.json"));
 
   ASSERT_EQ(shell(std::string(LODFORGE_BINARY) + " run " + job("same", dsm, "")).code, 0);
   const Output resampled = shell(std::string(LODFORGE_BINARY) + " run " + job("warped", (dir / "dsm_1m.tif").string(), ""));
-  ASSERT_EQ(resampled.code, 0) << resampled.text;
-  EXPECT_NE(resampled.text.find("resampled onto the segmentation's grid"), std::string::npos) << resampled.text;
+  ASSERT_EQ(resampled.code, 0) << resampled.output;
+  EXPECT_NE(resampled.output.find("resampled onto the segmentation's grid"), std::string::npos) << resampled.output;
   // Roof heights from the resampled DSM stay close to those from the original.
   auto roofs = [](const fs::path& file) {
     GDALAllRegister();
@@ -372,12 +351,12 @@ TEST_F(ModelFiles, MergedTilesEqualOneTileAndValidate) {
                                           << "  dsm: {path: " << data << "/delft-ahn3-bgt/derived/dsm_50cm.tif}\n"
                                           << "tiling: {tile_size_m: " << tile << "}\noutput: {dir: " << name << "_out}\nwork_dir: " << name << "_work\n";
     const Output r = shell(std::string(LODFORGE_BINARY) + " run " + (dir / (name + ".yaml")).string());
-    EXPECT_EQ(r.code, 0) << r.text;
+    EXPECT_EQ(r.code, 0) << r.output;
   };
   job("tiled", 64);
   job("whole", 1000);
   const Output merge = shell(std::string(LODFORGE_BINARY) + " merge " + (dir / "tiled_out").string());
-  ASSERT_EQ(merge.code, 0) << merge.text;
+  ASSERT_EQ(merge.code, 0) << merge.output;
   const fs::path merged = dir / "tiled_out" / "merged";
   EXPECT_EQ(gpkg_footprints(merged / "lodforge.gpkg"), gpkg_footprints(dir / "whole_out" / "tiles" / "r0000_c0000.gpkg"));
   // The same points to the millimetre (each file rounds relative to its own origin).
@@ -387,10 +366,10 @@ TEST_F(ModelFiles, MergedTilesEqualOneTileAndValidate) {
     for (int k = 0; k < 3; ++k) EXPECT_LE(std::llabs(merged_points[i][k] - whole_points[i][k]), 1) << i;
   const Output xml = shell("XML_CATALOG_FILES=" + data + "/citygml2-schemas/catalog.xml xmllint --noout --nonet --schema " + data +
                            "/citygml2-schemas/citygml/profiles/base/2.0/CityGML.xsd " + (merged / "lodforge.gml").string());
-  EXPECT_EQ(xml.code, 0) << xml.text;
+  EXPECT_EQ(xml.code, 0) << xml.output;
   const Output cj = shell("/usr/bin/python3 " + std::string(LODFORGE_SOURCE_DIR) + "/scripts/validate/cityjson.py " + data +
                           "/cityjson2-schemas/cityjson.min.schema.json " + (merged / "lodforge.city.json").string());
-  EXPECT_EQ(cj.code, 0) << cj.text;
+  EXPECT_EQ(cj.code, 0) << cj.output;
   const std::string gml = slurp_file(merged / "lodforge.gml"), whole = slurp_file(dir / "whole_out" / "tiles" / "r0000_c0000.gml");
   const auto buildings = [](const std::string& text) {
     std::size_t n = 0;

@@ -16,6 +16,7 @@
 #include <thread>
 #include <unistd.h>
 
+#include "support/process.hpp"
 #include "support/shapes.hpp"
 
 namespace fs = std::filesystem;
@@ -23,28 +24,9 @@ namespace fs = std::filesystem;
 namespace lodforge {
 namespace {
 
-struct Result {
-  int code;
-  std::string output;
-};
-
-Result lodforge(const std::string& arguments) {
-  const std::string command = std::string(LODFORGE_BINARY) + " " + arguments + " 2>&1";
-  Result result{-1, {}};
-  FILE* pipe = popen(command.c_str(), "r");
-  std::array<char, 4096> buffer;
-  while (std::size_t n = fread(buffer.data(), 1, buffer.size(), pipe)) result.output.append(buffer.data(), n);
-  const int status = pclose(pipe);
-  result.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  return result;
-}
-
-std::string slurp(const fs::path& p) {
-  std::ifstream in(p, std::ios::binary);
-  std::ostringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
+using Result = test::CommandOutput;
+using test::lodforge;
+using test::slurp;
 
 // Every file under out/tiles plus the tile index, by relative name.
 std::map<std::string, std::string> output_bytes(const fs::path& out) {
@@ -77,12 +59,7 @@ std::map<long, std::string> footprints(const fs::path& out) {
 
 class Run : public ::testing::Test {
  protected:
-  void SetUp() override {
-    dir = fs::temp_directory_path() / ("lodforge_run_" + std::to_string(::getpid()) + "_" +
-                                       ::testing::UnitTest::GetInstance()->current_test_info()->name());
-    fs::remove_all(dir);
-    fs::create_directories(dir);
-  }
+  void SetUp() override { dir = test::fresh_test_directory("lodforge_run"); }
   void TearDown() override { fs::remove_all(dir); }
   // Writes a job; `extra` is appended verbatim.
   fs::path job(const std::string& name, const std::string& segmentation, double tile_m, const std::string& extra = "") {

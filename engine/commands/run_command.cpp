@@ -292,15 +292,6 @@ void account(const std::string& summary, const std::string& tile, Totals& t, std
   }
 }
 
-std::string epsg_name(const std::string& wkt) {
-  OGRSpatialReference srs;
-  if (wkt.empty() || srs.importFromWkt(wkt.c_str()) != OGRERR_NONE) return {};
-  srs.AutoIdentifyEPSG();
-  const char* code = srs.GetAuthorityCode(nullptr);
-  const char* name = srs.GetAuthorityName(nullptr);
-  return code && name ? std::string(name) + ":" + code : std::string();
-}
-
 void write_text_atomically(const fs::path& path, const std::string& text) {
   const fs::path temp = path.string() + ".partial";
   {
@@ -525,7 +516,7 @@ int run_job(int argc, char** argv) {
   const std::string suffix = shard.count > 1 ? ".shard-" + std::to_string(shard.index) + "-of-" + std::to_string(shard.count) : "";
   std::ostringstream index;
   index << "{\"type\": \"FeatureCollection\", \"name\": \"tile_index\"";
-  if (const std::string crs = epsg_name(seg.crs_wkt); !crs.empty())
+  if (const std::string crs = epsg_of(seg.crs_wkt); !crs.empty())
     index << ", \"crs\": {\"type\": \"name\", \"properties\": {\"name\": \"urn:ogc:def:crs:" << crs.substr(0, crs.find(':')) << "::" << crs.substr(crs.find(':') + 1) << "\"}}";
   index << ", \"features\": [\n";
   for (std::size_t i = 0; i < totals.index_features.size(); ++i) index << totals.index_features[i] << (i + 1 < totals.index_features.size() ? ",\n" : "\n");

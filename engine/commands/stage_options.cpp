@@ -5,18 +5,20 @@
 
 namespace lodforge {
 
-void apply_overrides(StageOptions& options, const std::vector<std::string>& assignments) {
-  std::vector<std::string> errors;
+std::map<std::string, std::string> split_assignments(const std::vector<std::string>& assignments, const std::string& flag,
+                                                     std::vector<std::string>& errors) {
   std::map<std::string, std::string> values;
   for (const std::string& a : assignments) {
     const auto eq = a.find('=');
-    if (eq == std::string::npos || eq == 0) {
-      errors.push_back("--set " + a + ": expected KEY=VALUE, e.g. labeling.kappa2=5");
-      continue;
-    }
-    values[a.substr(0, eq)] = a.substr(eq + 1);
+    if (eq == std::string::npos || eq == 0) errors.push_back(flag + " " + a + ": expected KEY=VALUE, e.g. labeling.kappa2=5");
+    else values[a.substr(0, eq)] = a.substr(eq + 1);
   }
-  OptionSetter setter(values);
+  return values;
+}
+
+void apply_overrides(StageOptions& options, const std::vector<std::string>& assignments) {
+  std::vector<std::string> errors;
+  OptionSetter setter(split_assignments(assignments, "--set", errors));
   options.visit(setter);
   setter.report_unknown();
   errors.insert(errors.end(), setter.errors.begin(), setter.errors.end());

@@ -24,6 +24,10 @@ struct StageOptions {
   }
 };
 
+// Splits "path=value" assignments; malformed ones are added to errors (named by flag).
+std::map<std::string, std::string> split_assignments(const std::vector<std::string>& assignments, const std::string& flag,
+                                                     std::vector<std::string>& errors);
+
 // Applies "path=value" assignments, then validates everything; throws InputError listing every
 // problem at once, each with its key path.
 void apply_overrides(StageOptions& options, const std::vector<std::string>& assignments);

@@ -6,6 +6,7 @@
 
 #include "cli/args.hpp"
 #include "commands/commands.hpp"
+#include "commands/stage_options.hpp"
 #include "common/option_visitors.hpp"
 #include "io/errors.hpp"
 #include "io/footprint_writer.hpp"
@@ -28,7 +29,8 @@ int run_synth(int argc, char** argv) {
   args.parse(argc, argv, 2);
   if (args.has("help")) { std::cout << args.help(); return 0; }
   const fs::path out = args.require("out");
-  std::map<std::string, std::string> values;
+  std::vector<std::string> errors;
+  std::map<std::string, std::string> values = split_assignments(args.all("set"), "--set", errors);
   if (auto size = args.get("size-m")) {
     const auto x = size->find('x');
     values["width_m"] = size->substr(0, x);
@@ -36,19 +38,15 @@ int run_synth(int argc, char** argv) {
   }
   if (auto v = args.get("pixel-size")) values["pixel_size_m"] = *v;
   if (auto v = args.get("seed")) values["seed"] = *v;
-  for (const std::string& a : args.all("set")) {
-    const auto eq = a.find('=');
-    if (eq == std::string::npos) throw InputError("--set " + a + ": expected KEY=VALUE");
-    values[a.substr(0, eq)] = a.substr(eq + 1);
-  }
   SynthOptions options;
   OptionSetter setter(values);
   options.visit(setter);
   setter.report_unknown();
   OptionValidator validator;
   options.visit(validator);
-  setter.errors.insert(setter.errors.end(), validator.errors.begin(), validator.errors.end());
-  if (!setter.errors.empty()) throw input_errors(setter.errors);
+  errors.insert(errors.end(), setter.errors.begin(), setter.errors.end());
+  errors.insert(errors.end(), validator.errors.begin(), validator.errors.end());
+  if (!errors.empty()) throw input_errors(errors);
 
   std::error_code ec;
   fs::create_directories(out, ec);

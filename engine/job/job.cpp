@@ -29,13 +29,7 @@ Job load_job(const std::string& path, const std::vector<std::string>& overrides)
   reader.report_unknown();
   std::vector<std::string> errors = reader.errors;
 
-  std::map<std::string, std::string> values;
-  for (const std::string& a : overrides) {
-    const auto eq = a.find('=');
-    if (eq == std::string::npos || eq == 0) errors.push_back("--set " + a + ": expected KEY=VALUE, e.g. stages.labeling.kappa2=5");
-    else values[a.substr(0, eq)] = a.substr(eq + 1);
-  }
-  OptionSetter setter(values);
+  OptionSetter setter(split_assignments(overrides, "--set", errors));
   job.visit(setter);
   setter.report_unknown();
   errors.insert(errors.end(), setter.errors.begin(), setter.errors.end());

@@ -1,0 +1,20 @@
+// Test helpers for running the lodforge binary and other commands, and reading files back.
+#pragma once
+#include <filesystem>
+#include <string>
+
+namespace lodforge::test {
+
+struct CommandOutput {
+  int code;            // exit code, -1 if killed
+  std::string output;  // standard output and error together
+};
+
+CommandOutput shell(const std::string& command);
+CommandOutput lodforge(const std::string& arguments);  // the built binary with these arguments
+std::string slurp(const std::filesystem::path& path);
+
+// A fresh directory per test, named after it, removed afterwards.
+std::filesystem::path fresh_test_directory(const std::string& prefix);
+
+}  // namespace lodforge::test
