@@ -1,0 +1,133 @@
+#include "run/run_report.hpp"
+
+#include <filesystem>
+#include <fstream>
+#include <spdlog/spdlog.h>
+#include <sstream>
+
+#include "io/errors.hpp"
+#include "io/model_writers.hpp"
+
+namespace lodforge {
+
+namespace fs = std::filesystem;
+
+namespace {
+
+std::string json_escape(const std::string& s) {
+  std::string out;
+  for (char c : s) {
+    if (c == '"' || c == '\\') { out += '\\'; out += c; }
+    else if (c == '\n') out += "\\n";
+    else if (static_cast<unsigned char>(c) < 0x20) out += ' ';
+    else out += c;
+  }
+  return out;
+}
+
+
+void account(const std::string& summary, const std::string& tile, Totals& t, std::size_t& buildings_in_tile) {
+  std::istringstream in(summary);
+  std::size_t n = 0, ok = 0, fb = 0, dropped = 0, lod1 = 0;
+  in >> n >> ok >> fb >> dropped >> lod1;
+  t.lod1 += lod1;
+  buildings_in_tile = n;
+  t.buildings += n;
+  t.ok += ok;
+  t.fallback += fb;
+  t.dropped_small += dropped;
+  std::string line;
+  std::getline(in, line);
+  while (std::getline(in, line)) {
+    std::istringstream fields(line);
+    std::string kind, a, b, c;
+    std::getline(fields, kind, '\t');
+    if (kind == "failed") {
+      std::getline(fields, a, '\t');
+      std::getline(fields, b, '\t');
+      std::getline(fields, c);
+      t.failed_json.push_back("{\"id\": " + a + ", \"tile\": \"" + tile + "\", \"stage\": \"" + json_escape(b) +
+                              "\", \"reason\": \"" + json_escape(c) + "\"}");
+    } else if (kind == "too_large") {
+      std::getline(fields, a);
+      t.too_large.push_back(a);
+    }
+  }
+}
+
+void write_text_atomically(const fs::path& path, const std::string& text) {
+  const fs::path temp = path.string() + ".partial";
+  {
+    std::ofstream out(temp, std::ios::trunc);
+    out << text;
+    if (!out.flush()) throw InputError("'" + path.string() + "': cannot write (disk full or not writable?)");
+  }
+  fs::rename(temp, path);
+}
+
+}  // namespace
+
+void record_tile(Totals& totals, const RunPlan& plan, const TileResult& result, const std::vector<std::string>& outputs) {
+  const TileGrid& grid = plan.grid;
+  const TileResult* r = &result;
+  std::size_t count = 0;
+  account(r->summary, r->name, totals, count);
+  (r->skipped ? totals.tiles_skipped : totals.tiles_processed)++;
+  totals.contours_reused += r->contours_reused;
+  totals.buildings_reused += r->buildings_reused;
+  if (count == 0) totals.tiles_empty++;
+  const cv::Rect rect = grid.rect(r->tile);
+  const Vec2 a = plan.transform.to_map(rect.x, rect.y), b = plan.transform.to_map(rect.x + rect.width, rect.y + rect.height);
+  std::ostringstream feature;
+  feature.precision(12);
+  feature << "{\"type\": \"Feature\", \"properties\": {\"tile\": \"" << r->name << "\", \"col\": " << r->tile % grid.cols
+          << ", \"row\": " << r->tile / grid.cols << ", \"status\": \"" << (count ? "done" : "empty")
+          << "\", \"buildings\": " << count << ", \"outputs\": [";
+  for (std::size_t i = 0; i < outputs.size(); ++i) feature << (i ? ", " : "") << '"' << outputs[i] << '"';
+  feature << "]}, \"geometry\": {\"type\": \"Polygon\", \"coordinates\": [[[" << a.x() << ", " << a.y() << "], [" << b.x()
+          << ", " << a.y() << "], [" << b.x() << ", " << b.y() << "], [" << a.x() << ", " << b.y() << "], [" << a.x()
+          << ", " << a.y() << "]]]}}";
+  totals.index_features.push_back(feature.str());
+  std::ostringstream tile_json;
+  tile_json << "{\"tile\": \"" << r->name << "\", \"buildings\": " << count << ", \"skipped\": " << (r->skipped ? "true" : "false")
+            << ", \"seconds\": " << r->seconds << "}";
+  totals.tile_json.push_back(tile_json.str());
+}
+
+void write_index_and_report(const Totals& totals, const RunPlan& plan, const std::string& job_path, int shard_index,
+                            int shard_count, std::size_t tiles_count, double elapsed) {
+  const Job& job = plan.job;
+  const fs::path& out_dir = plan.out_dir;
+  struct { int index, count; } shard{shard_index, shard_count};
+  struct { std::size_t n; std::size_t size() const { return n; } } tiles{tiles_count};
+  // The tile index and the run report (one per shard when sharded).
+  const std::string suffix = shard.count > 1 ? ".shard-" + std::to_string(shard.index) + "-of-" + std::to_string(shard.count) : "";
+  std::ostringstream index;
+  index << "{\"type\": \"FeatureCollection\", \"name\": \"tile_index\"";
+  if (const std::string crs = epsg_of(plan.crs_wkt); !crs.empty())
+    index << ", \"crs\": {\"type\": \"name\", \"properties\": {\"name\": \"urn:ogc:def:crs:" << crs.substr(0, crs.find(':')) << "::" << crs.substr(crs.find(':') + 1) << "\"}}";
+  index << ", \"features\": [\n";
+  for (std::size_t i = 0; i < totals.index_features.size(); ++i) index << totals.index_features[i] << (i + 1 < totals.index_features.size() ? ",\n" : "\n");
+  index << "]}\n";
+  write_text_atomically(out_dir / ("tile_index" + suffix + ".geojson"), index.str());
+  std::ostringstream report;
+  report << "{\n  \"job\": \"" << json_escape(fs::absolute(job_path).string()) << "\",\n  \"shard\": \"" << shard.index << "/" << shard.count
+         << "\",\n  \"tiles\": " << tiles.size() << ", \"tiles_processed\": " << totals.tiles_processed << ", \"tiles_resumed\": "
+         << totals.tiles_skipped << ", \"tiles_empty\": " << totals.tiles_empty << ",\n  \"checkpoints_reused\": {\"contours\": " << totals.contours_reused << ", \"buildings\": " << totals.buildings_reused << "},\n  \"buildings\": " << totals.buildings
+         << ", \"ok\": " << totals.ok << ", \"fallback\": " << totals.fallback << ", \"lod1\": " << totals.lod1 << ", \"dropped_small\": " << totals.dropped_small
+         << ", \"too_large\": " << totals.too_large.size() << ",\n  \"seconds\": " << elapsed << ",\n  \"failed_buildings\": [";
+  for (std::size_t i = 0; i < totals.failed_json.size(); ++i) report << (i ? ",\n    " : "\n    ") << totals.failed_json[i];
+  report << "],\n  \"too_large_buildings\": [";
+  for (std::size_t i = 0; i < totals.too_large.size(); ++i) report << (i ? ", " : "") << '"' << json_escape(totals.too_large[i]) << '"';
+  report << "],\n  \"per_tile\": [";
+  for (std::size_t i = 0; i < totals.tile_json.size(); ++i) report << (i ? ",\n    " : "\n    ") << totals.tile_json[i];
+  report << "]\n}\n";
+  write_text_atomically(out_dir / ("report" + suffix + ".json"), report.str());
+  spdlog::info("{} tiles ({} computed, {} resumed from {}), {} buildings: {} ok, {} fallback, {} with LOD1; {} small components dropped{}; {:.1f} s",
+               tiles.size(), totals.tiles_processed, totals.tiles_skipped, job.work_dir, totals.buildings, totals.ok, totals.fallback, totals.lod1,
+               totals.dropped_small, totals.too_large.empty() ? "" : "; " + std::to_string(totals.too_large.size()) + " too large (see report)",
+               elapsed);
+  spdlog::info("outputs in {} (tile_index{}.geojson, report{}.json)", out_dir.string(), suffix, suffix);
+}
+
+}  // namespace lodforge

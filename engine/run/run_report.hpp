@@ -1,0 +1,24 @@
+// The run's accounting: totals over tiles, the tile index and the report (JSON and a summary).
+#pragma once
+#include <cstddef>
+#include <string>
+#include <vector>
+
+#include "run/tile_worker.hpp"
+
+namespace lodforge {
+
+struct Totals {
+  std::size_t buildings = 0, ok = 0, fallback = 0, dropped_small = 0, tiles_processed = 0, tiles_skipped = 0, tiles_empty = 0;
+  std::size_t contours_reused = 0, buildings_reused = 0, lod1 = 0;
+  std::vector<std::string> failed_json, too_large, tile_json, index_features;
+};
+
+// Adds a finished (or resumed) tile to the totals and the index.
+void record_tile(Totals& totals, const RunPlan& plan, const TileResult& result, const std::vector<std::string>& outputs);
+
+// Writes tile_index[.shard-K-of-N].geojson and report[...].json; logs the summary.
+void write_index_and_report(const Totals& totals, const RunPlan& plan, const std::string& job_path, int shard_index,
+                            int shard_count, std::size_t tiles, double elapsed);
+
+}  // namespace lodforge

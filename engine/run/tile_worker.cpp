@@ -1,0 +1,244 @@
+#include "run/tile_worker.hpp"
+
+#include <chrono>
+#include <gdal_priv.h>
+#include <opencv2/imgproc.hpp>
+#include <optional>
+#include <sstream>
+#include <tbb/parallel_for.h>
+
+#include "io/errors.hpp"
+#include "io/height_reader.hpp"
+#include "io/model_writers.hpp"
+#include "io/quicklook.hpp"
+#include "lod1/solid.hpp"
+#include "pipeline/building.hpp"
+
+namespace lodforge {
+
+namespace fs = std::filesystem;
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+double seconds_since(Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); }
+
+
+std::vector<BuildingOutput> regularize_tile(const TileBuildings& tile, const Job& job, long raster_width, double pixel_size) {
+  std::vector<BuildingOutput> out(tile.buildings.size());
+  tbb::parallel_for(std::size_t(0), tile.buildings.size(), [&](std::size_t i) {
+    const BuildingContour& b = tile.buildings[i];
+    BuildingOutput& o = out[i];
+    o.id = std::int64_t(b.first_row) * raster_width + b.first_col;
+    o.first_row = b.first_row;
+    o.first_col = b.first_col;
+    if (job.regularizer == "deformation") {
+      BuildingResult r = regularize_building(b.rings, pixel_size, job.stages.core);
+      o.footprint = std::move(r.footprint);
+      o.ok = r.ok;
+      o.stage = r.failed_stage;
+      o.reason = r.reason;
+    } else if (job.regularizer == "douglas_peucker") {
+      o.footprint = fallback_footprint(b.rings, job.stages.core.fallback.tolerance_m);
+    } else {
+      o.footprint = fallback_footprint(b.rings, 0.0);
+    }
+  });
+  return out;
+}
+
+std::string make_summary(const TileResult& r) {
+  int ok = 0, lod1 = 0;
+  for (const BuildingOutput& b : r.buildings) ok += b.ok;
+  for (const Heights& h : r.heights) lod1 += h.ok;
+  std::ostringstream s;
+  s << r.buildings.size() << ' ' << ok << ' ' << r.buildings.size() - ok << ' ' << r.dropped_small << ' ' << lod1 << '\n';
+  for (const BuildingOutput& b : r.buildings)
+    if (!b.ok) s << "failed\t" << b.id << '\t' << b.stage << '\t' << b.reason << '\n';
+  for (std::size_t i = 0; i < r.heights.size(); ++i)
+    if (!r.heights[i].ok) s << "failed\t" << r.buildings[i].id << "\theights\t" << r.heights[i].reason << " (LOD0 only)\n";
+  for (const std::string& t : r.too_large) s << "too_large\t" << t << '\n';
+  return s.str();
+}
+
+std::string serialize_heights(const std::vector<Heights>& heights) {
+  std::ostringstream s;
+  s.precision(17);
+  for (const Heights& h : heights) s << h.ok << '\t' << h.roof << '\t' << h.ground << '\t' << h.roof_samples << '\t' << h.ground_samples << '\t' << h.reason << '\n';
+  return s.str();
+}
+
+std::optional<std::vector<Heights>> parse_heights(const std::string& text, std::size_t count) {
+  std::vector<Heights> out;
+  std::istringstream in(text);
+  std::string line;
+  while (std::getline(in, line)) {
+    std::istringstream f(line);
+    Heights h;
+    std::string ok;
+    std::getline(f, ok, '\t');
+    f >> h.roof >> h.ground >> h.roof_samples >> h.ground_samples;
+    f.get();
+    std::getline(f, h.reason);
+    h.ok = ok == "1";
+    out.push_back(h);
+  }
+  if (out.size() != count) return std::nullopt;
+  return out;
+}
+
+BuildingModel model_of(const BuildingOutput& b, const Heights* h, const std::string& tile, const Job& job) {
+  BuildingModel m;
+  m.id = b.id;
+  m.tile = tile;
+  m.footprint = b.footprint;
+  m.regularizer = b.ok ? job.regularizer : "douglas_peucker";
+  m.stage = b.stage;
+  m.reason = b.reason;
+  if (h && h->ok) {
+    m.solid = extrude(b.footprint, h->ground, h->roof);
+    if (const std::string problem = shell_problem(m.solid); problem.empty()) {
+      m.has_lod1 = true;
+      m.ground = h->ground;
+      m.roof = h->roof;
+    } else {
+      m.reason += (m.reason.empty() ? "" : "; ") + std::string("lod1: invalid shell: ") + problem;
+    }
+  } else if (h) {
+    if (b.ok) m.stage = "heights";
+    m.reason += (m.reason.empty() ? "" : "; ") + std::string("heights: ") + h->reason;
+  }
+  m.status = !b.ok ? "fallback" : (m.has_lod1 || !h ? "ok" : "lod0_only");
+  return m;
+}
+
+// The orthophoto's window on the segmentation's grid as a BGR picture (first three bands, or grey).
+cv::Mat read_orthophoto(const std::string& path, const cv::Rect& w) {
+  GDALDataset* d = static_cast<GDALDataset*>(GDALOpen(path.c_str(), GA_ReadOnly));
+  if (!d) throw InputError("'" + path + "': not a raster GDAL can read");
+  const int bands = std::min(3, d->GetRasterCount());
+  std::vector<cv::Mat> channels;
+  for (int b = bands; b >= 1; --b) {  // BGR
+    cv::Mat m(w.height, w.width, CV_8U);
+    if (d->GetRasterBand(b)->RasterIO(GF_Read, w.x, w.y, w.width, w.height, m.data, w.width, w.height, GDT_Byte, 0, 0) != CE_None) {
+      GDALClose(d);
+      throw InputError("'" + path + "': cannot read: " + CPLGetLastErrorMsg());
+    }
+    channels.push_back(m);
+  }
+  GDALClose(d);
+  while (channels.size() < 3) channels.push_back(channels.front().clone());
+  cv::Mat out;
+  cv::merge(channels, out);
+  return out;
+}
+
+}  // namespace
+
+std::shared_ptr<TileResult> process_tile(const RunPlan& plan, int tile) {
+  const Job& job = plan.job;
+  const TileGrid& grid = plan.grid;
+  const CheckpointStore& store = plan.store;
+  const double pixel = plan.pixel;
+  const long width = plan.size.width;
+  auto r = std::make_shared<TileResult>();
+  const auto t0 = Clock::now();
+  r->tile = tile;
+  r->name = grid.name(tile);
+  const std::uint64_t done_key = fnv1a(r->name, plan.job_key);
+  if (auto summary = store.done_summary(r->name, done_key)) {
+    r->skipped = true;
+    r->summary = *summary;
+    return r;
+  }
+  const MaskWindowReader reader(job.inputs.segmentation.path, plan.selector);
+  const TileWindow window = find_tile_window(reader, grid, tile, plan.halo_px, plan.max_window_px, job.stages.contour.connectivity);
+  const std::uint64_t contour_key = fnv1a(plan.contour_options + plan.transform_text + std::to_string(grid.tile_px), window.hash);
+  std::optional<TileBuildings> contours = store.load_contours(r->name, contour_key);
+  r->contours_reused = contours.has_value();
+  if (!contours) {
+    contours = trace_tile(window, grid, tile, plan.transform, job.stages.contour);
+    store.save_contours(r->name, contour_key, *contours);
+  }
+  const std::uint64_t buildings_key = fnv1a(plan.core_options, contour_key);
+  std::optional<std::vector<BuildingOutput>> buildings = store.load_buildings(r->name, buildings_key);
+  r->buildings_reused = buildings.has_value();
+  if (!buildings) {
+    buildings = regularize_tile(*contours, job, width, pixel);
+    store.save_buildings(r->name, buildings_key, *buildings);
+  }
+  r->buildings = std::move(*buildings);
+  if (!plan.dsm_source.empty()) {
+    const std::uint64_t heights_key = fnv1a(plan.heights_options, buildings_key);
+    std::optional<std::vector<Heights>> heights;
+    if (auto blob = store.load_blob("heights", r->name, heights_key)) heights = parse_heights(*blob, r->buildings.size());
+    if (!heights) {
+      const int margin = int(std::ceil((job.stages.heights.ring_outer_m + job.stages.core.corners.max_corner_shift_m) / pixel)) + 2;
+      const cv::Rect area = (contours->window + cv::Size(2 * margin, 2 * margin) - cv::Point(margin, margin)) &
+              cv::Rect(0, 0, plan.size.width, plan.size.height);
+      const HeightRaster dsm = HeightWindowReader(plan.dsm_source).read(area, plan.transform);
+      std::optional<HeightRaster> dtm;
+      if (!plan.dtm_source.empty()) dtm = HeightWindowReader(plan.dtm_source).read(area, plan.transform);
+      heights.emplace(r->buildings.size());
+      tbb::parallel_for(std::size_t(0), r->buildings.size(), [&](std::size_t i) {
+        (*heights)[i] = building_heights(r->buildings[i].footprint, dsm, dtm ? &*dtm : nullptr, job.stages.heights);
+      });
+      store.save_blob("heights", r->name, heights_key, serialize_heights(*heights));
+    }
+    r->heights = std::move(*heights);
+  }
+  if (job.output.quicklook && !r->buildings.empty()) {
+    const cv::Rect tile_rect = grid.rect(tile);
+    if (!job.inputs.orthophoto.path.empty()) {
+      r->quicklook_background = read_orthophoto(plan.ortho_source, tile_rect);
+    } else if (!plan.dsm_source.empty()) {
+      const HeightRaster dsm = HeightWindowReader(plan.dsm_source).read(tile_rect, plan.transform);
+      r->quicklook_background = hillshade(dsm.values, dsm.valid, pixel);
+    } else {
+      cv::Mat grey = MaskWindowReader(job.inputs.segmentation.path, plan.selector).read(tile_rect) * 120 + 40;
+      cv::cvtColor(grey, r->quicklook_background, cv::COLOR_GRAY2BGR);
+    }
+  }
+  r->dropped_small = contours->dropped_small;
+  r->too_large = contours->too_large;
+  r->summary = make_summary(*r);
+  r->seconds = seconds_since(t0);
+  return r;
+}
+
+std::vector<std::string> write_tile_outputs(const RunPlan& plan, const TileResult& result) {
+  const Job& job = plan.job;
+  const TileGrid& grid = plan.grid;
+  const CheckpointStore& store = plan.store;
+  const fs::path& out_dir = plan.out_dir;
+  const TileResult* r = &result;
+
+  std::vector<std::string> outputs;
+  const cv::Rect tile_rect = grid.rect(r->tile);
+  WriterContext context{plan.crs_wkt, r->name, plan.transform.to_map(tile_rect.x, tile_rect.y + tile_rect.height)};
+  if (!r->buildings.empty() || r->skipped) {
+    for (const std::string& format : job.output.formats) {
+      const std::string relative = "tiles/" + r->name + extension_of(format);
+      if (!r->skipped) {
+        const auto writer = make_model_writer(format, (out_dir / relative).string(), context);
+        for (std::size_t i = 0; i < r->buildings.size(); ++i)
+          writer->add(model_of(r->buildings[i], r->heights.empty() ? nullptr : &r->heights[i], r->name, job));
+        writer->finish();
+      }
+      if (fs::exists(out_dir / relative)) outputs.push_back(relative);
+    }
+  }
+  if (!r->skipped && !r->quicklook_background.empty()) {
+    std::vector<QuicklookOutline> outlines;
+    for (const BuildingOutput& b : r->buildings) outlines.push_back({b.footprint, b.ok});
+    GeoTransform t = plan.transform;
+    t.c[0] = plan.transform.to_map(tile_rect.x, tile_rect.y).x();
+    t.c[3] = plan.transform.to_map(tile_rect.x, tile_rect.y).y();
+    write_quicklook((out_dir / ("tiles/" + r->name + ".png")).string(), r->quicklook_background, t, outlines);
+  }
+  if (fs::exists(out_dir / ("tiles/" + r->name + ".png"))) outputs.push_back("tiles/" + r->name + ".png");
+  if (!r->skipped) store.mark_done(r->name, fnv1a(r->name, plan.job_key), r->summary);
+  return outputs;
+}
+
+}  // namespace lodforge

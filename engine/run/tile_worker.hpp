@@ -1,0 +1,57 @@
+// A tile's work in the run's pipeline: the parallel part (window, contours, footprints, heights,
+// picture, each from its checkpoint when there is one) and the in-order part (its files).
+#pragma once
+#include <cstdint>
+#include <filesystem>
+#include <memory>
+#include <opencv2/core/mat.hpp>
+#include <string>
+#include <vector>
+
+#include "heights/heights.hpp"
+#include "io/raster.hpp"
+#include "job/job.hpp"
+#include "run/checkpoint.hpp"
+#include "run/tiles.hpp"
+
+namespace lodforge {
+
+// Everything a tile needs to know about the run, fixed before the first tile.
+struct RunPlan {
+  const Job& job;
+  cv::Size size;  // of the segmentation raster
+  GeoTransform transform;
+  std::string crs_wkt;
+  double pixel;
+  TileGrid grid;
+  int halo_px, max_window_px;
+  BuildingSelector selector;
+  std::string dsm_source, dtm_source, ortho_source;  // on the segmentation's grid; empty: not given
+  const CheckpointStore& store;
+  // What each stage's results depend on besides its input, as text for the checkpoint keys.
+  std::string contour_options, core_options, heights_options, transform_text;
+  std::uint64_t job_key;  // inputs' identity, every option and the tiling: a complete tile's key
+  std::filesystem::path out_dir;
+};
+
+struct TileResult {
+  int tile = 0;
+  std::string name;
+  bool skipped = false;  // complete from an earlier run
+  bool contours_reused = false, buildings_reused = false;  // stage checkpoints found
+  std::vector<BuildingOutput> buildings;
+  std::vector<Heights> heights;  // per building, when a DSM is given
+  int dropped_small = 0;
+  std::vector<std::string> too_large;
+  std::string summary;  // kept in the done marker, replayed on resume
+  cv::Mat quicklook_background;  // the tile's picture, when output.quicklook
+  double seconds = 0;
+};
+
+std::shared_ptr<TileResult> process_tile(const RunPlan& plan, int tile);
+
+// Writes the tile's files (every format and the quick look) and marks it complete; returns the
+// files it has, relative to out_dir.
+std::vector<std::string> write_tile_outputs(const RunPlan& plan, const TileResult& result);
+
+}  // namespace lodforge
