@@ -214,6 +214,25 @@ TEST_F(ModelFiles, DelftOutputsValidateAgainstTheOfficialSchemasAndEveryShellIsC
     }
   }
   EXPECT_EQ(objects, 55);
+  // Each OBJ's origin (header) is the one the tile index records for its tile.
+  const std::string index = slurp_file(dir / "out" / "tile_index.geojson");
+  for (const fs::path& p : files_with(dir / "out" / "tiles", ".obj")) {
+    std::ifstream in(p);
+    std::string line;
+    std::getline(in, line);
+    std::getline(in, line);
+    double ox = 0, oy = 0;
+    std::istringstream(line.substr(std::string("# origin ").size())) >> ox >> oy;
+    const std::string tile = p.filename().string().substr(0, 11);
+    const std::size_t at = index.find("\"tile\": \"" + tile + "\"");
+    ASSERT_NE(at, std::string::npos) << tile;
+    const std::size_t origin = index.find("\"origin\": [", at);
+    double ix = 0, iy = 0;
+    char comma;
+    std::istringstream(index.substr(origin + 11)) >> ix >> comma >> iy;
+    EXPECT_DOUBLE_EQ(ix, ox) << tile;
+    EXPECT_DOUBLE_EQ(iy, oy) << tile;
+  }
 
   // A quick-look picture per tile with buildings: the tile's size, outlines drawn in red.
   for (const fs::path& p : gml) {

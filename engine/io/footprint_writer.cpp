@@ -38,94 +38,138 @@ void check_output_path(const std::string& path) {
   if (access(dir.c_str(), W_OK) != 0) throw InputError("'" + path + "': output directory '" + dir.string() + "' is not writable");
 }
 
-void write_footprints(const std::string& path, const FootprintLayer& layer, const std::vector<FootprintRecord>& records) {
+struct FootprintFileWriter::Impl {
+  std::string path;
+  FootprintLayer layer;
+  fs::path final_path, temp;
+  GDALDataset* dataset = nullptr;
+  OGRLayer* ogr_layer = nullptr;
+  bool transaction = false;
+
+  [[noreturn]] void fail(const std::string& what) {
+    const std::string message = "'" + path + "': " + what + ": " + CPLGetLastErrorMsg();
+    close_and_remove();
+    throw InputError(message);
+  }
+  void close_and_remove() {
+    if (dataset) GDALClose(dataset);
+    dataset = nullptr;
+    std::error_code ec;
+    fs::remove(temp, ec);
+  }
+};
+
+FootprintFileWriter::FootprintFileWriter(const std::string& path, const FootprintLayer& layer) : impl_(new Impl) {
   GDALAllRegister();
   CPLErrorReset();
-  check_output_path(path);
+  impl_->path = path;
+  impl_->layer = layer;
+  try {
+    check_output_path(path);
+  } catch (...) {
+    delete impl_;
+    throw;
+  }
   const std::string driver_name = driver_for(path);
-  const fs::path final_path = fs::absolute(path);
-  const fs::path temp = final_path.parent_path() /
-                        (final_path.stem().string() + ".partial-" + std::to_string(getpid()) + final_path.extension().string());
+  impl_->final_path = fs::absolute(path);
+  impl_->temp = impl_->final_path.parent_path() / (impl_->final_path.stem().string() + ".partial-" + std::to_string(getpid()) +
+                                                   impl_->final_path.extension().string());
   GDALDriver* driver = GetGDALDriverManager()->GetDriverByName(driver_name.c_str());
-  if (!driver) throw InputError("GDAL driver " + driver_name + " is not available");
-  fs::remove(temp);
-  GDALDataset* ds = driver->Create(temp.c_str(), 0, 0, 0, GDT_Unknown, nullptr);
-  if (!ds) throw InputError("'" + path + "': cannot create: " + CPLGetLastErrorMsg());
-  auto fail = [&](const std::string& what) {
-    GDALClose(ds);
-    fs::remove(temp);
-    throw InputError("'" + path + "': " + what + ": " + CPLGetLastErrorMsg());
-  };
+  fs::remove(impl_->temp);
+  impl_->dataset = driver ? driver->Create(impl_->temp.c_str(), 0, 0, 0, GDT_Unknown, nullptr) : nullptr;
+  if (!impl_->dataset) {
+    const std::string message = "'" + path + "': cannot create: " + CPLGetLastErrorMsg();
+    delete impl_;
+    throw InputError(message);
+  }
   OGRSpatialReference srs;
   OGRSpatialReference* srs_ptr = nullptr;
   if (!layer.crs_wkt.empty() && srs.importFromWkt(layer.crs_wkt.c_str()) == OGRERR_NONE) {
     srs.SetAxisMappingStrategy(OAMS_TRADITIONAL_GIS_ORDER);
     srs_ptr = &srs;
   }
-  OGRLayer* l = ds->CreateLayer(layer.name.c_str(), srs_ptr, wkbPolygon, nullptr);
-  if (!l) fail("cannot create layer");
-  auto field = [&](const char* name, OGRFieldType type) {
-    OGRFieldDefn def(name, type);
-    if (l->CreateField(&def) != OGRERR_NONE) fail(std::string("cannot create field ") + name);
-  };
-  field("id", OFTInteger64);
-  if (layer.write_status) {
-    field("status", OFTString);
-    field("stage", OFTString);
-    field("reason", OFTString);
-    field("regularizer", OFTString);
-  }
-  if (!layer.kind_field.empty()) field(layer.kind_field.c_str(), OFTString);
-  if (layer.write_heights) {
-    field("ground_height", OFTReal);
-    field("roof_height", OFTReal);
-  }
-  field("vertex_count", OFTInteger);
-  field("area_m2", OFTReal);
-  const bool transaction = ds->StartTransaction() == OGRERR_NONE;  // GeoPackage yes, GeoJSON no
-  for (const FootprintRecord& r : records) {
-    OGRFeature feature(l->GetLayerDefn());
-    feature.SetField("id", static_cast<GIntBig>(r.id));
+  try {
+    impl_->ogr_layer = impl_->dataset->CreateLayer(layer.name.c_str(), srs_ptr, wkbPolygon, nullptr);
+    if (!impl_->ogr_layer) impl_->fail("cannot create layer");
+    auto field = [&](const char* name, OGRFieldType type) {
+      OGRFieldDefn def(name, type);
+      if (impl_->ogr_layer->CreateField(&def) != OGRERR_NONE) impl_->fail(std::string("cannot create field ") + name);
+    };
+    field("id", OFTInteger64);
     if (layer.write_status) {
-      feature.SetField("status", r.status.c_str());
-      feature.SetField("stage", r.failed_stage.c_str());
-      feature.SetField("reason", r.reason.c_str());
-      feature.SetField("regularizer", r.regularizer.c_str());
+      field("status", OFTString);
+      field("stage", OFTString);
+      field("reason", OFTString);
+      field("regularizer", OFTString);
     }
-    if (!layer.kind_field.empty()) feature.SetField(layer.kind_field.c_str(), r.kind.c_str());
-    if (layer.write_heights && r.has_heights) {
-      feature.SetField("roof_height", r.roof_height);
-      feature.SetField("ground_height", r.ground_height);
-    } else if (layer.write_heights) {
-      feature.SetFieldNull(feature.GetFieldIndex("roof_height"));
-      feature.SetFieldNull(feature.GetFieldIndex("ground_height"));
+    if (!layer.kind_field.empty()) field(layer.kind_field.c_str(), OFTString);
+    if (layer.write_heights) {
+      field("ground_height", OFTReal);
+      field("roof_height", OFTReal);
     }
-    int vertices = int(r.polygon.outer.size());
-    for (const Ring& h : r.polygon.holes) vertices += int(h.size());
-    feature.SetField("vertex_count", vertices);
-    feature.SetField("area_m2", area(r.polygon));
-    OGRPolygon polygon;
-    OGRLinearRing outer = to_ogr(r.polygon.outer);
-    polygon.addRing(&outer);
-    for (const Ring& h : r.polygon.holes) {
-      OGRLinearRing hole = to_ogr(h);
-      polygon.addRing(&hole);
-    }
-    feature.SetGeometry(&polygon);
-    if (l->CreateFeature(&feature) != OGRERR_NONE) fail("cannot write feature " + std::to_string(r.id));
+    field("vertex_count", OFTInteger);
+    field("area_m2", OFTReal);
+    impl_->transaction = impl_->dataset->StartTransaction() == OGRERR_NONE;  // GeoPackage yes, GeoJSON no
+  } catch (...) {
+    delete impl_;
+    throw;
   }
-  if (transaction && ds->CommitTransaction() != OGRERR_NONE) fail("cannot commit");
-  GDALClose(ds);
-  if (CPLGetLastErrorType() == CE_Failure) {
-    fs::remove(temp);
-    throw InputError("'" + path + "': writing failed: " + CPLGetLastErrorMsg());
+}
+
+FootprintFileWriter::~FootprintFileWriter() {
+  if (impl_->dataset) impl_->close_and_remove();
+  delete impl_;
+}
+
+void FootprintFileWriter::add(const FootprintRecord& r) {
+  const FootprintLayer& layer = impl_->layer;
+  OGRFeature feature(impl_->ogr_layer->GetLayerDefn());
+  feature.SetField("id", static_cast<GIntBig>(r.id));
+  if (layer.write_status) {
+    feature.SetField("status", r.status.c_str());
+    feature.SetField("stage", r.failed_stage.c_str());
+    feature.SetField("reason", r.reason.c_str());
+    feature.SetField("regularizer", r.regularizer.c_str());
   }
+  if (!layer.kind_field.empty()) feature.SetField(layer.kind_field.c_str(), r.kind.c_str());
+  if (layer.write_heights && r.has_heights) {
+    feature.SetField("roof_height", r.roof_height);
+    feature.SetField("ground_height", r.ground_height);
+  } else if (layer.write_heights) {
+    feature.SetFieldNull(feature.GetFieldIndex("roof_height"));
+    feature.SetFieldNull(feature.GetFieldIndex("ground_height"));
+  }
+  int vertices = int(r.polygon.outer.size());
+  for (const Ring& h : r.polygon.holes) vertices += int(h.size());
+  feature.SetField("vertex_count", vertices);
+  feature.SetField("area_m2", area(r.polygon));
+  OGRPolygon polygon;
+  OGRLinearRing outer = to_ogr(r.polygon.outer);
+  polygon.addRing(&outer);
+  for (const Ring& h : r.polygon.holes) {
+    OGRLinearRing hole = to_ogr(h);
+    polygon.addRing(&hole);
+  }
+  feature.SetGeometry(&polygon);
+  if (impl_->ogr_layer->CreateFeature(&feature) != OGRERR_NONE) impl_->fail("cannot write feature " + std::to_string(r.id));
+}
+
+void FootprintFileWriter::finish() {
+  if (impl_->transaction && impl_->dataset->CommitTransaction() != OGRERR_NONE) impl_->fail("cannot commit");
+  GDALClose(impl_->dataset);
+  impl_->dataset = nullptr;
   std::error_code ec;
-  fs::rename(temp, final_path, ec);
+  fs::rename(impl_->temp, impl_->final_path, ec);
   if (ec) {
-    fs::remove(temp);
-    throw InputError("'" + path + "': cannot move the finished file into place: " + ec.message());
+    fs::remove(impl_->temp, ec);
+    throw InputError("'" + impl_->path + "': cannot move the finished file into place: " + ec.message());
   }
+}
+
+void write_footprints(const std::string& path, const FootprintLayer& layer, const std::vector<FootprintRecord>& records) {
+  FootprintFileWriter writer(path, layer);
+  for (const FootprintRecord& r : records) writer.add(r);
+  writer.finish();
 }
 
 }  // namespace lodforge

@@ -30,6 +30,22 @@ struct FootprintLayer {
 // Checks up front that path can be written (directory exists and is writable, extension known).
 void check_output_path(const std::string& path);
 
+// Streams features into a temporary file; finish() moves it into place, destruction without
+// finish() removes it.
+class FootprintFileWriter {
+ public:
+  FootprintFileWriter(const std::string& path, const FootprintLayer& layer);
+  ~FootprintFileWriter();
+  FootprintFileWriter(const FootprintFileWriter&) = delete;
+  FootprintFileWriter& operator=(const FootprintFileWriter&) = delete;
+  void add(const FootprintRecord& record);
+  void finish();
+
+ private:
+  struct Impl;
+  Impl* impl_;
+};
+
 void write_footprints(const std::string& path, const FootprintLayer& layer, const std::vector<FootprintRecord>& records);
 
 }  // namespace lodforge

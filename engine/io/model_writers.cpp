@@ -302,7 +302,7 @@ class ObjWriter : public ModelWriter {
 // GeoPackage / GeoJSON footprints with attributes, for GIS users.
 class FootprintModelWriter : public ModelWriter {
  public:
-  FootprintModelWriter(std::string path, const WriterContext& c) : path_(std::move(path)) { layer_.crs_wkt = c.crs_wkt; layer_.write_heights = true; layer_.kind_field = "tile"; }
+  FootprintModelWriter(const std::string& path, const WriterContext& c) : file_(path, layer_for(c)) {}
   void add(const BuildingModel& m) override {
     FootprintRecord r;
     r.id = long(m.id);
@@ -315,14 +315,19 @@ class FootprintModelWriter : public ModelWriter {
     r.has_heights = m.has_lod1;
     r.roof_height = m.roof;
     r.ground_height = m.ground;
-    records_.push_back(std::move(r));
+    file_.add(r);
   }
-  void finish() override { write_footprints(path_, layer_, records_); }
+  void finish() override { file_.finish(); }
 
  private:
-  std::string path_;
-  FootprintLayer layer_;
-  std::vector<FootprintRecord> records_;
+  static FootprintLayer layer_for(const WriterContext& c) {
+    FootprintLayer layer;
+    layer.crs_wkt = c.crs_wkt;
+    layer.write_heights = true;
+    layer.kind_field = "tile";
+    return layer;
+  }
+  FootprintFileWriter file_;
 };
 
 }  // namespace

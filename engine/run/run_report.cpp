@@ -82,7 +82,7 @@ void record_tile(Totals& totals, const RunPlan& plan, const TileResult& result, 
   feature.precision(12);
   feature << "{\"type\": \"Feature\", \"properties\": {\"tile\": \"" << r->name << "\", \"col\": " << r->tile % grid.cols
           << ", \"row\": " << r->tile / grid.cols << ", \"status\": \"" << (count ? "done" : "empty")
-          << "\", \"buildings\": " << count << ", \"outputs\": [";
+          << "\", \"buildings\": " << count << ", \"origin\": [" << a.x() << ", " << b.y() << "], \"outputs\": [";
   for (std::size_t i = 0; i < outputs.size(); ++i) feature << (i ? ", " : "") << '"' << outputs[i] << '"';
   feature << "]}, \"geometry\": {\"type\": \"Polygon\", \"coordinates\": [[[" << a.x() << ", " << a.y() << "], [" << b.x()
           << ", " << a.y() << "], [" << b.x() << ", " << b.y() << "], [" << a.x() << ", " << b.y() << "], [" << a.x()
