@@ -282,3 +282,64 @@ TEST(Config, ExampleJobsAreValid) {
 
 }  // namespace
 }  // namespace lodforge
+
+namespace lodforge {
+namespace {
+
+class Rerun : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    dir = test::fresh_test_directory("lodforge_rerun");
+    ASSERT_EQ(lodforge("synth --out " + (dir / "city").string() + " --size-m 200 --seed 6").code, 0);
+  }
+  void TearDown() override { fs::remove_all(dir); }
+  fs::path write_job(const std::string& formats, const std::string& extra = "") {
+    std::ofstream(dir / "job.yaml") << "inputs: {segmentation: {path: city/seg_class.tif}}\ntiling: {tile_size_m: 50}\n"
+                                    << "output: {dir: out, formats: [" << formats << "], quicklook: false}\nwork_dir: work\n" << extra;
+    return dir / "job.yaml";
+  }
+  fs::path dir;
+};
+
+TEST_F(Rerun, FilesOfAnEarlierRunDoNotOutliveItAndMergeTakesTheIndexedFiles) {
+  ASSERT_EQ(lodforge("run " + write_job("gpkg, obj").string()).code, 0);
+  std::size_t obj = 0;
+  for (const auto& e : fs::directory_iterator(dir / "out" / "tiles")) obj += e.path().extension() == ".obj";
+  ASSERT_GT(obj, 0u);
+  // The same job without OBJ: every tile is recomputed and its old OBJ goes.
+  ASSERT_EQ(lodforge("run " + write_job("gpkg").string()).code, 0);
+  for (const auto& e : fs::directory_iterator(dir / "out" / "tiles")) EXPECT_NE(e.path().extension(), ".obj") << e.path();
+  // A stray file in tiles/ is not merged: merge reads the tile index.
+  fs::copy_file(dir / "out" / "tiles" / "r0000_c0000.gpkg", dir / "out" / "tiles" / "r9999_c9999.gpkg");
+  ASSERT_EQ(lodforge("merge " + (dir / "out").string()).code, 0);
+  GDALAllRegister();
+  auto count = [](const fs::path& p) {
+    GDALDataset* d = static_cast<GDALDataset*>(GDALOpenEx(p.c_str(), GDAL_OF_VECTOR, nullptr, nullptr, nullptr));
+    const long n = d ? long(d->GetLayer(0)->GetFeatureCount()) : -1;
+    if (d) GDALClose(d);
+    return n;
+  };
+  long tiles_total = 0;
+  for (const auto& e : fs::directory_iterator(dir / "out" / "tiles"))
+    if (e.path().extension() == ".gpkg" && e.path().filename() != "r9999_c9999.gpkg") tiles_total += count(e.path());
+  EXPECT_EQ(count(dir / "out" / "merged" / "lodforge.gpkg"), tiles_total);
+  EXPECT_FALSE(fs::exists(dir / "out" / "merged" / "lodforge.obj"));
+}
+
+TEST_F(Rerun, MergeRefusesAnIncompleteSetOfShards) {
+  const fs::path job = write_job("gpkg");
+  ASSERT_EQ(lodforge("run " + job.string() + " --shard 0/3").code, 0);
+  ASSERT_EQ(lodforge("run " + job.string() + " --shard 2/3").code, 0);
+  const Result r = lodforge("merge " + (dir / "out").string());
+  EXPECT_EQ(r.code, 1);
+  EXPECT_NE(r.output.find("2 of 3 shards' tile indexes are there"), std::string::npos) << r.output;
+}
+
+TEST_F(Rerun, WindowSmallerThanATileIsRefused) {
+  const Result r = lodforge("run " + write_job("gpkg", "").string() + " --set tiling.max_window_m=60");
+  EXPECT_EQ(r.code, 1);
+  EXPECT_NE(r.output.find("tiling.max_window_m: must be >= tile_size_m + 2 * halo_m"), std::string::npos) << r.output;
+}
+
+}  // namespace
+}  // namespace lodforge

@@ -1,6 +1,7 @@
 // lodforge: one binary, subcommands registered in one explicit list.
 #include <cstring>
 #include <iostream>
+#include <gdal_priv.h>
 #include <spdlog/spdlog.h>
 
 #include "commands/commands.hpp"
@@ -33,6 +34,7 @@ void usage(std::ostream& out) {
 
 int main(int argc, char** argv) {
   spdlog::set_pattern("[%H:%M:%S] [%^%l%$] %v");
+  GDALAllRegister();  // once, before any worker thread opens a dataset
   if (argc < 2 || !std::strcmp(argv[1], "--help") || !std::strcmp(argv[1], "help")) {
     usage(argc < 2 ? std::cerr : std::cout);
     return argc < 2 ? 2 : 0;

@@ -21,18 +21,6 @@ namespace fs = std::filesystem;
 
 namespace {
 
-std::vector<fs::path> tile_files(const fs::path& tiles, const std::string& extension) {
-  std::vector<fs::path> out;
-  for (const auto& e : fs::directory_iterator(tiles)) {
-    const std::string name = e.path().filename().string();
-    if (name.size() > extension.size() && name.compare(name.size() - extension.size(), extension.size(), extension) == 0 &&
-        name.find(".partial") == std::string::npos)
-      out.push_back(e.path());
-  }
-  std::sort(out.begin(), out.end());  // tile names sort in tile order
-  return out;
-}
-
 class Output {
  public:
   explicit Output(fs::path path) : path_(std::move(path)), temp_(path_.string() + ".partial") {
@@ -41,8 +29,9 @@ class Output {
   }
   std::ofstream& out() { return out_; }
   void commit() {
+    out_.flush();
     out_.close();
-    if (!out_) throw InputError("'" + path_.string() + "': writing failed");
+    if (!out_) throw InputError("'" + path_.string() + "': writing failed (disk full?)");
     fs::rename(temp_, path_);
   }
 
@@ -210,7 +199,14 @@ void merge_ogr(const std::vector<fs::path>& files, const fs::path& target, const
     OGRLayer* source = in->GetLayer(0);
     if (!layer) {
       layer = out->CreateLayer("footprints", source->GetSpatialRef(), wkbPolygon, nullptr);
-      for (int i = 0; i < source->GetLayerDefn()->GetFieldCount(); ++i) layer->CreateField(source->GetLayerDefn()->GetFieldDefn(i));
+      if (!layer) { GDALClose(in); GDALClose(out); fs::remove(temp); throw InputError("'" + target.string() + "': cannot create the layer"); }
+      for (int i = 0; i < source->GetLayerDefn()->GetFieldCount(); ++i)
+        if (layer->CreateField(source->GetLayerDefn()->GetFieldDefn(i)) != OGRERR_NONE) {
+          GDALClose(in);
+          GDALClose(out);
+          fs::remove(temp);
+          throw InputError("'" + target.string() + "': cannot create a field");
+        }
     }
     const bool transaction = out->StartTransaction() == OGRERR_NONE;
     for (auto& feature : *source) {
@@ -224,19 +220,37 @@ void merge_ogr(const std::vector<fs::path>& files, const fs::path& target, const
         throw InputError("'" + target.string() + "': cannot write a feature: " + CPLGetLastErrorMsg());
       }
     }
-    if (transaction) out->CommitTransaction();
+    const bool committed = !transaction || out->CommitTransaction() == OGRERR_NONE;
     GDALClose(in);
+    if (!committed) { GDALClose(out); fs::remove(temp); throw InputError("'" + target.string() + "': cannot commit"); }
   }
+  CPLErrorReset();
+  out->FlushCache(true);
   GDALClose(out);
+  if (CPLGetLastErrorType() == CE_Failure) {
+    fs::remove(temp);
+    throw InputError("'" + target.string() + "': writing failed: " + CPLGetLastErrorMsg());
+  }
   fs::rename(temp, target);
 }
 
-// The shards' tile indexes, as one.
+// The shards' tile indexes, as one. Every shard of one N must be there.
 void merge_indexes(const fs::path& dir) {
-  std::vector<fs::path> parts;
-  for (const auto& e : fs::directory_iterator(dir))
-    if (e.path().filename().string().rfind("tile_index.shard-", 0) == 0) parts.push_back(e.path());
-  if (parts.empty()) return;
+  std::map<int, std::vector<fs::path>> by_count;
+  const std::regex part(R"re(tile_index\.shard-(\d+)-of-(\d+)\.geojson)re");
+  for (const auto& e : fs::directory_iterator(dir)) {
+    std::smatch m;
+    const std::string name = e.path().filename().string();
+    if (std::regex_match(name, m, part)) by_count[std::stoi(m[2])].push_back(e.path());
+  }
+  if (by_count.empty()) return;
+  if (by_count.size() > 1)
+    throw InputError("'" + dir.string() + "': holds tile indexes of runs with different shard counts; remove the stale ones");
+  const auto& [count, parts_found] = *by_count.begin();
+  if (int(parts_found.size()) != count)
+    throw InputError("'" + dir.string() + "': " + std::to_string(parts_found.size()) + " of " + std::to_string(count) +
+                     " shards' tile indexes are there; run the missing shards first");
+  std::vector<fs::path> parts = parts_found;
   std::sort(parts.begin(), parts.end());
   std::vector<std::pair<std::string, std::string>> features;  // (tile name, feature)
   std::string header;
@@ -259,6 +273,25 @@ void merge_indexes(const fs::path& dir) {
   for (std::size_t i = 0; i < features.size(); ++i) o.out() << features[i].second << (i + 1 < features.size() ? ",\n" : "\n");
   o.out() << "]}\n";
   o.commit();
+}
+
+// The files the tile index lists (the run's own, not whatever else is in tiles/), in tile order.
+std::vector<fs::path> indexed_files(const fs::path& dir, const std::string& extension) {
+  std::ifstream in(dir / "tile_index.geojson");
+  if (!in) throw InputError("'" + dir.string() + "': no tile_index.geojson; is it a lodforge run's output.dir?");
+  std::vector<fs::path> out;
+  const std::regex listed(R"re("(tiles/[^"]+)")re");
+  for (std::string line; std::getline(in, line);) {
+    const std::size_t at = line.find("\"outputs\": [");
+    if (at == std::string::npos) continue;
+    const std::string list = line.substr(at, line.find(']', at) - at);
+    for (std::sregex_iterator it(list.begin(), list.end(), listed), stop; it != stop; ++it) {
+      const std::string file = (*it)[1];
+      if (file.size() > extension.size() && file.compare(file.size() - extension.size(), extension.size(), extension) == 0)
+        out.push_back(dir / file);
+    }
+  }
+  return out;
 }
 
 }  // namespace
@@ -284,7 +317,7 @@ int run_merge(int argc, char** argv) {
   fs::create_directories(dir / "merged");
   for (const std::string& format : formats) {
     const std::string extension = extension_of(format);
-    const auto files = tile_files(dir / "tiles", extension);
+    const auto files = indexed_files(dir, extension);
     if (files.empty()) continue;
     const fs::path target = dir / "merged" / ("lodforge" + extension);
     if (format == "citygml") merge_citygml(files, target);

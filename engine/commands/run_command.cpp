@@ -1,5 +1,7 @@
 // lodforge run JOB.yaml: the tiled batch engine.
 #include <atomic>
+#include <cerrno>
+#include <csignal>
 #include <chrono>
 #include <filesystem>
 #include <fstream>
@@ -162,15 +164,21 @@ int run_job(int argc, char** argv) {
   fs::create_directories(out_dir / "tiles", ec);
   if (ec || access(out_dir.c_str(), W_OK) != 0) throw InputError("output.dir '" + out_dir.string() + "': cannot create or write");
   const CheckpointStore store(job.work_dir);
-  // A killed run may have left temporary files; they never look complete, but go anyway.
-  for (const auto& entry : fs::directory_iterator(out_dir / "tiles"))
-    if (entry.path().filename().string().find(".partial") != std::string::npos) fs::remove(entry.path(), ec);
+  // A killed run may have left temporary files (named .partial-PID); they never look complete,
+  // but go once their writer is gone. Another shard's files in progress stay.
+  for (const auto& entry : fs::directory_iterator(out_dir / "tiles")) {
+    const std::string name = entry.path().filename().string();
+    const auto at = name.find(".partial-");
+    if (at == std::string::npos) continue;
+    const pid_t writer = pid_t(std::atol(name.c_str() + at + 9));
+    if (writer <= 0 || (kill(writer, 0) != 0 && errno == ESRCH)) fs::remove(entry.path(), ec);
+  }
 
   const GridSpec grid_spec{seg.size, seg.transform, seg.crs_wkt};
-  const std::string dsm_source = job.inputs.dsm.path.empty() ? "" : aligned_source(job.inputs.dsm.path, grid_spec, (fs::path(job.work_dir) / "dsm.aligned.vrt").string());
-  const std::string dtm_source = job.inputs.dtm.path.empty() ? "" : aligned_source(job.inputs.dtm.path, grid_spec, (fs::path(job.work_dir) / "dtm.aligned.vrt").string());
+  const std::string dsm_source = job.inputs.dsm.path.empty() ? "" : aligned_source(job.inputs.dsm.path, grid_spec, (fs::path(job.work_dir) / "dsm.aligned.vrt").string(), true);
+  const std::string dtm_source = job.inputs.dtm.path.empty() ? "" : aligned_source(job.inputs.dtm.path, grid_spec, (fs::path(job.work_dir) / "dtm.aligned.vrt").string(), true);
   if (!dsm_source.empty() && dsm_source != job.inputs.dsm.path) spdlog::info("{}: resampled onto the segmentation's grid ({})", job.inputs.dsm.path, dsm_source);
-  const std::string ortho_source = job.inputs.orthophoto.path.empty() ? "" : aligned_source(job.inputs.orthophoto.path, grid_spec, (fs::path(job.work_dir) / "orthophoto.aligned.vrt").string());
+  const std::string ortho_source = job.inputs.orthophoto.path.empty() ? "" : aligned_source(job.inputs.orthophoto.path, grid_spec, (fs::path(job.work_dir) / "orthophoto.aligned.vrt").string(), false);
   if (!dtm_source.empty() && dtm_source != job.inputs.dtm.path) spdlog::info("{}: resampled onto the segmentation's grid ({})", job.inputs.dtm.path, dtm_source);
   const double pixel = seg.transform.pixel_size();
   const TileGrid grid(seg.size, int(std::lround(job.tiling.tile_size_m / pixel)));
@@ -188,9 +196,10 @@ int run_job(int argc, char** argv) {
   key_job.work_dir.clear();
   const std::string contour_options = options_text(key_job.stages.contour);
   const std::string heights_options = options_text(key_job.stages.heights) + file_identity(job.inputs.dsm.path) + file_identity(job.inputs.dtm.path);
-  const std::string core_options = job.regularizer + "\n" + options_text(key_job.stages.core);
+  // Building ids are first-pixel indices, so the footprints also depend on the raster's width.
+  const std::string core_options = job.regularizer + "\n" + options_text(key_job.stages.core) + "\nwidth " + std::to_string(seg.size.width);
   const std::uint64_t job_key = fnv1a(file_identity(job.inputs.segmentation.path) + "\n" + file_identity(job.inputs.dsm.path) + "\n" +
-                                      file_identity(job.inputs.dtm.path) + "\n" + options_text(key_job) + "\n" +
+                                      file_identity(job.inputs.dtm.path) + "\n" + file_identity(job.inputs.orthophoto.path) + "\n" + options_text(key_job) + "\n" +
                                       std::to_string(grid.tile_px) + "/" + std::to_string(halo_px) + "/" + std::to_string(max_window_px));
   std::string transform_text;
   for (double c : seg.transform.c) transform_text += std::to_string(c) + ",";

@@ -156,8 +156,16 @@ void FootprintFileWriter::add(const FootprintRecord& r) {
 
 void FootprintFileWriter::finish() {
   if (impl_->transaction && impl_->dataset->CommitTransaction() != OGRERR_NONE) impl_->fail("cannot commit");
-  GDALClose(impl_->dataset);
+  CPLErrorReset();
+  impl_->dataset->FlushCache(true);  // GDAL 3.6: errors are reported through CPLGetLastErrorType
+  if (CPLGetLastErrorType() == CE_Failure) impl_->fail("cannot flush (disk full?)");
+  GDALClose(impl_->dataset);  // GeoJSON writes its closing bytes here
   impl_->dataset = nullptr;
+  if (CPLGetLastErrorType() == CE_Failure) {
+    const std::string message = "'" + impl_->path + "': writing failed: " + CPLGetLastErrorMsg();
+    impl_->close_and_remove();
+    throw InputError(message);
+  }
   std::error_code ec;
   fs::rename(impl_->temp, impl_->final_path, ec);
   if (ec) {

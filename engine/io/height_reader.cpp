@@ -1,6 +1,9 @@
 #include "io/height_reader.hpp"
 
 #include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <unistd.h>
 #include <gdal_priv.h>
 #include <gdal_utils.h>
 #include <ogr_spatialref.h>
@@ -9,7 +12,15 @@
 
 namespace lodforge {
 
-std::string aligned_source(const std::string& path, const GridSpec& grid, const std::string& vrt_path) {
+namespace {
+std::string exact(double v) {
+  char buffer[40];
+  std::snprintf(buffer, sizeof buffer, "%.17g", v);
+  return buffer;
+}
+}  // namespace
+
+std::string aligned_source(const std::string& path, const GridSpec& grid, const std::string& vrt_path, bool heights) {
   GDALAllRegister();
   GDALDatasetH source = GDALOpen(path.c_str(), GA_ReadOnly);
   if (!source) throw InputError("'" + path + "': not a raster GDAL can read");
@@ -22,21 +33,25 @@ std::string aligned_source(const std::string& path, const GridSpec& grid, const 
     return path;
   }
   const Vec2 a = grid.transform.to_map(0, 0), b = grid.transform.to_map(grid.size.width, grid.size.height);
-  std::vector<std::string> words = {"-of", "VRT", "-r", "bilinear", "-te", std::to_string(std::min(a.x(), b.x())),
-                                    std::to_string(std::min(a.y(), b.y())), std::to_string(std::max(a.x(), b.x())),
-                                    std::to_string(std::max(a.y(), b.y())), "-ts", std::to_string(grid.size.width),
+  std::vector<std::string> words = {"-of", "VRT", "-r", "bilinear", "-te", exact(std::min(a.x(), b.x())),
+                                    exact(std::min(a.y(), b.y())), exact(std::max(a.x(), b.x())),
+                                    exact(std::max(a.y(), b.y())), "-ts", std::to_string(grid.size.width),
                                     std::to_string(grid.size.height)};
+  if (heights) for (const char* w : {"-ot", "Float32", "-dstnodata", "nan"}) words.push_back(w);
   if (!grid.crs_wkt.empty()) { words.push_back("-t_srs"); words.push_back(grid.crs_wkt); }
   std::vector<char*> argv;
   for (std::string& w : words) argv.push_back(w.data());
   argv.push_back(nullptr);
   GDALWarpAppOptions* options = GDALWarpAppOptionsNew(argv.data(), nullptr);
   int error = 0;
-  GDALDatasetH warped = GDALWarp(vrt_path.c_str(), nullptr, 1, &source, options, &error);
+  // Written under a temporary name and renamed: concurrent shards may read the same file.
+  const std::string temp = vrt_path + ".tmp-" + std::to_string(getpid());
+  GDALDatasetH warped = GDALWarp(temp.c_str(), nullptr, 1, &source, options, &error);
   GDALWarpAppOptionsFree(options);
   GDALClose(source);
   if (!warped || error) throw InputError("'" + path + "': cannot resample onto the segmentation's grid: " + CPLGetLastErrorMsg());
   GDALClose(warped);
+  std::filesystem::rename(temp, vrt_path);
   return vrt_path;
 }
 
@@ -46,7 +61,6 @@ struct HeightWindowReader::Impl {
 };
 
 HeightWindowReader::HeightWindowReader(const std::string& path) : impl_(new Impl) {
-  GDALAllRegister();
   impl_->path = path;
   impl_->dataset = static_cast<GDALDataset*>(GDALOpenEx(path.c_str(), GDAL_OF_RASTER | GDAL_OF_READONLY, nullptr, nullptr, nullptr));
   if (!impl_->dataset) {

@@ -14,9 +14,10 @@ struct GridSpec {
   std::string crs_wkt;
 };
 
-// When the raster at path is not on grid, writes a warped VRT of it onto grid at vrt_path and
-// returns that path; else returns path unchanged.
-std::string aligned_source(const std::string& path, const GridSpec& grid, const std::string& vrt_path);
+// When the raster at path is not on grid, writes a warped VRT of it onto grid at vrt_path
+// (atomically) and returns that path; else returns path unchanged. heights: resample to Float32
+// with NaN where the source has no data (so uncovered pixels never count as height 0).
+std::string aligned_source(const std::string& path, const GridSpec& grid, const std::string& vrt_path, bool heights);
 
 // One per thread.
 class HeightWindowReader {

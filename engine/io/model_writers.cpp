@@ -56,8 +56,8 @@ class AtomicText {
   std::ostream& out() { return out_; }
   void commit() {
     out_.flush();
-    if (!out_) throw InputError("'" + path_ + "': writing failed (disk full?)");
     out_.close();
+    if (!out_) throw InputError("'" + path_ + "': writing failed (disk full?)");
     fs::rename(temp_, path_);
     done_ = true;
   }
@@ -179,7 +179,8 @@ class CityJsonWriter : public ModelWriter {
     o << (first_ ? "\n" : ",\n") << "  \"" << gml_id(m.id) << "\": {\"type\": \"Building\", \"attributes\": {\"status\": \""
       << m.status << "\", \"regularizer\": \"" << m.regularizer << "\", \"tile\": \"" << m.tile << "\"";
     first_ = false;
-    if (!m.stage.empty()) o << ", \"failed_stage\": \"" << json(m.stage) << "\", \"reason\": \"" << json(m.reason) << "\"";
+    if (!m.stage.empty()) o << ", \"failed_stage\": \"" << json(m.stage) << "\"";
+    if (!m.reason.empty()) o << ", \"reason\": \"" << json(m.reason) << "\"";
     if (m.has_lod1) o << ", \"measuredHeight\": " << (m.roof - m.ground) << ", \"ground_height\": " << m.ground << ", \"roof_height\": " << m.roof;
     o << "}, \"geometry\": [";
     const double z = m.has_lod1 ? m.ground : 0.0;

@@ -25,8 +25,12 @@ Job load_job(const std::string& path, const std::vector<std::string>& overrides)
   if (!root.IsMap()) throw InputError("'" + path + "': a job is a YAML mapping (inputs:, tiling:, output:, ...)");
   Job job;
   YamlReader reader(root);
-  job.visit(reader);
-  reader.report_unknown();
+  try {
+    job.visit(reader);
+    reader.report_unknown();
+  } catch (const YAML::Exception& e) {
+    throw InputError("'" + path + "': unexpected YAML structure: " + e.what());
+  }
   std::vector<std::string> errors = reader.errors;
 
   OptionSetter setter(split_assignments(overrides, "--set", errors));
@@ -46,6 +50,9 @@ Job load_job(const std::string& path, const std::vector<std::string>& overrides)
                          &job.inputs.orthophoto.path, &job.output.dir, &job.work_dir})
     resolve(*p);
   if (job.inputs.segmentation.path.empty()) errors.push_back("inputs.segmentation.path: required");
+  if (job.tiling.max_window_m < job.tiling.tile_size_m + 2 * job.tiling.halo_m)
+    errors.push_back("tiling.max_window_m: must be >= tile_size_m + 2 * halo_m (" +
+                     std::to_string(job.tiling.tile_size_m + 2 * job.tiling.halo_m) + ")");
   const auto& rgb = job.inputs.segmentation.building_rgb;
   if (!rgb.empty() && rgb.size() != 3) errors.push_back("inputs.segmentation.building_rgb: needs three values [R, G, B]");
   if (rgb.empty() && job.inputs.segmentation.building_values.empty())

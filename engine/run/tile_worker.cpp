@@ -97,13 +97,9 @@ BuildingModel model_of(const BuildingOutput& b, const Heights* h, const std::str
   m.reason = b.reason;
   if (h && h->ok) {
     m.solid = extrude(b.footprint, h->ground, h->roof);
-    if (const std::string problem = shell_problem(m.solid); problem.empty()) {
-      m.has_lod1 = true;
-      m.ground = h->ground;
-      m.roof = h->roof;
-    } else {
-      m.reason += (m.reason.empty() ? "" : "; ") + std::string("lod1: invalid shell: ") + problem;
-    }
+    m.has_lod1 = true;
+    m.ground = h->ground;
+    m.roof = h->roof;
   } else if (h) {
     if (b.ok) m.stage = "heights";
     m.reason += (m.reason.empty() ? "" : "; ") + std::string("heights: ") + h->reason;
@@ -181,7 +177,16 @@ std::shared_ptr<TileResult> process_tile(const RunPlan& plan, int tile) {
       if (!plan.dtm_source.empty()) dtm = HeightWindowReader(plan.dtm_source).read(area, plan.transform);
       heights.emplace(r->buildings.size());
       tbb::parallel_for(std::size_t(0), r->buildings.size(), [&](std::size_t i) {
-        (*heights)[i] = building_heights(r->buildings[i].footprint, dsm, dtm ? &*dtm : nullptr, job.stages.heights);
+        Heights& h = (*heights)[i];
+        h = building_heights(r->buildings[i].footprint, dsm, dtm ? &*dtm : nullptr, job.stages.heights);
+        // The block must be a valid shell to count as LOD1; decided here so that the report,
+        // the summary and every file agree.
+        if (h.ok) {
+          if (const std::string problem = shell_problem(extrude(r->buildings[i].footprint, h.ground, h.roof)); !problem.empty()) {
+            h.ok = false;
+            h.reason = "lod1: invalid shell: " + problem;
+          }
+        }
       });
       store.save_blob("heights", r->name, heights_key, serialize_heights(*heights));
     }
@@ -215,6 +220,13 @@ std::vector<std::string> write_tile_outputs(const RunPlan& plan, const TileResul
 
   std::vector<std::string> outputs;
   const cv::Rect tile_rect = grid.rect(r->tile);
+  if (!r->skipped) {
+    // Files of this tile from an earlier run with other options (another format, no buildings
+    // any more) must not outlive it.
+    std::error_code ec;
+    for (const auto& entry : fs::directory_iterator(out_dir / "tiles", ec))
+      if (entry.path().filename().string().rfind(r->name + ".", 0) == 0) fs::remove(entry.path(), ec);
+  }
   WriterContext context{plan.crs_wkt, r->name, plan.transform.to_map(tile_rect.x, tile_rect.y + tile_rect.height)};
   if (!r->buildings.empty() || r->skipped) {
     for (const std::string& format : job.output.formats) {

@@ -30,7 +30,6 @@ struct MaskWindowReader::Impl {
 };
 
 MaskWindowReader::MaskWindowReader(const std::string& path, const BuildingSelector& selector) : impl_(new Impl) {
-  GDALAllRegister();
   impl_->selector = selector;
   impl_->path = path;
   impl_->dataset = static_cast<GDALDataset*>(GDALOpenEx(path.c_str(), GDAL_OF_RASTER | GDAL_OF_READONLY, nullptr, nullptr, nullptr));
@@ -111,20 +110,25 @@ TileWindow find_tile_window(const MaskWindowReader& reader, const TileGrid& grid
     cv::Mat labels, stats, centroids;
     const int count = cv::connectedComponentsWithStats(out.mask, labels, stats, centroids, connectivity == 4 ? 4 : 8, CV_32S);
     cv::Rect grown = out.window;
+    out.too_large.clear();
     for (int k = 1; k < count; ++k) {
       const cv::Rect box(stats.at<int>(k, cv::CC_STAT_LEFT), stats.at<int>(k, cv::CC_STAT_TOP),
                          stats.at<int>(k, cv::CC_STAT_WIDTH), stats.at<int>(k, cv::CC_STAT_HEIGHT));
       const cv::Rect global = box + out.window.tl();
       if ((global & tile_rect).empty() || !touches_inner_border(box, out.window, grid.raster)) continue;
-      // Possibly owned by this tile and not whole: read around it.
-      grown |= (global + cv::Size(2 * halo_px, 2 * halo_px) - cv::Point(halo_px, halo_px)) & bounds;
+      // Possibly owned by this tile and not whole: read around it, if that still fits.
+      const cv::Rect wanted = grown | ((global + cv::Size(2 * halo_px, 2 * halo_px) - cv::Point(halo_px, halo_px)) & bounds);
+      if (wanted.width > max_window_px || wanted.height > max_window_px) {
+        out.too_large.push_back("a building reaching at least from pixel (row " + std::to_string(global.y) + ", col " +
+                                std::to_string(global.x) + ") to (row " + std::to_string(global.y + global.height) + ", col " +
+                                std::to_string(global.x + global.width) + ") does not fit a window of " +
+                                std::to_string(max_window_px) + " pixels (tiling.max_window_m) around tile " + grid.name(tile) +
+                                "; it is not modeled");
+        continue;
+      }
+      grown = wanted;
     }
     if (grown == out.window) break;
-    if (grown.width > max_window_px || grown.height > max_window_px) {
-      out.too_large.push_back("a building around tile " + grid.name(tile) + " reaches beyond a window of " +
-                              std::to_string(max_window_px) + " pixels (tiling.max_window_m); it is not modeled");
-      break;
-    }
     out.window = grown;
   }
   const int rect[4] = {out.window.x, out.window.y, out.window.width, out.window.height};
