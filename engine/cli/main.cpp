@@ -18,6 +18,7 @@ struct Command {
 const Command commands[] = {
     {"run", "process an area described by a YAML job: tiles, checkpoints, resume, shards", lodforge::run_job},
     {"merge", "combine a run's per-tile files into one file per format", lodforge::run_merge},
+    {"eval", "score footprints against ground truth (IoU, F1, C-IoU, N-ratio, PoLiS, Hausdorff)", lodforge::run_eval},
     {"config", "print the full default job (--defaults)", lodforge::run_config},
     {"regularize", "LOD0 footprints of every building in a segmentation raster", lodforge::run_regularize},
     {"synth", "generate a procedural demo city (segmentation, DSM, DTM, true footprints)", lodforge::run_synth},

@@ -9,5 +9,6 @@ int run_options(int argc, char** argv);
 int run_job(int argc, char** argv);
 int run_config(int argc, char** argv);
 int run_merge(int argc, char** argv);
+int run_eval(int argc, char** argv);
 
 }  // namespace lodforge

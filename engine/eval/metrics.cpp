@@ -1,0 +1,212 @@
+#include "eval/metrics.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <memory>
+#include <numeric>
+#include <ogr_geometry.h>
+#include <sstream>
+
+namespace lodforge {
+
+namespace {
+
+using Geometry = std::unique_ptr<OGRGeometry>;
+
+Geometry to_ogr(const PolygonWithHoles& p) {
+  auto polygon = std::make_unique<OGRPolygon>();
+  auto add = [&](const Ring& r) {
+    OGRLinearRing ring;
+    for (const Vec2& q : r) ring.addPoint(q.x(), q.y());
+    ring.addPoint(r.front().x(), r.front().y());
+    polygon->addRing(&ring);
+  };
+  add(p.outer);
+  for (const Ring& h : p.holes) add(h);
+  return polygon;
+}
+
+double area_of(const OGRGeometry* g) {
+  if (!g) return 0;
+  if (auto s = dynamic_cast<const OGRSurface*>(g)) return s->get_Area();
+  if (auto c = dynamic_cast<const OGRGeometryCollection*>(g)) return c->get_Area();
+  return 0;
+}
+
+Geometry union_of(const std::vector<Geometry>& parts) {
+  auto collection = std::make_unique<OGRMultiPolygon>();
+  for (const Geometry& g : parts) collection->addGeometry(g.get());
+  return Geometry(collection->UnionCascaded());
+}
+
+double iou(const OGRGeometry* a, const OGRGeometry* b) {
+  const Geometry inter(a->Intersection(b)), uni(a->Union(b));
+  const double u = area_of(uni.get());
+  return u > 0 ? area_of(inter.get()) / u : 0;
+}
+
+std::size_t vertices(const PolygonWithHoles& p) {
+  std::size_t n = p.outer.size();
+  for (const Ring& h : p.holes) n += h.size();
+  return n;
+}
+
+double point_segment(const Vec2& p, const Vec2& a, const Vec2& b) {
+  const Vec2 ab = b - a;
+  const double len2 = ab.squaredNorm();
+  const double t = len2 > 0 ? std::clamp((p - a).dot(ab) / len2, 0.0, 1.0) : 0.0;
+  return (p - (a + t * ab)).norm();
+}
+
+double distance_to_boundary(const Vec2& p, const PolygonWithHoles& poly) {
+  double best = std::numeric_limits<double>::infinity();
+  auto scan = [&](const Ring& r) {
+    for (std::size_t i = 0; i < r.size(); ++i) best = std::min(best, point_segment(p, r[i], r[(i + 1) % r.size()]));
+  };
+  scan(poly.outer);
+  for (const Ring& h : poly.holes) scan(h);
+  return best;
+}
+
+std::vector<Vec2> all_vertices(const PolygonWithHoles& p) {
+  std::vector<Vec2> out(p.outer.begin(), p.outer.end());
+  for (const Ring& h : p.holes) out.insert(out.end(), h.begin(), h.end());
+  return out;
+}
+
+// Boundary points every `step` metres (and every vertex).
+std::vector<Vec2> densified(const PolygonWithHoles& p, double step) {
+  std::vector<Vec2> out;
+  auto walk = [&](const Ring& r) {
+    for (std::size_t i = 0; i < r.size(); ++i) {
+      const Vec2 a = r[i], b = r[(i + 1) % r.size()];
+      const int n = std::max(1, int(std::ceil((b - a).norm() / step)));
+      for (int k = 0; k < n; ++k) out.push_back(a + (b - a) * (double(k) / n));
+    }
+  };
+  walk(p.outer);
+  for (const Ring& h : p.holes) walk(h);
+  return out;
+}
+
+}  // namespace
+
+double polis(const PolygonWithHoles& a, const PolygonWithHoles& b) {
+  auto one_way = [](const PolygonWithHoles& from, const PolygonWithHoles& to) {
+    const auto v = all_vertices(from);
+    double sum = 0;
+    for (const Vec2& p : v) sum += distance_to_boundary(p, to);
+    return sum / double(v.size());
+  };
+  return 0.5 * (one_way(a, b) + one_way(b, a));
+}
+
+double hausdorff(const PolygonWithHoles& a, const PolygonWithHoles& b) {
+  auto one_way = [](const PolygonWithHoles& from, const PolygonWithHoles& to) {
+    double worst = 0;
+    for (const Vec2& p : densified(from, 0.05)) worst = std::max(worst, distance_to_boundary(p, to));
+    return worst;
+  };
+  return std::max(one_way(a, b), one_way(b, a));
+}
+
+EvalResult evaluate(const std::vector<PolygonWithHoles>& predicted_in, const std::vector<PolygonWithHoles>& truth_in,
+                    const std::optional<PolygonWithHoles>& aoi) {
+  EvalResult r;
+  const Geometry area = aoi ? to_ogr(*aoi) : nullptr;
+  std::vector<PolygonWithHoles> predicted, truth;
+  std::vector<Geometry> pred_geom, truth_geom;
+  for (const PolygonWithHoles& t : truth_in) {
+    Geometry g = to_ogr(t);
+    if (area && !g->Intersects(area.get())) continue;
+    truth.push_back(t);
+    truth_geom.push_back(std::move(g));
+  }
+  for (const PolygonWithHoles& p : predicted_in) {
+    Geometry g = to_ogr(p);
+    if (area && !g->Intersects(area.get())) continue;
+    predicted.push_back(p);
+    pred_geom.push_back(std::move(g));
+  }
+  r.predicted = predicted.size();
+  r.truth = truth.size();
+  // Overall IoU inside the AOI.
+  Geometry pu = union_of(pred_geom), tu = union_of(truth_geom);
+  if (area) {
+    pu.reset(pu ? pu->Intersection(area.get()) : nullptr);
+    tu.reset(tu ? tu->Intersection(area.get()) : nullptr);
+  }
+  if (pu && tu) r.overall_iou = iou(pu.get(), tu.get());
+  // One-to-one matches (at IoU >= 0.5 a prediction overlaps at most one truth that well).
+  std::vector<std::vector<double>> pair_iou(predicted.size(), std::vector<double>(truth.size(), 0));
+  std::vector<double> ious, c_ious, ratios, polises, hausdorffs, blobs;
+  for (std::size_t i = 0; i < predicted.size(); ++i) {
+    std::vector<Geometry> covered;
+    int best = -1;
+    double best_iou = 0.5;
+    for (std::size_t j = 0; j < truth.size(); ++j) {
+      if (!pred_geom[i]->Intersects(truth_geom[j].get())) continue;
+      const double v = iou(pred_geom[i].get(), truth_geom[j].get());
+      if (v >= best_iou) { best_iou = v; best = int(j); }
+      const Geometry inter(pred_geom[i]->Intersection(truth_geom[j].get()));
+      if (area_of(inter.get()) > 0.5 * area_of(truth_geom[j].get())) covered.push_back(Geometry(truth_geom[j]->clone()));
+    }
+    if (!covered.empty()) {
+      const Geometry u = union_of(covered);
+      blobs.push_back(iou(pred_geom[i].get(), u.get()));
+    }
+    if (best < 0) continue;
+    ++r.matched;
+    ious.push_back(best_iou);
+    const double np = double(vertices(predicted[i])), ng = double(vertices(truth[best]));
+    c_ious.push_back(best_iou * (1.0 - std::abs(np - ng) / (np + ng)));
+    ratios.push_back(np / ng);
+    polises.push_back(polis(predicted[i], truth[best]));
+    hausdorffs.push_back(hausdorff(predicted[i], truth[best]));
+  }
+  auto mean = [](const std::vector<double>& v) { return v.empty() ? 0.0 : std::accumulate(v.begin(), v.end(), 0.0) / double(v.size()); };
+  r.precision = r.predicted ? double(r.matched) / double(r.predicted) : 0;
+  r.recall = r.truth ? double(r.matched) / double(r.truth) : 0;
+  r.f1 = r.precision + r.recall > 0 ? 2 * r.precision * r.recall / (r.precision + r.recall) : 0;
+  r.mean_iou = mean(ious);
+  r.c_iou = mean(c_ious);
+  r.n_ratio = mean(ratios);
+  r.polis = mean(polises);
+  r.hausdorff_mean = mean(hausdorffs);
+  if (!hausdorffs.empty()) {
+    std::sort(hausdorffs.begin(), hausdorffs.end());
+    r.hausdorff_p95 = hausdorffs[std::min(hausdorffs.size() - 1, std::size_t(std::ceil(0.95 * double(hausdorffs.size()))) - 1)];
+  }
+  r.blob_iou = mean(blobs);
+  return r;
+}
+
+std::string eval_json(const EvalResult& r) {
+  std::ostringstream s;
+  s.precision(6);
+  s << "{\"predicted\": " << r.predicted << ", \"truth\": " << r.truth << ", \"matched\": " << r.matched
+    << ", \"overall_iou\": " << r.overall_iou << ", \"precision\": " << r.precision << ", \"recall\": " << r.recall
+    << ", \"f1\": " << r.f1 << ", \"mean_iou\": " << r.mean_iou << ", \"c_iou\": " << r.c_iou << ", \"n_ratio\": " << r.n_ratio
+    << ", \"polis_m\": " << r.polis << ", \"hausdorff_mean_m\": " << r.hausdorff_mean << ", \"hausdorff_p95_m\": " << r.hausdorff_p95
+    << ", \"blob_iou\": " << r.blob_iou << "}";
+  return s.str();
+}
+
+std::string eval_table(const EvalResult& r) {
+  std::ostringstream s;
+  s.setf(std::ios::fixed);
+  s.precision(4);
+  s << "predicted / truth / matched (IoU >= 0.5): " << r.predicted << " / " << r.truth << " / " << r.matched << '\n'
+    << "overall IoU              " << r.overall_iou << '\n'
+    << "precision / recall / F1  " << r.precision << " / " << r.recall << " / " << r.f1 << '\n'
+    << "mean matched IoU         " << r.mean_iou << '\n'
+    << "C-IoU                    " << r.c_iou << '\n'
+    << "N-ratio                  " << r.n_ratio << '\n'
+    << "PoLiS (m)                " << r.polis << '\n'
+    << "Hausdorff mean / p95 (m) " << r.hausdorff_mean << " / " << r.hausdorff_p95 << '\n'
+    << "blob IoU                 " << r.blob_iou << '\n';
+  return s.str();
+}
+
+}  // namespace lodforge

@@ -1,0 +1,37 @@
+// Footprint quality against ground truth, in metres: overall IoU, one-to-one matching at IoU >= 0.5
+// (precision, recall, F1, mean matched IoU), C-IoU, N-ratio, PoLiS, Hausdorff, and blob-level IoU
+// (a predicted blob against the union of the truth footprints it covers, since a segmentation
+// merges houses that share walls).
+#pragma once
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "geometry/types.hpp"
+
+namespace lodforge {
+
+struct EvalResult {
+  std::size_t predicted = 0, truth = 0, matched = 0;
+  double overall_iou = 0;
+  double precision = 0, recall = 0, f1 = 0;
+  double mean_iou = 0;             // over matched pairs
+  double c_iou = 0;                // mean IoU x (1 - |Np - Ng| / (Np + Ng)) over matched pairs
+  double n_ratio = 0;              // mean vertex count ratio predicted / truth over matched pairs
+  double polis = 0;                // mean PoLiS distance over matched pairs (m)
+  double hausdorff_mean = 0, hausdorff_p95 = 0;  // over matched pairs (m)
+  double blob_iou = 0;             // mean over predictions of IoU with the union of the truth they cover
+};
+
+// aoi (optional): only what lies inside counts; truth outside it is dropped, predictions clipped.
+EvalResult evaluate(const std::vector<PolygonWithHoles>& predicted, const std::vector<PolygonWithHoles>& truth,
+                    const std::optional<PolygonWithHoles>& aoi = std::nullopt);
+
+// Symmetric PoLiS distance (Avbelj et al. 2015) and Hausdorff distance between two polygons' boundaries.
+double polis(const PolygonWithHoles& a, const PolygonWithHoles& b);
+double hausdorff(const PolygonWithHoles& a, const PolygonWithHoles& b);
+
+std::string eval_json(const EvalResult& r);
+std::string eval_table(const EvalResult& r);
+
+}  // namespace lodforge

@@ -1,0 +1,87 @@
+// The quality metrics on cases computed by hand.
+#include <gtest/gtest.h>
+
+#include "eval/metrics.hpp"
+#include "support/process.hpp"
+
+namespace lodforge {
+namespace {
+
+PolygonWithHoles square(double x, double y, double side = 10) { return {{{x, y}, {x + side, y}, {x + side, y + side}, {x, y + side}}, {}}; }
+
+TEST(Eval, IdenticalSquares) {
+  const EvalResult r = evaluate({square(0, 0)}, {square(0, 0)});
+  EXPECT_DOUBLE_EQ(r.overall_iou, 1.0);
+  EXPECT_EQ(r.matched, 1u);
+  EXPECT_DOUBLE_EQ(r.f1, 1.0);
+  EXPECT_DOUBLE_EQ(r.mean_iou, 1.0);
+  EXPECT_DOUBLE_EQ(r.c_iou, 1.0);
+  EXPECT_DOUBLE_EQ(r.n_ratio, 1.0);
+  EXPECT_NEAR(r.polis, 0.0, 1e-12);
+  EXPECT_NEAR(r.hausdorff_mean, 0.0, 1e-12);
+  EXPECT_DOUBLE_EQ(r.blob_iou, 1.0);
+}
+
+TEST(Eval, SquareShiftedByOneMetre) {
+  const EvalResult r = evaluate({square(1, 0)}, {square(0, 0)});
+  EXPECT_NEAR(r.overall_iou, 90.0 / 110.0, 1e-9);
+  EXPECT_NEAR(r.mean_iou, 90.0 / 110.0, 1e-9);
+  // Two of four vertices lie on the other square's boundary, two are 1 m away, both ways.
+  EXPECT_NEAR(r.polis, 0.5, 1e-9);
+  EXPECT_NEAR(r.hausdorff_mean, 1.0, 1e-9);
+  EXPECT_NEAR(r.hausdorff_p95, 1.0, 1e-9);
+}
+
+TEST(Eval, OneExtraVertex) {
+  PolygonWithHoles five = square(0, 0);
+  five.outer.insert(five.outer.begin() + 1, Vec2(5, 0));  // collinear: same shape, one more vertex
+  const EvalResult r = evaluate({five}, {square(0, 0)});
+  EXPECT_NEAR(r.mean_iou, 1.0, 1e-12);
+  EXPECT_NEAR(r.n_ratio, 5.0 / 4.0, 1e-12);
+  EXPECT_NEAR(r.c_iou, 1.0 - 1.0 / 9.0, 1e-12);
+  EXPECT_NEAR(r.polis, 0.0, 1e-12);
+}
+
+TEST(Eval, MatchingNeedsIoUOfOneHalfAndBlobsCompareWithTheUnion) {
+  EvalResult r = evaluate({square(6, 0)}, {square(0, 0)});  // IoU 40/160
+  EXPECT_EQ(r.matched, 0u);
+  EXPECT_DOUBLE_EQ(r.precision, 0.0);
+  EXPECT_NEAR(r.overall_iou, 0.25, 1e-9);
+  // One blob over two houses sharing a wall.
+  const PolygonWithHoles blob{{{0, 0}, {20, 0}, {20, 10}, {0, 10}}, {}};
+  r = evaluate({blob}, {square(0, 0), square(10, 0)});
+  EXPECT_EQ(r.matched, 1u);  // IoU exactly 0.5 with either house
+  EXPECT_NEAR(r.recall, 0.5, 1e-12);
+  EXPECT_NEAR(r.blob_iou, 1.0, 1e-9);
+  EXPECT_NEAR(r.overall_iou, 1.0, 1e-9);
+}
+
+TEST(Eval, AreaOfInterestClipsPredictionsAndDropsTruthOutside) {
+  const PolygonWithHoles aoi = square(0, 0, 15);
+  const EvalResult r = evaluate({square(0, 0), square(12, 0)}, {square(0, 0), square(30, 30)}, aoi);
+  EXPECT_EQ(r.truth, 1u);
+  EXPECT_EQ(r.predicted, 2u);
+  // Inside the AOI: truth 100 m², predictions 100 + 3 x 10 m².
+  EXPECT_NEAR(r.overall_iou, 100.0 / 130.0, 1e-9);
+}
+
+TEST(EvalCommand, ReportsOnFilesAndRefusesMissingOnes) {
+  const auto dir = test::fresh_test_directory("lodforge_eval");
+  ASSERT_EQ(test::lodforge("synth --out " + (dir / "city").string() + " --size-m 150 --seed 9").code, 0);
+  ASSERT_EQ(test::lodforge("regularize --mask " + (dir / "city" / "seg_class.tif").string() + " --out " + (dir / "lod0.gpkg").string()).code, 0);
+  const auto r = test::lodforge("eval --pred " + (dir / "lod0.gpkg").string() + " --gt " + (dir / "city" / "footprints.gpkg").string() +
+                                " --json " + (dir / "eval.json").string());
+  ASSERT_EQ(r.code, 0) << r.output;
+  EXPECT_NE(r.output.find("overall IoU"), std::string::npos) << r.output;
+  const std::string json = test::slurp(dir / "eval.json");
+  const auto at = json.find("\"overall_iou\": ");
+  ASSERT_NE(at, std::string::npos) << json;
+  EXPECT_GT(std::stod(json.substr(at + 15)), 0.9);
+  const auto missing = test::lodforge("eval --pred " + (dir / "nope.gpkg").string() + " --gt " + (dir / "lod0.gpkg").string());
+  EXPECT_EQ(missing.code, 1);
+  EXPECT_NE(missing.output.find("nope.gpkg': file not found"), std::string::npos) << missing.output;
+  std::filesystem::remove_all(dir);
+}
+
+}  // namespace
+}  // namespace lodforge
