@@ -42,6 +42,19 @@ TEST(Eval, OneExtraVertex) {
   EXPECT_NEAR(r.polis, 0.0, 1e-12);
 }
 
+TEST(Eval, MaxTangentAngleError) {
+  EXPECT_NEAR(max_tangent_angle_deg(square(1, 0), square(0, 0)), 0.0, 1e-9);  // shifted, not turned
+  // The same square turned by 3° about its centre: every tangent is 3° off.
+  PolygonWithHoles turned = square(0, 0);
+  const double a = 3.0 * M_PI / 180.0;
+  for (Vec2& p : turned.outer) {
+    const Vec2 q = p - Vec2(5, 5);
+    p = Vec2(5, 5) + Vec2(std::cos(a) * q.x() - std::sin(a) * q.y(), std::sin(a) * q.x() + std::cos(a) * q.y());
+  }
+  EXPECT_NEAR(max_tangent_angle_deg(turned, square(0, 0)), 3.0, 1e-6);
+  EXPECT_NEAR(evaluate({turned}, {square(0, 0)}).max_tangent_angle_deg, 3.0, 1e-6);
+}
+
 TEST(Eval, MatchingNeedsIoUOfOneHalfAndBlobsCompareWithTheUnion) {
   EvalResult r = evaluate({square(6, 0)}, {square(0, 0)});  // IoU 40/160
   EXPECT_EQ(r.matched, 0u);

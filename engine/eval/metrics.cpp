@@ -111,6 +111,56 @@ double hausdorff(const PolygonWithHoles& a, const PolygonWithHoles& b) {
   return std::max(one_way(a, b), one_way(b, a));
 }
 
+double max_tangent_angle_deg(const PolygonWithHoles& predicted, const PolygonWithHoles& truth) {
+  // Every boundary segment of the prediction, to find the nearest one and its direction.
+  std::vector<std::pair<Vec2, Vec2>> segments;
+  auto collect = [&](const Ring& r) {
+    for (std::size_t i = 0; i < r.size(); ++i) segments.push_back({r[i], r[(i + 1) % r.size()]});
+  };
+  collect(predicted.outer);
+  for (const Ring& h : predicted.holes) collect(h);
+  const std::vector<Vec2> truth_corners = all_vertices(truth);
+  double worst = 0;
+  auto scan = [&](const Ring& r) {
+    for (std::size_t i = 0; i < r.size(); ++i) {
+      const Vec2 a = r[i], b = r[(i + 1) % r.size()];
+      const double length = (b - a).norm();
+      const Vec2 t = (b - a) / length;
+      for (double s = 0.5; s <= length - 0.5; s += 0.25) {
+        const Vec2 p = a + s * t;
+        double best = std::numeric_limits<double>::infinity();
+        Vec2 direction = t, nearest = p;
+        const Vec2* ends[2] = {nullptr, nullptr};
+        for (const auto& [u, v] : segments) {
+          const double length2 = (v - u).squaredNorm();
+          if (length2 == 0) continue;
+          const double w = std::clamp((p - u).dot(v - u) / length2, 0.0, 1.0);
+          const Vec2 q = u + w * (v - u);
+          if ((p - q).norm() < best) {
+            best = (p - q).norm();
+            direction = (v - u).normalized();
+            nearest = q;
+            ends[0] = &u;
+            ends[1] = &v;
+          }
+        }
+        // Near a corner the nearest edge is ambiguous: a sample counts only when it is farther from
+        // every truth corner than from the prediction (plus 0.5 m), and its nearest point is not
+        // within 0.5 m of a predicted corner.
+        double corner = std::numeric_limits<double>::infinity();
+        for (const Vec2& c : truth_corners) corner = std::min(corner, (p - c).norm());
+        if (corner < best + 0.5) continue;
+        if (!ends[0] || (nearest - *ends[0]).norm() < 0.5 || (nearest - *ends[1]).norm() < 0.5) continue;
+        const double angle = std::acos(std::min(1.0, std::abs(direction.dot(t)))) * 180.0 / M_PI;
+        worst = std::max(worst, angle);
+      }
+    }
+  };
+  scan(truth.outer);
+  for (const Ring& h : truth.holes) scan(h);
+  return worst;
+}
+
 EvalResult evaluate(const std::vector<PolygonWithHoles>& predicted_in, const std::vector<PolygonWithHoles>& truth_in,
                     const std::optional<PolygonWithHoles>& aoi) {
   EvalResult r;
@@ -140,7 +190,7 @@ EvalResult evaluate(const std::vector<PolygonWithHoles>& predicted_in, const std
   if (pu && tu) r.overall_iou = iou(pu.get(), tu.get());
   // One-to-one matches (at IoU >= 0.5 a prediction overlaps at most one truth that well).
   std::vector<std::vector<double>> pair_iou(predicted.size(), std::vector<double>(truth.size(), 0));
-  std::vector<double> ious, c_ious, ratios, polises, hausdorffs, blobs;
+  std::vector<double> ious, c_ious, ratios, polises, hausdorffs, blobs, tangents;
   for (std::size_t i = 0; i < predicted.size(); ++i) {
     std::vector<Geometry> covered;
     int best = -1;
@@ -164,6 +214,7 @@ EvalResult evaluate(const std::vector<PolygonWithHoles>& predicted_in, const std
     ratios.push_back(np / ng);
     polises.push_back(polis(predicted[i], truth[best]));
     hausdorffs.push_back(hausdorff(predicted[i], truth[best]));
+    tangents.push_back(max_tangent_angle_deg(predicted[i], truth[best]));
   }
   auto mean = [](const std::vector<double>& v) { return v.empty() ? 0.0 : std::accumulate(v.begin(), v.end(), 0.0) / double(v.size()); };
   r.precision = r.predicted ? double(r.matched) / double(r.predicted) : 0;
@@ -179,6 +230,7 @@ EvalResult evaluate(const std::vector<PolygonWithHoles>& predicted_in, const std
     r.hausdorff_p95 = hausdorffs[std::min(hausdorffs.size() - 1, std::size_t(std::ceil(0.95 * double(hausdorffs.size()))) - 1)];
   }
   r.blob_iou = mean(blobs);
+  r.max_tangent_angle_deg = mean(tangents);
   return r;
 }
 
@@ -189,7 +241,7 @@ std::string eval_json(const EvalResult& r) {
     << ", \"overall_iou\": " << r.overall_iou << ", \"precision\": " << r.precision << ", \"recall\": " << r.recall
     << ", \"f1\": " << r.f1 << ", \"mean_iou\": " << r.mean_iou << ", \"c_iou\": " << r.c_iou << ", \"n_ratio\": " << r.n_ratio
     << ", \"polis_m\": " << r.polis << ", \"hausdorff_mean_m\": " << r.hausdorff_mean << ", \"hausdorff_p95_m\": " << r.hausdorff_p95
-    << ", \"blob_iou\": " << r.blob_iou << "}";
+    << ", \"max_tangent_angle_deg\": " << r.max_tangent_angle_deg << ", \"blob_iou\": " << r.blob_iou << "}";
   return s.str();
 }
 
@@ -205,6 +257,7 @@ std::string eval_table(const EvalResult& r) {
     << "N-ratio                  " << r.n_ratio << '\n'
     << "PoLiS (m)                " << r.polis << '\n'
     << "Hausdorff mean / p95 (m) " << r.hausdorff_mean << " / " << r.hausdorff_p95 << '\n'
+    << "max tangent angle (deg)  " << r.max_tangent_angle_deg << '\n'
     << "blob IoU                 " << r.blob_iou << '\n';
   return s.str();
 }

@@ -20,6 +20,7 @@ struct EvalResult {
   double n_ratio = 0;              // mean vertex count ratio predicted / truth over matched pairs
   double polis = 0;                // mean PoLiS distance over matched pairs (m)
   double hausdorff_mean = 0, hausdorff_p95 = 0;  // over matched pairs (m)
+  double max_tangent_angle_deg = 0;  // mean over matched pairs of the largest tangent orientation error
   double blob_iou = 0;             // mean over predictions of IoU with the union of the truth they cover
 };
 
@@ -30,6 +31,10 @@ EvalResult evaluate(const std::vector<PolygonWithHoles>& predicted, const std::v
 // Symmetric PoLiS distance (Avbelj et al. 2015) and Hausdorff distance between two polygons' boundaries.
 double polis(const PolygonWithHoles& a, const PolygonWithHoles& b);
 double hausdorff(const PolygonWithHoles& a, const PolygonWithHoles& b);
+// The largest angle (degrees, orientation modulo 180°) between the truth boundary's tangent at a
+// sample point (every 0.25 m) and the predicted boundary's tangent at its nearest point. Samples
+// near corners, where the nearest edge is ambiguous, are left out (see metrics.cpp).
+double max_tangent_angle_deg(const PolygonWithHoles& predicted, const PolygonWithHoles& truth);
 
 std::string eval_json(const EvalResult& r);
 std::string eval_table(const EvalResult& r);
