@@ -55,6 +55,18 @@ TEST(Eval, MaxTangentAngleError) {
   EXPECT_NEAR(evaluate({turned}, {square(0, 0)}).max_tangent_angle_deg, 3.0, 1e-6);
 }
 
+TEST(Eval, CornersWithinFiveDegreesOfTheTruthsDirections) {
+  EXPECT_EQ(regular_corners(square(1, 0), square(0, 0)), std::make_pair(std::size_t(4), std::size_t(4)));
+  // One corner pulled 1 m out: its two edges turn by about 6° (atan 1/10), the other two corners
+  // keep one aligned edge each but not both.
+  PolygonWithHoles skewed = square(0, 0);
+  skewed.outer[2] += Vec2(1, 1);
+  const auto [regular, total] = regular_corners(skewed, square(0, 0));
+  EXPECT_EQ(total, 4u);
+  EXPECT_EQ(regular, 1u);  // only the opposite corner (0, 0)
+  EXPECT_NEAR(evaluate({skewed}, {square(0, 0)}).corner_share_5deg, 0.25, 1e-12);
+}
+
 TEST(Eval, MatchingNeedsIoUOfOneHalfAndBlobsCompareWithTheUnion) {
   EvalResult r = evaluate({square(6, 0)}, {square(0, 0)});  // IoU 40/160
   EXPECT_EQ(r.matched, 0u);

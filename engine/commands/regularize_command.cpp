@@ -60,6 +60,7 @@ int run_regularize(int argc, char** argv) {
       .value("building-rgb", "R,G,B", "building colour in an RGB raster, e.g. 0,0,255 (ISPRS)")
       .value("out", "FILE", "output footprints (.gpkg or .geojson)")
       .value("route", "NAME", "corner route: 'original' (lines fitted to the raw contour) or 'deformed' (the paper)")
+      .value("regularizer", "NAME", "deformation (default: the paper's chain), douglas_peucker or none (raw contour)")
       .value("threads", "N", "worker threads (default: all cores)")
       .value("set", "KEY=VALUE", "set any stage option, e.g. labeling.kappa2=5 (see lodforge options)", true)
       .flag("help", "show this help");
@@ -76,6 +77,9 @@ int run_regularize(int argc, char** argv) {
     try { threads = std::stoi(*t); } catch (...) { threads = -1; }
     if (threads < 0) throw InputError("lodforge regularize: --threads '" + *t + "': must be a number >= 0");
   }
+  const std::string regularizer = args.get("regularizer").value_or("deformation");
+  if (regularizer != "deformation" && regularizer != "douglas_peucker" && regularizer != "none")
+    throw InputError("lodforge regularize: --regularizer '" + regularizer + "': must be one of: deformation, douglas_peucker, none");
   const BuildingSelector selector = parse_selector(args);
   check_output_path(out_path);
 
@@ -95,7 +99,7 @@ int run_regularize(int argc, char** argv) {
   std::unique_ptr<tbb::global_control> limit;
   if (threads > 0) limit = std::make_unique<tbb::global_control>(tbb::global_control::max_allowed_parallelism, threads);
   tbb::parallel_for(std::size_t(0), count, [&](std::size_t i) {
-    results[i] = regularize_building(contours.buildings[i].rings, pixel_size, options.core);
+    results[i] = regularize_with(regularizer, contours.buildings[i].rings, pixel_size, options.core);
     const std::size_t n = ++done;
     if (count >= 20 && n % (count / 10) == 0) spdlog::info("{}/{} buildings", n, count);
   });
@@ -111,7 +115,7 @@ int run_regularize(int argc, char** argv) {
     rec.status = r.status();
     rec.failed_stage = r.failed_stage;
     rec.reason = r.reason;
-    rec.regularizer = r.ok ? "contour_" + options.core.corners.route : "douglas_peucker";
+    rec.regularizer = !r.ok ? "douglas_peucker" : regularizer == "deformation" ? "deformation_" + options.core.corners.route : regularizer;
     if (!r.ok) {
       ++failed;
       ++failures[r.failed_stage];

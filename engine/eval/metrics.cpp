@@ -129,28 +129,23 @@ double max_tangent_angle_deg(const PolygonWithHoles& predicted, const PolygonWit
       for (double s = 0.5; s <= length - 0.5; s += 0.25) {
         const Vec2 p = a + s * t;
         double best = std::numeric_limits<double>::infinity();
-        Vec2 direction = t, nearest = p;
-        const Vec2* ends[2] = {nullptr, nullptr};
+        Vec2 direction = t;
         for (const auto& [u, v] : segments) {
-          const double length2 = (v - u).squaredNorm();
-          if (length2 == 0) continue;
-          const double w = std::clamp((p - u).dot(v - u) / length2, 0.0, 1.0);
-          const Vec2 q = u + w * (v - u);
-          if ((p - q).norm() < best) {
-            best = (p - q).norm();
-            direction = (v - u).normalized();
-            nearest = q;
-            ends[0] = &u;
-            ends[1] = &v;
+          if ((v - u).squaredNorm() == 0) continue;
+          const double d = point_segment(p, u, v);
+          const Vec2 dv = (v - u).normalized();
+          // A sample exactly at a predicted corner is as near to both edges: take the one that
+          // runs along the truth, so a shared corner is not an error.
+          if (d < best - 1e-9 || (d <= best + 1e-9 && std::abs(dv.dot(t)) > std::abs(direction.dot(t)))) {
+            best = std::min(best, d);
+            direction = dv;
           }
         }
-        // Near a corner the nearest edge is ambiguous: a sample counts only when it is farther from
-        // every truth corner than from the prediction (plus 0.5 m), and its nearest point is not
-        // within 0.5 m of a predicted corner.
+        // Near a truth corner the nearest edge is ambiguous: a sample counts only when it is
+        // farther from every truth corner than from the prediction (plus 0.5 m).
         double corner = std::numeric_limits<double>::infinity();
         for (const Vec2& c : truth_corners) corner = std::min(corner, (p - c).norm());
         if (corner < best + 0.5) continue;
-        if (!ends[0] || (nearest - *ends[0]).norm() < 0.5 || (nearest - *ends[1]).norm() < 0.5) continue;
         const double angle = std::acos(std::min(1.0, std::abs(direction.dot(t)))) * 180.0 / M_PI;
         worst = std::max(worst, angle);
       }
@@ -159,6 +154,36 @@ double max_tangent_angle_deg(const PolygonWithHoles& predicted, const PolygonWit
   scan(truth.outer);
   for (const Ring& h : truth.holes) scan(h);
   return worst;
+}
+
+std::pair<std::size_t, std::size_t> regular_corners(const PolygonWithHoles& predicted, const PolygonWithHoles& truth,
+                                                    double tolerance_deg) {
+  std::vector<Vec2> directions;  // unit tangents of the truth's edges of 1 m or more
+  auto gather = [&](const Ring& r) {
+    for (std::size_t i = 0; i < r.size(); ++i) {
+      const Vec2 e = r[(i + 1) % r.size()] - r[i];
+      if (e.norm() >= 1.0) directions.push_back(e.normalized());
+    }
+  };
+  gather(truth.outer);
+  for (const Ring& h : truth.holes) gather(h);
+  const double cos_tolerance = std::cos(tolerance_deg * M_PI / 180.0);
+  auto aligned = [&](const Vec2& e) {
+    const Vec2 t = e.normalized();
+    for (const Vec2& d : directions) if (std::abs(t.dot(d)) >= cos_tolerance) return true;
+    return false;
+  };
+  std::size_t regular = 0, total = 0;
+  auto corners = [&](const Ring& r) {
+    for (std::size_t i = 0; i < r.size(); ++i) {
+      const Vec2 before = r[i] - r[(i + r.size() - 1) % r.size()], after = r[(i + 1) % r.size()] - r[i];
+      ++total;
+      regular += aligned(before) && aligned(after);
+    }
+  };
+  corners(predicted.outer);
+  for (const Ring& h : predicted.holes) corners(h);
+  return {regular, total};
 }
 
 EvalResult evaluate(const std::vector<PolygonWithHoles>& predicted_in, const std::vector<PolygonWithHoles>& truth_in,
@@ -191,6 +216,7 @@ EvalResult evaluate(const std::vector<PolygonWithHoles>& predicted_in, const std
   // One-to-one matches (at IoU >= 0.5 a prediction overlaps at most one truth that well).
   std::vector<std::vector<double>> pair_iou(predicted.size(), std::vector<double>(truth.size(), 0));
   std::vector<double> ious, c_ious, ratios, polises, hausdorffs, blobs, tangents;
+  std::size_t regular = 0, corners = 0;
   for (std::size_t i = 0; i < predicted.size(); ++i) {
     std::vector<Geometry> covered;
     int best = -1;
@@ -215,6 +241,9 @@ EvalResult evaluate(const std::vector<PolygonWithHoles>& predicted_in, const std
     polises.push_back(polis(predicted[i], truth[best]));
     hausdorffs.push_back(hausdorff(predicted[i], truth[best]));
     tangents.push_back(max_tangent_angle_deg(predicted[i], truth[best]));
+    const auto [good, all] = regular_corners(predicted[i], truth[best]);
+    regular += good;
+    corners += all;
   }
   auto mean = [](const std::vector<double>& v) { return v.empty() ? 0.0 : std::accumulate(v.begin(), v.end(), 0.0) / double(v.size()); };
   r.precision = r.predicted ? double(r.matched) / double(r.predicted) : 0;
@@ -231,6 +260,7 @@ EvalResult evaluate(const std::vector<PolygonWithHoles>& predicted_in, const std
   }
   r.blob_iou = mean(blobs);
   r.max_tangent_angle_deg = mean(tangents);
+  r.corner_share_5deg = corners ? double(regular) / double(corners) : 0;
   return r;
 }
 
@@ -241,7 +271,7 @@ std::string eval_json(const EvalResult& r) {
     << ", \"overall_iou\": " << r.overall_iou << ", \"precision\": " << r.precision << ", \"recall\": " << r.recall
     << ", \"f1\": " << r.f1 << ", \"mean_iou\": " << r.mean_iou << ", \"c_iou\": " << r.c_iou << ", \"n_ratio\": " << r.n_ratio
     << ", \"polis_m\": " << r.polis << ", \"hausdorff_mean_m\": " << r.hausdorff_mean << ", \"hausdorff_p95_m\": " << r.hausdorff_p95
-    << ", \"max_tangent_angle_deg\": " << r.max_tangent_angle_deg << ", \"blob_iou\": " << r.blob_iou << "}";
+    << ", \"max_tangent_angle_deg\": " << r.max_tangent_angle_deg << ", \"corner_share_5deg\": " << r.corner_share_5deg << ", \"blob_iou\": " << r.blob_iou << "}";
   return s.str();
 }
 
@@ -258,6 +288,7 @@ std::string eval_table(const EvalResult& r) {
     << "PoLiS (m)                " << r.polis << '\n'
     << "Hausdorff mean / p95 (m) " << r.hausdorff_mean << " / " << r.hausdorff_p95 << '\n'
     << "max tangent angle (deg)  " << r.max_tangent_angle_deg << '\n'
+    << "corners within 5 deg     " << r.corner_share_5deg << '\n'
     << "blob IoU                 " << r.blob_iou << '\n';
   return s.str();
 }

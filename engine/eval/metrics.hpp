@@ -21,6 +21,8 @@ struct EvalResult {
   double polis = 0;                // mean PoLiS distance over matched pairs (m)
   double hausdorff_mean = 0, hausdorff_p95 = 0;  // over matched pairs (m)
   double max_tangent_angle_deg = 0;  // mean over matched pairs of the largest tangent orientation error
+  double corner_share_5deg = 0;      // share of predicted corners whose two edges are within 5° of the
+                                     // truth building's edge orientations (over matched pairs)
   double blob_iou = 0;             // mean over predictions of IoU with the union of the truth they cover
 };
 
@@ -35,6 +37,11 @@ double hausdorff(const PolygonWithHoles& a, const PolygonWithHoles& b);
 // sample point (every 0.25 m) and the predicted boundary's tangent at its nearest point. Samples
 // near corners, where the nearest edge is ambiguous, are left out (see metrics.cpp).
 double max_tangent_angle_deg(const PolygonWithHoles& predicted, const PolygonWithHoles& truth);
+
+// Corners of predicted whose two edges both lie within tolerance_deg of an orientation (mod 180°)
+// of one of truth's edges at least 1 m long: (regular corners, corners).
+std::pair<std::size_t, std::size_t> regular_corners(const PolygonWithHoles& predicted, const PolygonWithHoles& truth,
+                                                    double tolerance_deg = 5.0);
 
 std::string eval_json(const EvalResult& r);
 std::string eval_table(const EvalResult& r);

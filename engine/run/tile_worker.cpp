@@ -32,17 +32,11 @@ std::vector<BuildingOutput> regularize_tile(const TileBuildings& tile, const Job
     o.id = std::int64_t(b.first_row) * raster_width + b.first_col;
     o.first_row = b.first_row;
     o.first_col = b.first_col;
-    if (job.regularizer == "deformation") {
-      BuildingResult r = regularize_building(b.rings, pixel_size, job.stages.core);
-      o.footprint = std::move(r.footprint);
-      o.ok = r.ok;
-      o.stage = r.failed_stage;
-      o.reason = r.reason;
-    } else if (job.regularizer == "douglas_peucker") {
-      o.footprint = fallback_footprint(b.rings, job.stages.core.fallback.tolerance_m);
-    } else {
-      o.footprint = fallback_footprint(b.rings, 0.0);
-    }
+    BuildingResult r = regularize_with(job.regularizer, b.rings, pixel_size, job.stages.core);
+    o.footprint = std::move(r.footprint);
+    o.ok = r.ok;
+    o.stage = r.failed_stage;
+    o.reason = r.reason;
   });
   return out;
 }

@@ -163,4 +163,18 @@ BuildingResult regularize_building(const std::vector<Ring>& rings, double pixel_
   return result;
 }
 
+BuildingResult regularize_with(const std::string& regularizer, const std::vector<Ring>& rings, double pixel_size,
+                               const CoreOptions& options) {
+  if (regularizer == "deformation") return regularize_building(rings, pixel_size, options);
+  BuildingResult result;
+  if (rings.empty()) {
+    result.ok = false;
+    result.failed_stage = "input";
+    result.reason = "no contour";
+    return result;
+  }
+  result.footprint = fallback_footprint(rings, regularizer == "douglas_peucker" ? options.fallback.tolerance_m : 0.0);
+  return result;
+}
+
 }  // namespace lodforge

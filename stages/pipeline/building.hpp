@@ -29,6 +29,12 @@ struct BuildingResult {
 // extract_contours). pixel_size: the raster's ground sampling distance in metres.
 BuildingResult regularize_building(const std::vector<Ring>& rings, double pixel_size, const CoreOptions& options);
 
+// The same rings through a named regularizer: "deformation" (the chain above, corner route in
+// options.corners.route), "douglas_peucker" (tolerance options.fallback.tolerance_m) or "none"
+// (the raw contour, collinear vertices removed). The last two always succeed.
+BuildingResult regularize_with(const std::string& regularizer, const std::vector<Ring>& rings, double pixel_size,
+                               const CoreOptions& options);
+
 // The fallback footprint: Douglas–Peucker of the raw rings, or the raw rings if that is invalid.
 PolygonWithHoles fallback_footprint(const std::vector<Ring>& rings, double tolerance);
 
