@@ -14,6 +14,7 @@
 #include "geometry/polygon.hpp"
 #include "heights/heights.hpp"
 #include "io/height_reader.hpp"
+#include "io/ogr_polygon.hpp"
 #include "io/raster_writer.hpp"
 #include "lod1/solid.hpp"
 #include "support/process.hpp"
@@ -91,14 +92,7 @@ std::map<std::string, PolygonWithHoles> bgt_footprints() {
   for (auto& f : *d->GetLayer(0)) {
     const OGRGeometry* g = f->GetGeometryRef();
     const OGRPolygon* poly = wkbFlatten(g->getGeometryType()) == wkbMultiPolygon ? g->toMultiPolygon()->getGeometryRef(0) : g->toPolygon();
-    auto ring = [](const OGRLinearRing* r, bool outer) {
-      Ring out;
-      for (int i = 0; i + 1 < r->getNumPoints(); ++i) out.emplace_back(r->getX(i), r->getY(i));
-      if ((signed_area(out) > 0) != outer) std::reverse(out.begin(), out.end());
-      return out;
-    };
-    PolygonWithHoles p{ring(poly->getExteriorRing(), true), {}};
-    for (int k = 0; k < poly->getNumInteriorRings(); ++k) p.holes.push_back(ring(poly->getInteriorRing(k), false));
+    const PolygonWithHoles p = from_ogr_polygon(*poly);
     out[f->GetFieldAsString("lokaalid")] = p;
   }
   GDALClose(d);

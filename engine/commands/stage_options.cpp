@@ -18,13 +18,7 @@ std::map<std::string, std::string> split_assignments(const std::vector<std::stri
 
 void apply_overrides(StageOptions& options, const std::vector<std::string>& assignments) {
   std::vector<std::string> errors;
-  OptionSetter setter(split_assignments(assignments, "--set", errors));
-  options.visit(setter);
-  setter.report_unknown();
-  errors.insert(errors.end(), setter.errors.begin(), setter.errors.end());
-  OptionValidator validator;
-  options.visit(validator);
-  errors.insert(errors.end(), validator.errors.begin(), validator.errors.end());
+  set_and_validate(options, split_assignments(assignments, "--set", errors), errors);
   if (!errors.empty()) throw input_errors(errors);
 }
 

@@ -39,13 +39,7 @@ int run_synth(int argc, char** argv) {
   if (auto v = args.get("pixel-size")) values["pixel_size_m"] = *v;
   if (auto v = args.get("seed")) values["seed"] = *v;
   SynthOptions options;
-  OptionSetter setter(values);
-  options.visit(setter);
-  setter.report_unknown();
-  OptionValidator validator;
-  options.visit(validator);
-  errors.insert(errors.end(), setter.errors.begin(), setter.errors.end());
-  errors.insert(errors.end(), validator.errors.begin(), validator.errors.end());
+  set_and_validate(options, values, errors);
   if (!errors.empty()) throw input_errors(errors);
 
   std::error_code ec;

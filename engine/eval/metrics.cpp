@@ -1,5 +1,7 @@
 #include "eval/metrics.hpp"
 
+#include "io/ogr_polygon.hpp"
+
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -14,18 +16,7 @@ namespace {
 
 using Geometry = std::unique_ptr<OGRGeometry>;
 
-Geometry to_ogr(const PolygonWithHoles& p) {
-  auto polygon = std::make_unique<OGRPolygon>();
-  auto add = [&](const Ring& r) {
-    OGRLinearRing ring;
-    for (const Vec2& q : r) ring.addPoint(q.x(), q.y());
-    ring.addPoint(r.front().x(), r.front().y());
-    polygon->addRing(&ring);
-  };
-  add(p.outer);
-  for (const Ring& h : p.holes) add(h);
-  return polygon;
-}
+Geometry to_ogr(const PolygonWithHoles& p) { return to_ogr_polygon(p); }
 
 double area_of(const OGRGeometry* g) {
   if (!g) return 0;
@@ -91,6 +82,11 @@ std::vector<Vec2> densified(const PolygonWithHoles& p, double step) {
 }
 
 }  // namespace
+
+double polygon_iou(const PolygonWithHoles& a, const PolygonWithHoles& b) {
+  const Geometry pa = to_ogr(a), pb = to_ogr(b);
+  return iou(pa.get(), pb.get());
+}
 
 double polis(const PolygonWithHoles& a, const PolygonWithHoles& b) {
   auto one_way = [](const PolygonWithHoles& from, const PolygonWithHoles& to) {

@@ -30,6 +30,9 @@ struct EvalResult {
 EvalResult evaluate(const std::vector<PolygonWithHoles>& predicted, const std::vector<PolygonWithHoles>& truth,
                     const std::optional<PolygonWithHoles>& aoi = std::nullopt);
 
+// Intersection over union of two polygons.
+double polygon_iou(const PolygonWithHoles& a, const PolygonWithHoles& b);
+
 // Symmetric PoLiS distance (Avbelj et al. 2015) and Hausdorff distance between two polygons' boundaries.
 double polis(const PolygonWithHoles& a, const PolygonWithHoles& b);
 double hausdorff(const PolygonWithHoles& a, const PolygonWithHoles& b);

@@ -7,6 +7,7 @@
 
 #include "geometry/polygon.hpp"
 #include "io/errors.hpp"
+#include "io/ogr_polygon.hpp"
 
 namespace lodforge {
 
@@ -21,12 +22,6 @@ std::string driver_for(const std::string& path) {
   return {};
 }
 
-OGRLinearRing to_ogr(const Ring& ring) {
-  OGRLinearRing out;
-  for (const Vec2& p : ring) out.addPoint(p.x(), p.y());
-  out.addPoint(ring.front().x(), ring.front().y());
-  return out;
-}
 
 }  // namespace
 
@@ -143,14 +138,7 @@ void FootprintFileWriter::add(const FootprintRecord& r) {
   for (const Ring& h : r.polygon.holes) vertices += int(h.size());
   feature.SetField("vertex_count", vertices);
   feature.SetField("area_m2", area(r.polygon));
-  OGRPolygon polygon;
-  OGRLinearRing outer = to_ogr(r.polygon.outer);
-  polygon.addRing(&outer);
-  for (const Ring& h : r.polygon.holes) {
-    OGRLinearRing hole = to_ogr(h);
-    polygon.addRing(&hole);
-  }
-  feature.SetGeometry(&polygon);
+  feature.SetGeometry(to_ogr_polygon(r.polygon).get());
   if (impl_->ogr_layer->CreateFeature(&feature) != OGRERR_NONE) impl_->fail("cannot write feature " + std::to_string(r.id));
 }
 

@@ -70,6 +70,19 @@ class AtomicText {
 
 std::string gml_id(std::int64_t id) { return "lodforge_b" + std::to_string(id); }
 
+// The footprint at height z, as one face.
+Face lifted(const PolygonWithHoles& footprint, double z) {
+  Face face;
+  auto lift = [z](const Ring& r) {
+    Ring3 out;
+    for (const Vec2& p : r) out.emplace_back(p.x(), p.y(), z);
+    return out;
+  };
+  face.rings.push_back(lift(footprint.outer));
+  for (const Ring& h : footprint.holes) face.rings.push_back(lift(h));
+  return face;
+}
+
 std::string xml_escape(const std::string& s) {
   std::string out;
   for (char c : s) {
@@ -113,18 +126,7 @@ class CityGmlWriter : public ModelWriter {
     }
     const double z = m.has_lod1 ? m.ground : 0.0;
     o << "      <bldg:lod0FootPrint>\n        <gml:MultiSurface" << srs_ << " srsDimension=\"3\">\n          <gml:surfaceMember>\n";
-    Face footprint;
-    for (const Ring* r = &m.footprint.outer; r; r = nullptr) {
-      Ring3 ring;
-      for (const Vec2& p : *r) ring.emplace_back(p.x(), p.y(), z);
-      footprint.rings.push_back(ring);
-    }
-    for (const Ring& h : m.footprint.holes) {
-      Ring3 ring;
-      for (const Vec2& p : h) ring.emplace_back(p.x(), p.y(), z);
-      footprint.rings.push_back(ring);
-    }
-    polygon(footprint, 12);
+    polygon(lifted(m.footprint, z), 12);
     o << "          </gml:surfaceMember>\n        </gml:MultiSurface>\n      </bldg:lod0FootPrint>\n";
     if (m.has_lod1) {
       o << "      <bldg:lod1Solid>\n        <gml:Solid" << srs_ << " srsDimension=\"3\">\n          <gml:exterior>\n            <gml:CompositeSurface>\n";
@@ -263,14 +265,17 @@ class ObjWriter : public ModelWriter {
         continue;
       }
       // A top or bottom face with holes (or many vertices): constrained triangulation in 2D.
+      // Triangulate in the plan (outer ring counter-clockwise, holes clockwise) and turn the
+      // triangles over for a face that looks down (the bottom).
       std::vector<Ring> rings;
-      for (const Ring3& r : f.rings) {
+      bool downward = false;
+      for (std::size_t k = 0; k < f.rings.size(); ++k) {
         Ring flat;
-        for (const Vec3& p : r) flat.emplace_back(p.x() - origin_.x(), p.y() - origin_.y());
-        if (signed_area(flat) * (&r == &f.rings[0] ? 1 : -1) < 0) std::reverse(flat.begin(), flat.end());
+        for (const Vec3& p : f.rings[k]) flat.emplace_back(p.x() - origin_.x(), p.y() - origin_.y());
+        if (k == 0) downward = signed_area(flat) < 0;
+        if ((signed_area(flat) > 0) != (k == 0)) std::reverse(flat.begin(), flat.end());
         rings.push_back(flat);
       }
-      const bool downward = signed_area([&] { Ring flat; for (const Vec3& p : f.rings[0]) flat.emplace_back(p.x(), p.y()); return flat; }()) < 0;
       TriangulationOptions plain;
       plain.max_vertices = 0;  // no refinement: the input vertices only
       const TriangleMesh mesh = triangulate(rings, 1e9, plain);

@@ -33,13 +33,7 @@ Job load_job(const std::string& path, const std::vector<std::string>& overrides)
   }
   std::vector<std::string> errors = reader.errors;
 
-  OptionSetter setter(split_assignments(overrides, "--set", errors));
-  job.visit(setter);
-  setter.report_unknown();
-  errors.insert(errors.end(), setter.errors.begin(), setter.errors.end());
-  OptionValidator validator;
-  job.visit(validator);
-  errors.insert(errors.end(), validator.errors.begin(), validator.errors.end());
+  set_and_validate(job, split_assignments(overrides, "--set", errors), errors);
 
   // Paths relative to the job file.
   const fs::path base = fs::absolute(path).parent_path();

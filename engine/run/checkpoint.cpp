@@ -129,7 +129,7 @@ CheckpointStore::CheckpointStore(std::string directory) : directory_(std::move(d
   if (access(directory_.c_str(), W_OK) != 0) throw InputError("work_dir '" + directory_ + "': not writable");
 }
 
-std::string CheckpointStore::path(const std::string& stage, const std::string& tile, std::uint64_t) const {
+std::string CheckpointStore::path(const std::string& stage, const std::string& tile) const {
   return (fs::path(directory_) / (tile + "." + stage)).string();
 }
 
@@ -153,11 +153,11 @@ void CheckpointStore::save_contours(const std::string& tile, std::uint64_t key, 
     w.pod<std::int32_t>(b.bbox.height);
     w.rings(b.rings);
   }
-  write_atomically(path("contours", tile, key), w.str(), key);
+  write_atomically(path("contours", tile), w.str(), key);
 }
 
 std::optional<TileBuildings> CheckpointStore::load_contours(const std::string& tile, std::uint64_t key) const {
-  auto r = read_checked(path("contours", tile, key), key);
+  auto r = read_checked(path("contours", tile), key);
   if (!r) return std::nullopt;
   try {
     TileBuildings t;
@@ -199,11 +199,11 @@ void CheckpointStore::save_buildings(const std::string& tile, std::uint64_t key,
     w.text(b.stage);
     w.text(b.reason);
   }
-  write_atomically(path("buildings", tile, key), w.str(), key);
+  write_atomically(path("buildings", tile), w.str(), key);
 }
 
 std::optional<std::vector<BuildingOutput>> CheckpointStore::load_buildings(const std::string& tile, std::uint64_t key) const {
-  auto r = read_checked(path("buildings", tile, key), key);
+  auto r = read_checked(path("buildings", tile), key);
   if (!r) return std::nullopt;
   try {
     std::vector<BuildingOutput> value(r->count());
@@ -227,11 +227,11 @@ std::optional<std::vector<BuildingOutput>> CheckpointStore::load_buildings(const
 void CheckpointStore::save_blob(const std::string& stage, const std::string& tile, std::uint64_t key, const std::string& payload) const {
   Writer w;
   w.text(payload);
-  write_atomically(path(stage, tile, key), w.str(), key);
+  write_atomically(path(stage, tile), w.str(), key);
 }
 
 std::optional<std::string> CheckpointStore::load_blob(const std::string& stage, const std::string& tile, std::uint64_t key) const {
-  auto r = read_checked(path(stage, tile, key), key);
+  auto r = read_checked(path(stage, tile), key);
   if (!r) return std::nullopt;
   try {
     std::string payload = r->text();
@@ -245,11 +245,11 @@ std::optional<std::string> CheckpointStore::load_blob(const std::string& stage, 
 void CheckpointStore::mark_done(const std::string& tile, std::uint64_t key, const std::string& summary) const {
   Writer w;
   w.text(summary);
-  write_atomically(path("done", tile, key), w.str(), key);
+  write_atomically(path("done", tile), w.str(), key);
 }
 
 std::optional<std::string> CheckpointStore::done_summary(const std::string& tile, std::uint64_t key) const {
-  auto r = read_checked(path("done", tile, key), key);
+  auto r = read_checked(path("done", tile), key);
   if (!r) return std::nullopt;
   try {
     return r->text();

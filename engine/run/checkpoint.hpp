@@ -24,8 +24,6 @@ struct BuildingOutput {
 class CheckpointStore {
  public:
   explicit CheckpointStore(std::string directory);  // creates it; throws InputError if it cannot
-  std::string path(const std::string& stage, const std::string& tile, std::uint64_t key) const;
-
   void save_contours(const std::string& tile, std::uint64_t key, const TileBuildings& value) const;
   std::optional<TileBuildings> load_contours(const std::string& tile, std::uint64_t key) const;
   void save_buildings(const std::string& tile, std::uint64_t key, const std::vector<BuildingOutput>& value) const;
@@ -38,6 +36,8 @@ class CheckpointStore {
   std::optional<std::string> done_summary(const std::string& tile, std::uint64_t key) const;
 
  private:
+  // One file per tile and stage; the key inside says which inputs it was made from.
+  std::string path(const std::string& stage, const std::string& tile) const;
   std::string directory_;
 };
 

@@ -158,6 +158,7 @@ std::shared_ptr<TileResult> process_tile(const RunPlan& plan, int tile) {
     store.save_buildings(r->name, buildings_key, *buildings);
   }
   r->buildings = std::move(*buildings);
+  std::optional<HeightRaster> dsm_window;  // read for the heights, reused for the picture
   if (!plan.dsm_source.empty()) {
     const std::uint64_t heights_key = fnv1a(plan.heights_options, buildings_key);
     std::optional<std::vector<Heights>> heights;
@@ -166,7 +167,8 @@ std::shared_ptr<TileResult> process_tile(const RunPlan& plan, int tile) {
       const int margin = int(std::ceil((job.stages.heights.ring_outer_m + job.stages.core.corners.max_corner_shift_m) / pixel)) + 2;
       const cv::Rect area = (contours->window + cv::Size(2 * margin, 2 * margin) - cv::Point(margin, margin)) &
               cv::Rect(0, 0, plan.size.width, plan.size.height);
-      const HeightRaster dsm = HeightWindowReader(plan.dsm_source).read(area, plan.transform);
+      dsm_window = HeightWindowReader(plan.dsm_source).read(area, plan.transform);
+      const HeightRaster& dsm = *dsm_window;
       std::optional<HeightRaster> dtm;
       if (!plan.dtm_source.empty()) dtm = HeightWindowReader(plan.dtm_source).read(area, plan.transform);
       heights.emplace(r->buildings.size());
@@ -191,8 +193,16 @@ std::shared_ptr<TileResult> process_tile(const RunPlan& plan, int tile) {
     if (!job.inputs.orthophoto.path.empty()) {
       r->quicklook_background = read_orthophoto(plan.ortho_source, tile_rect);
     } else if (!plan.dsm_source.empty()) {
-      const HeightRaster dsm = HeightWindowReader(plan.dsm_source).read(tile_rect, plan.transform);
-      r->quicklook_background = hillshade(dsm.values, dsm.valid, pixel);
+      if (dsm_window && (dsm_window->values.size().area() > 0)) {
+        // The tile within the window read for the heights (which contains it).
+        const Vec2 corner = dsm_window->transform.to_pixel(plan.transform.to_map(tile_rect.x, tile_rect.y));
+        const cv::Rect inside(int(std::lround(corner.x())), int(std::lround(corner.y())), tile_rect.width, tile_rect.height);
+        // Cloned: filters must not see past the tile, exactly as with a fresh read of it.
+        r->quicklook_background = hillshade(dsm_window->values(inside).clone(), dsm_window->valid(inside).clone(), pixel);
+      } else {
+        const HeightRaster dsm = HeightWindowReader(plan.dsm_source).read(tile_rect, plan.transform);
+        r->quicklook_background = hillshade(dsm.values, dsm.valid, pixel);
+      }
     } else {
       cv::Mat grey = MaskWindowReader(job.inputs.segmentation.path, plan.selector).read(tile_rect) * 120 + 40;
       cv::cvtColor(grey, r->quicklook_background, cv::COLOR_GRAY2BGR);

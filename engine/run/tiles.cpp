@@ -49,8 +49,6 @@ MaskWindowReader::~MaskWindowReader() {
   delete impl_;
 }
 
-cv::Size MaskWindowReader::size() const { return {impl_->dataset->GetRasterXSize(), impl_->dataset->GetRasterYSize()}; }
-
 cv::Mat MaskWindowReader::read(const cv::Rect& w) const {
   auto band = [&](int b) {
     cv::Mat m(w.height, w.width, CV_32S);
@@ -158,7 +156,6 @@ TileBuildings trace_tile(const TileWindow& w, const TileGrid& grid, int tile, co
   out.dropped_small = contours.dropped_small;
   out.too_large = w.too_large;
   out.window = window;
-  out.mask_hash = w.hash;
   return out;
 }
 

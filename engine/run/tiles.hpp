@@ -31,7 +31,6 @@ class MaskWindowReader {
   ~MaskWindowReader();
   MaskWindowReader(const MaskWindowReader&) = delete;
   MaskWindowReader& operator=(const MaskWindowReader&) = delete;
-  cv::Size size() const;
   cv::Mat read(const cv::Rect& window) const;  // CV_8U, 1 = building
 
  private:
@@ -44,7 +43,6 @@ struct TileBuildings {
   int dropped_small = 0;
   std::vector<std::string> too_large;      // buildings that do not fit max_window_px
   cv::Rect window;                         // the window finally read
-  std::uint64_t mask_hash = 0;             // hash of the window's mask, for checkpoints
 };
 
 // The window around a tile that holds every building the tile owns, and its mask.

@@ -137,4 +137,17 @@ class OptionSetter {
   std::string prefix_;
 };
 
+// Applies "path" -> "text" values to options, then validates them; every problem (unknown key,
+// unreadable value, value out of range) is appended to errors with its key path.
+template <class Options>
+void set_and_validate(Options& options, std::map<std::string, std::string> values, std::vector<std::string>& errors) {
+  OptionSetter setter(std::move(values));
+  options.visit(setter);
+  setter.report_unknown();
+  errors.insert(errors.end(), setter.errors.begin(), setter.errors.end());
+  OptionValidator validator;
+  options.visit(validator);
+  errors.insert(errors.end(), validator.errors.begin(), validator.errors.end());
+}
+
 }  // namespace lodforge

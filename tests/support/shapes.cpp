@@ -4,8 +4,8 @@
 #include <cmath>
 #include <cstdlib>
 #include <memory>
-#include <ogr_geometry.h>
 
+#include "eval/metrics.hpp"
 #include "synth/city.hpp"
 
 namespace lodforge::test {
@@ -46,37 +46,7 @@ RasterizedShape rasterize_shape(const PolygonWithHoles& truth, double pixel_size
   return s;
 }
 
-namespace {
-
-std::unique_ptr<OGRPolygon> to_ogr(const PolygonWithHoles& p) {
-  auto polygon = std::make_unique<OGRPolygon>();
-  auto add = [&](const Ring& r) {
-    OGRLinearRing ring;
-    for (const Vec2& q : r) ring.addPoint(q.x(), q.y());
-    ring.addPoint(r.front().x(), r.front().y());
-    polygon->addRing(&ring);
-  };
-  add(p.outer);
-  for (const Ring& h : p.holes) add(h);
-  return polygon;
-}
-
-}  // namespace
-
-double iou(const PolygonWithHoles& a, const PolygonWithHoles& b) {
-  auto pa = to_ogr(a), pb = to_ogr(b);
-  std::unique_ptr<OGRGeometry> inter(pa->Intersection(pb.get()));
-  std::unique_ptr<OGRGeometry> uni(pa->Union(pb.get()));
-  if (!inter || !uni) return 0;
-  auto area = [](const OGRGeometry* g) {
-    if (auto s = dynamic_cast<const OGRSurface*>(g)) return s->get_Area();
-    if (auto m = dynamic_cast<const OGRMultiSurface*>(g)) return m->get_Area();
-    if (auto c = dynamic_cast<const OGRGeometryCollection*>(g)) return c->get_Area();
-    return 0.0;
-  };
-  const double u = area(uni.get());
-  return u > 0 ? area(inter.get()) / u : 0;
-}
+double iou(const PolygonWithHoles& a, const PolygonWithHoles& b) { return polygon_iou(a, b); }
 
 std::string shared_data() {
   if (const char* env = std::getenv("LODFORGE_SHARED_DATA")) return env;

@@ -1,0 +1,72 @@
+#include "io/ogr_polygon.hpp"
+
+#include <algorithm>
+#include <filesystem>
+#include <gdal_priv.h>
+#include <ogrsf_frmts.h>
+
+#include "geometry/polygon.hpp"
+#include "io/errors.hpp"
+
+namespace lodforge {
+
+OGRLinearRing to_ogr_ring(const Ring& ring) {
+  OGRLinearRing out;
+  for (const Vec2& p : ring) out.addPoint(p.x(), p.y());
+  out.addPoint(ring.front().x(), ring.front().y());
+  return out;
+}
+
+std::unique_ptr<OGRPolygon> to_ogr_polygon(const PolygonWithHoles& p) {
+  auto polygon = std::make_unique<OGRPolygon>();
+  OGRLinearRing outer = to_ogr_ring(p.outer);
+  polygon->addRing(&outer);
+  for (const Ring& h : p.holes) {
+    OGRLinearRing hole = to_ogr_ring(h);
+    polygon->addRing(&hole);
+  }
+  return polygon;
+}
+
+namespace {
+
+Ring ring_of(const OGRLinearRing* r, bool outer) {
+  Ring out;
+  for (int i = 0; i + 1 < r->getNumPoints(); ++i) out.emplace_back(r->getX(i), r->getY(i));
+  if (!out.empty() && (signed_area(out) > 0) != outer) std::reverse(out.begin(), out.end());
+  return out;
+}
+
+}  // namespace
+
+PolygonWithHoles from_ogr_polygon(const OGRPolygon& p) {
+  PolygonWithHoles out;
+  if (p.getExteriorRing()) out.outer = ring_of(p.getExteriorRing(), true);
+  for (int k = 0; k < p.getNumInteriorRings(); ++k) out.holes.push_back(ring_of(p.getInteriorRing(k), false));
+  return out;
+}
+
+std::vector<PolygonWithHoles> read_polygons(const std::string& path, const std::string& label) {
+  if (!std::filesystem::exists(path)) throw InputError(label + " '" + path + "': file not found");
+  GDALDataset* d = static_cast<GDALDataset*>(GDALOpenEx(path.c_str(), GDAL_OF_VECTOR | GDAL_OF_READONLY, nullptr, nullptr, nullptr));
+  if (!d) throw InputError(label + " '" + path + "': not a vector file GDAL can read");
+  std::vector<PolygonWithHoles> out;
+  auto add = [&out](const OGRPolygon* p) {
+    if (p->getExteriorRing() && p->getExteriorRing()->getNumPoints() >= 4) out.push_back(from_ogr_polygon(*p));
+  };
+  for (OGRLayer* layer : d->GetLayers()) {
+    for (auto& f : *layer) {
+      const OGRGeometry* g = f->GetGeometryRef();
+      if (!g) continue;
+      const auto type = wkbFlatten(g->getGeometryType());
+      if (type == wkbPolygon) add(g->toPolygon());
+      else if (type == wkbMultiPolygon)
+        for (const OGRPolygon* part : *g->toMultiPolygon()) add(part);
+    }
+  }
+  GDALClose(d);
+  if (out.empty()) throw InputError(label + " '" + path + "': holds no polygon");
+  return out;
+}
+
+}  // namespace lodforge

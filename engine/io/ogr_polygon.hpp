@@ -1,0 +1,22 @@
+// Conversions between the core's polygons and OGR geometries, and reading polygon files.
+#pragma once
+#include <memory>
+#include <ogr_geometry.h>
+#include <string>
+#include <vector>
+
+#include "geometry/types.hpp"
+
+namespace lodforge {
+
+std::unique_ptr<OGRPolygon> to_ogr_polygon(const PolygonWithHoles& polygon);
+OGRLinearRing to_ogr_ring(const Ring& ring);  // closed (first point repeated)
+
+// Oriented as the core expects: outer counter-clockwise, holes clockwise.
+PolygonWithHoles from_ogr_polygon(const OGRPolygon& polygon);
+
+// Every polygon of every layer of a vector file (multipolygons split into their parts). Throws
+// InputError naming `label` and the file when it is missing, unreadable or holds no polygon.
+std::vector<PolygonWithHoles> read_polygons(const std::string& path, const std::string& label);
+
+}  // namespace lodforge
