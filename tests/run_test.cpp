@@ -1,5 +1,6 @@
 // The batch engine end to end: tiling, determinism, kill and resume, shards, job errors.
 #include <gtest/gtest.h>
+#include <regex>
 
 #include <array>
 #include <chrono>
@@ -174,6 +175,20 @@ TEST_F(SynthRun, ShardsTogetherGiveTheSingleRunOutputs) {
   // Merging the shards' tile indexes gives the single run's index.
   ASSERT_EQ(lodforge("merge " + (dir / "sharded_out").string()).code, 0);
   EXPECT_EQ(slurp(dir / "sharded_out" / "tile_index.geojson"), slurp(dir / "single_out" / "tile_index.geojson"));
+  // ... and the shards' reports the single run's report, but for the seconds and the shard line.
+  const auto without_seconds = [](std::string text) {
+    text = std::regex_replace(text, std::regex(R"re("seconds": [0-9.e+-]+)re"), "");
+    text = std::regex_replace(text, std::regex(R"re("job": "[^"]*")re"), "");
+    return std::regex_replace(text, std::regex(R"re("shard": "[^"]*")re"), "");
+  };
+  const std::string merged = slurp(dir / "sharded_out" / "report.json");
+  EXPECT_NE(merged.find("\"shard\": \"merged 3\""), std::string::npos) << merged;
+  EXPECT_EQ(without_seconds(merged), without_seconds(slurp(dir / "single_out" / "report.json")));
+  // A missing shard report is refused.
+  fs::remove(dir / "sharded_out" / "report.shard-1-of-3.json");
+  const Result incomplete = lodforge("merge " + (dir / "sharded_out").string());
+  EXPECT_EQ(incomplete.code, 1);
+  EXPECT_NE(incomplete.output.find("2 of 3 shards' run reports"), std::string::npos) << incomplete.output;
 }
 
 // Peak memory of a child process run (KiB).

@@ -275,6 +275,82 @@ void merge_indexes(const fs::path& dir) {
   o.commit();
 }
 
+// The shards' run reports, as one report.json: counts summed, seconds the slowest shard's, the
+// failed and too-large buildings and the per-tile lines in tile order. Every shard must be there.
+void merge_reports(const fs::path& dir) {
+  std::map<int, std::vector<fs::path>> by_count;
+  const std::regex part(R"re(report\.shard-(\d+)-of-(\d+)\.json)re");
+  for (const auto& e : fs::directory_iterator(dir)) {
+    std::smatch m;
+    const std::string name = e.path().filename().string();
+    if (std::regex_match(name, m, part)) by_count[std::stoi(m[2])].push_back(e.path());
+  }
+  if (by_count.empty()) return;
+  if (by_count.size() > 1)
+    throw InputError("'" + dir.string() + "': holds run reports of runs with different shard counts; remove the stale ones");
+  const auto& [count, parts] = *by_count.begin();
+  if (int(parts.size()) != count)
+    throw InputError("'" + dir.string() + "': " + std::to_string(parts.size()) + " of " + std::to_string(count) +
+                     " shards' run reports are there; run the missing shards first");
+  const std::vector<std::string> keys = {"tiles", "tiles_processed", "tiles_resumed", "tiles_empty", "contours", "checkpoint_buildings",
+                                         "buildings", "ok", "fallback", "lod1", "dropped_small", "too_large"};
+  std::map<std::string, long long> sums;
+  double seconds = 0;
+  std::string job;
+  std::vector<std::string> failed, too_large;
+  std::vector<std::string> tiles;  // sorted, they are in tile order (names rRRRR_cCCCC lead each line)
+  const std::regex pair(R"re("(\w+)": (-?[0-9.eE+-]+))re"), quoted(R"re("([^"]+)")re");
+  for (const fs::path& p : parts) {
+    std::ifstream in(p);
+    std::string line, section;
+    while (std::getline(in, line)) {
+      if (line.rfind("  \"job\": ", 0) == 0) { job = line; continue; }
+      if (line.rfind("  \"failed_buildings\": [", 0) == 0) section = "failed";
+      else if (line.rfind("  \"too_large_buildings\": [", 0) == 0) section = "too_large";
+      else if (line.rfind("  \"per_tile\": [", 0) == 0) section = "per_tile";
+      if (section.empty()) {
+        const bool checkpoints = line.rfind("  \"checkpoints_reused\"", 0) == 0;
+        for (std::sregex_iterator it(line.begin(), line.end(), pair), stop; it != stop; ++it) {
+          std::string key = (*it)[1];
+          if (checkpoints && key == "buildings") key = "checkpoint_buildings";
+          if (key == "seconds") seconds = std::max(seconds, std::stod((*it)[2]));
+          else sums[key] += std::stoll((*it)[2]);
+        }
+        continue;
+      }
+      std::string item = line.substr(line.find_first_not_of(' '));
+      if (item.back() == ',') item.pop_back();
+      if (section == "too_large") {
+        const std::string list = line.substr(line.find('['));
+        for (std::sregex_iterator it(list.begin(), list.end(), quoted), stop; it != stop; ++it) too_large.push_back((*it)[0]);
+      } else if (item.front() == '{') {
+        std::string entry = item.back() == ']' ? item.substr(0, item.size() - 1) : item;
+        (section == "failed" ? failed : tiles).push_back(entry);
+      }
+    }
+  }
+  // Failed buildings in tile order, each tile's in its own order, as a single run lists them.
+  const auto tile_of = [](const std::string& entry) { const std::size_t at = entry.find("\"tile\": "); return entry.substr(at, 22); };
+  std::stable_sort(failed.begin(), failed.end(), [&](const std::string& a, const std::string& b) { return tile_of(a) < tile_of(b); });
+  std::sort(too_large.begin(), too_large.end());
+  std::sort(tiles.begin(), tiles.end());
+  std::ostringstream r;
+  r << "{\n" << job << "\n  \"shard\": \"merged " << count << "\",\n  \"tiles\": " << sums["tiles"] << ", \"tiles_processed\": " << sums["tiles_processed"]
+    << ", \"tiles_resumed\": " << sums["tiles_resumed"] << ", \"tiles_empty\": " << sums["tiles_empty"] << ",\n  \"checkpoints_reused\": {\"contours\": "
+    << sums["contours"] << ", \"buildings\": " << sums["checkpoint_buildings"] << "},\n  \"buildings\": " << sums["buildings"] << ", \"ok\": " << sums["ok"]
+    << ", \"fallback\": " << sums["fallback"] << ", \"lod1\": " << sums["lod1"] << ", \"dropped_small\": " << sums["dropped_small"]
+    << ", \"too_large\": " << sums["too_large"] << ",\n  \"seconds\": " << seconds << ",\n  \"failed_buildings\": [";
+  for (std::size_t i = 0; i < failed.size(); ++i) r << (i ? ",\n    " : "\n    ") << failed[i];
+  r << "],\n  \"too_large_buildings\": [";
+  for (std::size_t i = 0; i < too_large.size(); ++i) r << (i ? ", " : "") << too_large[i];
+  r << "],\n  \"per_tile\": [";
+  for (std::size_t i = 0; i < tiles.size(); ++i) r << (i ? ",\n    " : "\n    ") << tiles[i];
+  r << "]\n}\n";
+  Output o(dir / "report.json");
+  o.out() << r.str();
+  o.commit();
+}
+
 // The files the tile index lists (the run's own, not whatever else is in tiles/), in tile order.
 std::vector<fs::path> indexed_files(const fs::path& dir, const std::string& extension) {
   std::ifstream in(dir / "tile_index.geojson");
@@ -298,7 +374,7 @@ std::vector<fs::path> indexed_files(const fs::path& dir, const std::string& exte
 
 int run_merge(int argc, char** argv) {
   Args args("merge", "Combines the per-tile files of a run (all shards) into one file per format in OUT_DIR/merged/,\n"
-                     "and the shards' tile indexes into OUT_DIR/tile_index.geojson.\nusage: lodforge merge OUT_DIR [options]");
+                     "and the shards' tile indexes and run reports into OUT_DIR/tile_index.geojson and OUT_DIR/report.json.\nusage: lodforge merge OUT_DIR [options]");
   args.value("formats", "F[,F...]", "formats to merge (default: every format found)").flag("help", "show this help");
   if (argc < 3 || std::string(argv[2]) == "--help") {
     if (argc >= 3) { std::cout << args.help(); return 0; }
@@ -314,6 +390,7 @@ int run_merge(int argc, char** argv) {
     for (std::string x; std::getline(s, x, ',');) formats.push_back(x);
   }
   merge_indexes(dir);
+  merge_reports(dir);
   fs::create_directories(dir / "merged");
   for (const std::string& format : formats) {
     const std::string extension = extension_of(format);
