@@ -1,7 +1,18 @@
 #!/usr/bin/env bash
 # Installs the Debian 12 packages lodforge needs to build, test and run. Idempotent: does
 # nothing when everything is present.
+#   --tests   also what the integration tests need (scripts/test.sh): Slurm (slurm-wlm) for
+#             tests/slurm/slurm_test.sh, python3-yaml for scripts/slurm/submit.sh's job reading.
+#             Debian's slurmctld and slurmd services do not start without /etc/slurm/slurm.conf
+#             (their units and init scripts check it), and the test starts its own daemons on
+#             other ports with auth/none, so a munge service started by the package is unused.
 set -euo pipefail
+tests=0
+case "${1:-}" in
+  --tests) tests=1 ;;
+  "") ;;
+  *) echo "usage: $0 [--tests]" >&2; exit 2 ;;
+esac
 packages=(
   build-essential cmake ccache pkg-config
   libeigen3-dev libopencv-dev libcgal-dev libceres-dev libmaxflow-dev
@@ -9,6 +20,7 @@ packages=(
   libgtest-dev libgmock-dev libbenchmark-dev
   libxml2-utils python3 python3-gdal python3-jsonschema python3-numpy python3-pil
 )
+if [ "$tests" -eq 1 ]; then packages+=(slurm-wlm python3-yaml); fi
 missing=()
 for p in "${packages[@]}"; do
   dpkg -s "$p" >/dev/null 2>&1 || missing+=("$p")
