@@ -133,7 +133,8 @@ merge_cmd=("$sbatch" --parsable --kill-on-invalid-dep=yes "${sbatch_opts[@]}" "$
 
 echo "$prog: job $job_abs, $shards shards, output $out_dir"
 if [ "$dry_run" -eq 1 ]; then
-  echo "$(q "${array_cmd[@]}")"
+  q "${array_cmd[@]}"
+  echo
   echo "$(q "${merge_cmd[@]:0:3}")--dependency=afterok:ARRAY_JOB_ID $(q "${merge_cmd[@]:3}")"
   exit 0
 fi

@@ -91,7 +91,7 @@ for attempt in $(seq 0 49); do
 done
 [ -n "$port" ] || fail "no two free ports next to each other"
 user="$(id -un)"
-node=lodforge-test-node
+node="lodforge-test-node"
 : > "$tmp/slurm/plugstack.conf"
 cat > "$SLURM_CONF" <<EOF
 ClusterName=lodforgetest
@@ -177,11 +177,11 @@ state_of() {  # ID (e.g. 12 or 12_2)
   squeue -h -t all -r -j "$1" -o '%i %T' | awk -v id="$1" '$1 == id { print $2 }'
 }
 wait_jobs() {  # JOBID...: until every task has ended
-  local done
+  local finished
   while :; do
-    done=1
-    while read -r _ s; do terminal_state "$s" || done=0; done < <(states "$@")
-    [ "$done" -eq 1 ] && [ -n "$(states "$@")" ] && return 0
+    finished=1
+    while read -r _ s; do terminal_state "$s" || finished=0; done < <(states "$@")
+    [ "$finished" -eq 1 ] && [ -n "$(states "$@")" ] && return 0
     [ "$SECONDS" -lt "$limit" ] || fail "jobs $* still not finished after $((SECONDS - start)) s: $(states "$@" | tr '\n' ' ')"
     sleep 0.5
   done
@@ -225,7 +225,7 @@ same_outputs array
 # ---- case 2: a task killed mid-run, resubmitted alone -----------------------------------------
 write_job killed
 submit_job killed
-log "case 2: array job $array_id, merge job $merge_id; waiting for task $killed to run and write a tile"
+log "case 2: array job $array_id, merge job $merge_id; waiting for task $killed to run and write two tiles"
 cols=$(((width + tile - 1) / tile)) rows=$(((height + tile - 1) / tile))
 shard_tiles=()  # the .gml of every tile of the shard that will be killed
 for ((n = killed; n < cols * rows; n += shards)); do
@@ -234,7 +234,8 @@ done
 written() { local f c=0; for f in "${shard_tiles[@]}"; do [ -f "$f" ] && c=$((c + 1)); done; echo "$c"; }
 while :; do
   s="$(state_of "${array_id}_$killed")"
-  if [ "$s" = RUNNING ] && [ "$(written)" -ge 1 ]; then break; fi
+  # two tiles written: the first one is surely complete and checkpointed, so the rerun resumes it
+  if [ "$s" = RUNNING ] && [ "$(written)" -ge 2 ]; then break; fi
   terminal_state "${s:-PENDING}" && fail "task $killed ended ($s) before it could be killed: the job is too fast for this test"
   [ "$SECONDS" -lt "$limit" ] || fail "task $killed did not start in time"
   sleep 0.1
