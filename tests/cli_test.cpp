@@ -99,6 +99,48 @@ TEST_F(Cli, SynthThenRegularizeClassAndColourGiveTheSameBuildings) {
   for (const auto& entry : fs::directory_iterator(dir)) EXPECT_EQ(entry.path().string().find(".partial"), std::string::npos);
 }
 
+// A cadastre's footprints through a simulated segmentation (lodforge synth --from), each
+// regularizer on it, scored by eval: the benchmark's path (bench/quality.sh) end to end.
+TEST_F(Cli, SynthFromFootprintsRegularizeWithEachMethodAndEvaluate) {
+  std::ofstream(path("truth.geojson"))
+      << R"({"type": "FeatureCollection", "crs": {"type": "name", "properties": {"name": "urn:ogc:def:crs:EPSG::28992"}}, "features": [)"
+      << R"({"type": "Feature", "properties": {}, "geometry": {"type": "Polygon", "coordinates": [[[85000, 447000], [85020, 447000], [85020, 447012], [85000, 447012], [85000, 447000]]]}},)"
+      << R"({"type": "Feature", "properties": {}, "geometry": {"type": "Polygon", "coordinates": [[[85040, 447030], [85058, 447036], [85054, 447048], [85036, 447042], [85040, 447030]]]}}]})";
+  CommandRun r = lodforge("synth --from " + path("truth.geojson") + " --pixel-size 0.25 --seed 2 --out " + path("sim"));
+  ASSERT_EQ(r.code, 0) << r.output;
+  EXPECT_TRUE(fs::exists(path("sim/seg_class.tif")));
+  EXPECT_FALSE(fs::exists(path("sim/dsm.tif")));  // no heights for given footprints
+  GDALAllRegister();
+  GDALDataset* d = static_cast<GDALDataset*>(GDALOpen(path("sim/seg_class.tif").c_str(), GA_ReadOnly));
+  ASSERT_NE(d, nullptr);
+  double gt[6];
+  d->GetGeoTransform(gt);
+  EXPECT_LE(gt[0], 85000 - 10 + 1e-9);  // the grid covers the footprints with a 10 m margin
+  EXPECT_GE(gt[3], 447048 + 10 - 1e-9);
+  EXPECT_NEAR(gt[1], 0.25, 1e-12);
+  EXPECT_NE(std::string(d->GetProjectionRef()).find("28992"), std::string::npos);
+  GDALClose(d);
+  for (const std::string name : {"deformation", "cgal", "douglas_peucker", "none"}) {
+    r = lodforge("regularize --mask " + path("sim/seg_class.tif") + " --regularizer " + name + " --out " + path(name + ".gpkg") +
+                 " --stats " + path(name + ".json"));
+    ASSERT_EQ(r.code, 0) << name << ": " << r.output;
+    const std::string stats = test::slurp(dir / (name + ".json"));
+    EXPECT_NE(stats.find("\"regularizer\": \"" + name + "\", \"route\": \"original\", \"buildings\": 2, \"ok\": 2"), std::string::npos) << stats;
+    r = lodforge("eval --pred " + path(name + ".gpkg") + " --gt " + path("truth.geojson") + " --json " + path(name + ".eval.json"));
+    ASSERT_EQ(r.code, 0) << r.output;
+    const std::string metrics = test::slurp(dir / (name + ".eval.json"));
+    const std::size_t at = metrics.find("\"overall_iou\": ");
+    ASSERT_NE(at, std::string::npos) << metrics;
+    EXPECT_GE(std::stod(metrics.substr(at + 15)), 0.95) << name;
+  }
+  r = lodforge("regularize --mask " + path("sim/seg_class.tif") + " --regularizer bogus --out " + path("x.gpkg"));
+  EXPECT_EQ(r.code, 1);
+  EXPECT_NE(r.output.find("must be one of: deformation, cgal, douglas_peucker, none"), std::string::npos) << r.output;
+  r = lodforge("synth --from " + path("missing.geojson") + " --out " + path("sim2"));
+  EXPECT_EQ(r.code, 1);
+  EXPECT_NE(r.output.find("--from '" + path("missing.geojson") + "': file not found"), std::string::npos) << r.output;
+}
+
 TEST_F(Cli, OptionsPrintsDefaults) {
   const CommandRun r = lodforge("options");
   EXPECT_EQ(r.code, 0);

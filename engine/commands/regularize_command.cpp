@@ -1,5 +1,7 @@
 // lodforge regularize: the per-building core on one segmentation raster, LOD0 polygons out.
+#include <algorithm>
 #include <atomic>
+#include <fstream>
 #include <iostream>
 #include <map>
 #include <spdlog/spdlog.h>
@@ -60,7 +62,8 @@ int run_regularize(int argc, char** argv) {
       .value("building-rgb", "R,G,B", "building colour in an RGB raster, e.g. 0,0,255 (ISPRS)")
       .value("out", "FILE", "output footprints (.gpkg or .geojson)")
       .value("route", "NAME", "corner route: 'original' (lines fitted to the raw contour) or 'deformed' (the paper)")
-      .value("regularizer", "NAME", "deformation (default: the paper's chain), douglas_peucker or none (raw contour)")
+      .value("regularizer", "NAME", "deformation (default: the paper's chain), cgal (CGAL Shape_regularization), douglas_peucker or none (raw contour)")
+      .value("stats", "FILE", "also write a JSON summary: counts by status and the regularization time per building")
       .value("threads", "N", "worker threads (default: all cores)")
       .value("set", "KEY=VALUE", "set any stage option, e.g. labeling.kappa2=5 (see lodforge options)", true)
       .flag("help", "show this help");
@@ -78,8 +81,12 @@ int run_regularize(int argc, char** argv) {
     if (threads < 0) throw InputError("lodforge regularize: --threads '" + *t + "': must be a number >= 0");
   }
   const std::string regularizer = args.get("regularizer").value_or("deformation");
-  if (regularizer != "deformation" && regularizer != "douglas_peucker" && regularizer != "none")
-    throw InputError("lodforge regularize: --regularizer '" + regularizer + "': must be one of: deformation, douglas_peucker, none");
+  const auto& names = regularizer_names();
+  if (std::find(names.begin(), names.end(), regularizer) == names.end()) {
+    std::string list;
+    for (const std::string& n : names) list += (list.empty() ? "" : ", ") + n;
+    throw InputError("lodforge regularize: --regularizer '" + regularizer + "': must be one of: " + list);
+  }
   const BuildingSelector selector = parse_selector(args);
   check_output_path(out_path);
 
@@ -130,6 +137,20 @@ int run_regularize(int argc, char** argv) {
   for (const auto& [stage, n] : failures) by_stage += (by_stage.empty() ? " (" : ", ") + stage + ": " + std::to_string(n);
   if (!by_stage.empty()) by_stage += ")";
   spdlog::info("wrote {} footprints to {}: {} ok, {} fallback{}", count, out_path, count - failed, failed, by_stage);
+  if (auto stats = args.get("stats")) {
+    std::vector<double> seconds;
+    for (const BuildingResult& r : results) seconds.push_back(r.seconds);
+    std::sort(seconds.begin(), seconds.end());
+    double total = 0;
+    for (double s : seconds) total += s;
+    const auto at = [&](double q) { return seconds[std::min(seconds.size() - 1, std::size_t(q * double(seconds.size())))]; };
+    std::ofstream out(*stats);
+    out << "{\"regularizer\": \"" << regularizer << "\", \"route\": \"" << options.core.corners.route << "\", \"buildings\": " << count
+        << ", \"ok\": " << count - failed << ", \"fallback\": " << failed << ", \"seconds_total\": " << total
+        << ", \"seconds_mean\": " << total / double(count) << ", \"seconds_median\": " << at(0.5) << ", \"seconds_p99\": " << at(0.99) << "}\n";
+    out.close();
+    if (!out) throw InputError("--stats '" + *stats + "': cannot write");
+  }
   return 0;
 }
 

@@ -10,6 +10,7 @@
 #include "common/option_visitors.hpp"
 #include "io/errors.hpp"
 #include "io/footprint_writer.hpp"
+#include "io/ogr_polygon.hpp"
 #include "io/raster_writer.hpp"
 #include "synth/city.hpp"
 
@@ -19,11 +20,14 @@ namespace fs = std::filesystem;
 
 int run_synth(int argc, char** argv) {
   Args args("synth", "Generates a seeded procedural city: seg_class.tif (building = 6, ground = 2), seg_isprs.tif\n"
-                     "(ISPRS colours, building = (0,0,255)), dsm.tif, dtm.tif and the true footprints.gpkg.");
+                     "(ISPRS colours, building = (0,0,255)), dsm.tif, dtm.tif and the true footprints.gpkg.\n"
+                     "With --from, the true footprints are the file's polygons (e.g. a cadastre): their segmentation\n"
+                     "is simulated the same way (rasterized, rounded corners, boundary noise, speckles), without DSM/DTM.");
   args.value("out", "DIR", "output directory (created if missing)")
       .value("size-m", "W[xH]", "extent in metres (default 300x300)")
       .value("pixel-size", "M", "ground sampling distance in metres (default 0.25)")
       .value("seed", "N", "random seed (default 1)")
+      .value("from", "FOOTPRINTS", "simulate the segmentation of these true footprints (any OGR polygon source; --size-m is ignored)")
       .value("set", "KEY=VALUE", "any other option, e.g. boundary_noise_px=1.2", true)
       .flag("help", "show this help");
   args.parse(argc, argv, 2);
@@ -41,21 +45,27 @@ int run_synth(int argc, char** argv) {
   SynthOptions options;
   set_and_validate(options, values, errors);
   if (!errors.empty()) throw input_errors(errors);
+  std::vector<PolygonWithHoles> given;
+  std::string given_crs;
+  if (auto from = args.get("from")) given = read_polygons(*from, "--from", &given_crs);
 
   std::error_code ec;
   fs::create_directories(out, ec);
   if (ec) throw InputError("'" + out.string() + "': cannot create directory: " + ec.message());
-  spdlog::info("generating a {} x {} m city at {} m per pixel, seed {}", options.width_m, options.height_m,
-               options.pixel_size_m, options.seed);
-  const SynthCity city = generate_city(options);
-  RasterMeta meta{city.transform, epsg_wkt(options.epsg)};
+  if (!given.empty())
+    spdlog::info("simulating the segmentation of {} footprints at {} m per pixel, seed {}", given.size(), options.pixel_size_m, options.seed);
+  else
+    spdlog::info("generating a {} x {} m city at {} m per pixel, seed {}", options.width_m, options.height_m,
+                 options.pixel_size_m, options.seed);
+  const SynthCity city = given.empty() ? generate_city(options) : segment_footprints(given, options);
+  RasterMeta meta{city.transform, given.empty() || given_crs.empty() ? epsg_wkt(options.epsg) : given_crs};
   cv::Mat classes = city.building_mask * 4 + 2;  // 6 = building, 2 = ground
   write_geotiff((out / "seg_class.tif").string(), {classes}, meta);
   cv::Mat background = 255 * (1 - city.building_mask);
   cv::Mat blue = cv::Mat::ones(classes.size(), CV_8U) * 255;
   write_geotiff((out / "seg_isprs.tif").string(), {background, background.clone(), blue}, meta);
-  write_geotiff((out / "dsm.tif").string(), {city.dsm}, meta);
-  write_geotiff((out / "dtm.tif").string(), {city.dtm}, meta);
+  if (!city.dsm.empty()) write_geotiff((out / "dsm.tif").string(), {city.dsm}, meta);
+  if (!city.dtm.empty()) write_geotiff((out / "dtm.tif").string(), {city.dtm}, meta);
   std::vector<FootprintRecord> truth;
   for (std::size_t i = 0; i < city.buildings.size(); ++i) {
     const SynthBuilding& b = city.buildings[i];
@@ -70,7 +80,7 @@ int run_synth(int argc, char** argv) {
   FootprintLayer layer;
   layer.crs_wkt = meta.crs_wkt;
   layer.write_status = false;
-  layer.write_heights = true;
+  layer.write_heights = given.empty();
   layer.kind_field = "kind";
   write_footprints((out / "footprints.gpkg").string(), layer, truth);
   spdlog::info("wrote {} true footprints and rasters of {} x {} pixels to {}", truth.size(), classes.cols, classes.rows,

@@ -46,7 +46,7 @@ PolygonWithHoles from_ogr_polygon(const OGRPolygon& p) {
   return out;
 }
 
-std::vector<PolygonWithHoles> read_polygons(const std::string& path, const std::string& label) {
+std::vector<PolygonWithHoles> read_polygons(const std::string& path, const std::string& label, std::string* crs_wkt) {
   if (!std::filesystem::exists(path)) throw InputError(label + " '" + path + "': file not found");
   GDALDataset* d = static_cast<GDALDataset*>(GDALOpenEx(path.c_str(), GDAL_OF_VECTOR | GDAL_OF_READONLY, nullptr, nullptr, nullptr));
   if (!d) throw InputError(label + " '" + path + "': not a vector file GDAL can read");
@@ -55,6 +55,12 @@ std::vector<PolygonWithHoles> read_polygons(const std::string& path, const std::
     if (p->getExteriorRing() && p->getExteriorRing()->getNumPoints() >= 4) out.push_back(from_ogr_polygon(*p));
   };
   for (OGRLayer* layer : d->GetLayers()) {
+    if (crs_wkt && crs_wkt->empty() && layer->GetSpatialRef()) {
+      char* wkt = nullptr;
+      layer->GetSpatialRef()->exportToWkt(&wkt);
+      *crs_wkt = wkt ? wkt : "";
+      CPLFree(wkt);
+    }
     for (auto& f : *layer) {
       const OGRGeometry* g = f->GetGeometryRef();
       if (!g) continue;

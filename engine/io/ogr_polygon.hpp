@@ -17,6 +17,7 @@ PolygonWithHoles from_ogr_polygon(const OGRPolygon& polygon);
 
 // Every polygon of every layer of a vector file (multipolygons split into their parts). Throws
 // InputError naming `label` and the file when it is missing, unreadable or holds no polygon.
-std::vector<PolygonWithHoles> read_polygons(const std::string& path, const std::string& label);
+// crs_wkt, when given, receives the first layer's CRS (empty if it has none).
+std::vector<PolygonWithHoles> read_polygons(const std::string& path, const std::string& label, std::string* crs_wkt = nullptr);
 
 }  // namespace lodforge

@@ -6,6 +6,7 @@
 
 #include "commands/stage_options.hpp"
 #include "common/option.hpp"
+#include "pipeline/building.hpp"
 
 namespace lodforge {
 
@@ -87,7 +88,7 @@ struct Job {
     v.section("output", output);
     v("work_dir", work_dir, "checkpoints of every tile and stage; a rerun skips what is complete");
     v("threads", threads, "worker threads; 0 = all cores", Check::at_least(0));
-    v("regularizer", regularizer, "footprint method: 'deformation' (the paper's chain, route in stages.corners.route), 'douglas_peucker' or 'none' (raw contour)", Check::one_of({"deformation", "douglas_peucker", "none"}));
+    v("regularizer", regularizer, "footprint method: 'deformation' (the paper's chain, route in stages.corners.route), 'cgal' (CGAL Shape_regularization, stages.cgal), 'douglas_peucker' or 'none' (raw contour)", Check::one_of(regularizer_names()));
     v.section("stages", stages);
   }
 };

@@ -104,6 +104,19 @@ double terrain(const Vec2& local) {
 
 }  // namespace
 
+// The segmentation of a true 0/1 mask: rounded corners, a smooth boundary wobble, speckles.
+static cv::Mat segmentation_of(const cv::Mat& truth, const SynthOptions& o, Rng& rng) {
+  const int rows = truth.rows, cols = truth.cols;
+  cv::Mat mask = degrade_mask(truth, o.boundary_noise_px, o.corner_radius_px, o.seed * 7919 + 2);
+  const int speckles = int(o.speckle_per_km2 * o.width_m * o.height_m / 1e6);
+  for (int k = 0; k < speckles; ++k) {
+    const int c = int(rng() % cols), r = int(rng() % rows), size = 1 + int(rng() % 2);
+    const cv::Rect box = cv::Rect(c, r, size, size) & cv::Rect(0, 0, cols, rows);
+    mask(box).setTo(mask.at<uint8_t>(r, c) ? 0 : 1);
+  }
+  return mask;
+}
+
 SynthCity generate_city(const SynthOptions& o) {
   SynthCity city;
   Rng rng(o.seed);
@@ -148,15 +161,34 @@ SynthCity generate_city(const SynthOptions& o) {
   cv_rng.fill(height_noise, cv::RNG::NORMAL, 0, 0.05);
   city.dsm += height_noise;
 
-  // The segmentation: rounded corners, a smooth boundary wobble, speckles.
-  cv::Mat mask = degrade_mask(truth, o.boundary_noise_px, o.corner_radius_px, o.seed * 7919 + 2);
-  const int speckles = int(o.speckle_per_km2 * o.width_m * o.height_m / 1e6);
-  for (int k = 0; k < speckles; ++k) {
-    const int c = int(rng() % cols), r = int(rng() % rows), size = 1 + int(rng() % 2);
-    const cv::Rect box = cv::Rect(c, r, size, size) & cv::Rect(0, 0, cols, rows);
-    mask(box).setTo(mask.at<uint8_t>(r, c) ? 0 : 1);
+  city.building_mask = segmentation_of(truth, o, rng);
+  return city;
+}
+
+SynthCity segment_footprints(const std::vector<PolygonWithHoles>& footprints, const SynthOptions& options) {
+  if (footprints.empty()) throw std::invalid_argument("no footprints to segment");
+  double x0 = 1e300, y0 = 1e300, x1 = -1e300, y1 = -1e300;
+  for (const PolygonWithHoles& f : footprints)
+    for (const Vec2& p : f.outer) {
+      x0 = std::min(x0, p.x()); y0 = std::min(y0, p.y());
+      x1 = std::max(x1, p.x()); y1 = std::max(y1, p.y());
+    }
+  const double px = options.pixel_size_m, margin = 10.0;
+  SynthOptions o = options;
+  o.origin_x = std::floor((x0 - margin) / px) * px;
+  o.origin_y = std::ceil((y1 + margin) / px) * px;
+  const int cols = int(std::ceil((x1 + margin - o.origin_x) / px)), rows = int(std::ceil((o.origin_y - (y0 - margin)) / px));
+  o.width_m = cols * px;
+  o.height_m = rows * px;
+  SynthCity city;
+  city.transform.c = {o.origin_x, px, 0, o.origin_y, 0, -px};
+  cv::Mat truth = cv::Mat::zeros(rows, cols, CV_8U);
+  for (const PolygonWithHoles& f : footprints) {
+    rasterize(truth, f, city.transform);
+    city.buildings.push_back({f, "given", 0, 0});
   }
-  city.building_mask = mask;
+  Rng rng(o.seed);
+  city.building_mask = segmentation_of(truth, o, rng);
   return city;
 }
 

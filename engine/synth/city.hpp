@@ -54,6 +54,11 @@ struct SynthCity {
 // Pure: the same options give the same city.
 SynthCity generate_city(const SynthOptions& options);
 
+// The segmentation of given true footprints (map metres): rasterized at options.pixel_size_m
+// on a grid covering them with a 10 m margin (origin snapped to whole pixels), then degraded as
+// generate_city degrades its own (noise, rounded corners, speckles). No DSM or DTM. Seeded.
+SynthCity segment_footprints(const std::vector<PolygonWithHoles>& footprints, const SynthOptions& options);
+
 // Degrades a clean 0/1 mask like a segmentation network's output: rounded corners, a smooth
 // boundary wobble of about noise_px pixels. Seeded.
 cv::Mat degrade_mask(const cv::Mat& mask, double noise_px, double corner_radius_px, std::uint64_t seed);

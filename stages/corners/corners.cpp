@@ -33,6 +33,47 @@ Line fit_line(const Ring& ring, int first, int count, const Vec2& normal) {
   return {normal, total > 0 ? weighted / total : normal.dot(ring[first])};
 }
 
+// True when the run's contour departs from its line by more than curve_px on average over some
+// window of curve_window_px (a boundary wobble averages out over a window, a curved wall does not).
+bool is_curved(const Ring& ring, int first, int count, const Line& line, const CornerOptions& o, double pixel_size) {
+  if (o.curve_px <= 0) return false;
+  const double window = o.curve_window_px * pixel_size, total = run_length(ring, first, count);
+  // The run's ends (a window each) are left out: corners are rounded there, by the raster.
+  double position = 0, window_length = 0, window_sum = 0;
+  for (int k = 0; k < count; ++k) {
+    const std::size_t i = (first + k) % ring.size();
+    const Vec2 e = edge_vector(ring, i);
+    const double len = e.norm();
+    position += len;
+    if (position < window || position > total - window) continue;
+    window_sum += len * (line.normal.dot(ring[i] + 0.5 * e) - line.offset);
+    window_length += len;
+    if (window_length >= window) {
+      if (std::abs(window_sum / window_length) > o.curve_px * pixel_size) return true;
+      window_length = window_sum = 0;
+    }
+  }
+  return false;
+}
+
+// Douglas–Peucker on the open polyline points[a..b], appending the kept interior points.
+void simplify_open(const std::vector<Vec2>& points, std::size_t a, std::size_t b, double tolerance, Ring& out) {
+  if (b <= a + 1) return;
+  const Vec2 d = points[b] - points[a];
+  const double length = d.norm();
+  std::size_t worst = a;
+  double worst_distance = tolerance;
+  for (std::size_t k = a + 1; k < b; ++k) {
+    const Vec2 v = points[k] - points[a];
+    const double distance = length > 0 ? std::abs(cross(d, v)) / length : v.norm();
+    if (distance > worst_distance) { worst_distance = distance; worst = k; }
+  }
+  if (worst == a) return;
+  simplify_open(points, a, worst, tolerance, out);
+  out.push_back(points[worst]);
+  simplify_open(points, worst, b, tolerance, out);
+}
+
 }  // namespace
 
 void absorb_short_runs(const Ring& ring, std::vector<int>& labels, double min_length) {
@@ -60,19 +101,31 @@ Ring extract_corners(const Ring& ring, const std::vector<int>& labels, const std
   std::vector<int> own = labels;
   absorb_short_runs(ring, own, o.min_run_px * pixel_size);
   const auto runs = label_runs(own);
-  if (runs.size() < 3) {
+  const int n = int(runs.size());
+  std::vector<Line> lines;
+  for (auto [first, count] : runs) lines.push_back(fit_line(ring, first, count, directions[own[first]]));
+  std::vector<bool> curved(n);
+  bool any_curved = false;
+  for (int r = 0; r < n; ++r) any_curved |= curved[r] = is_curved(ring, runs[r].first, runs[r].second, lines[r], o, pixel_size);
+  if (n < 3 && !(n == 2 && any_curved)) {  // two runs make a polygon only when one is a curve
     *problem = "only " + std::to_string(runs.size()) + " straight runs, a polygon needs 3";
     return {};
   }
-  std::vector<Line> lines;
-  for (auto [first, count] : runs) lines.push_back(fit_line(ring, first, count, directions[own[first]]));
   const double parallel_sin = std::sin(o.parallel_angle_deg * M_PI / 180.0);
   Ring out;
-  const int n = int(runs.size());
   for (int r = 0; r < n; ++r) {
+    if (curved[r]) {  // the run's own contour, simplified, between its ends
+      std::vector<Vec2> points;
+      for (int k = 0; k <= runs[r].second; ++k) points.push_back(ring[(runs[r].first + k) % ring.size()]);
+      simplify_open(points, 0, points.size() - 1, pixel_size, out);
+    }
     const Line& a = lines[r];
     const Line& b = lines[(r + 1) % n];
     const Vec2 junction = ring[runs[(r + 1) % n].first];  // where run r ends and r+1 starts
+    if (curved[r] || curved[(r + 1) % n]) {
+      out.push_back(curved[r] ? (curved[(r + 1) % n] ? junction : b.project(junction)) : a.project(junction));
+      continue;
+    }
     const double det = cross(a.normal, b.normal);
     bool use_step = std::abs(det) < parallel_sin;
     if (!use_step) {

@@ -18,6 +18,8 @@ struct CornerOptions {
   double max_corner_shift_m = 3.0;   // an intersection farther than this from the run junction is
                                      // replaced by a step between the two lines
   int repair_attempts = 4;           // an invalid polygon is retried with min_run doubled this often
+  double curve_px = 2.5;             // a run whose contour bows this far from its line is a curved wall (0 = off)
+  double curve_window_px = 16.0;     // ... measured as the mean offset over windows of this length
 
   template <class V>
   void visit(V& v) {
@@ -26,13 +28,16 @@ struct CornerOptions {
     v("parallel_angle_deg", parallel_angle_deg, "consecutive lines closer than this in angle are joined by a perpendicular step (degrees)", Check::between(0, 89));
     v("max_corner_shift_m", max_corner_shift_m, "an intersection farther than this from where the runs meet is replaced by a step (m)", Check::above(0));
     v("repair_attempts", repair_attempts, "retries of an invalid polygon with min_run_px doubled each time", Check::between(0, 20));
+    v("curve_px", curve_px, "a run whose contour departs from its fitted line by more than this on average over a window (pixels) is kept as a curve: its contour, simplified, replaces the line (0 = off)", Check::at_least(0));
+    v("curve_window_px", curve_window_px, "length of the windows over which a run's departure from its line is averaged (pixels)", Check::above(0));
   }
 };
 
 // Absorbs runs shorter than min_run_px pixel lengths into their longer neighbour, in place.
 void absorb_short_runs(const Ring& ring, std::vector<int>& labels, double min_length);
 
-// The corner ring of one contour ring. labels: per edge; directions: unit outward normals.
+// The corner ring of one contour ring. A curved run (see curve_px) keeps its contour, simplified
+// by Douglas–Peucker to one pixel, between the lines of its neighbours. labels: per edge; directions: unit outward normals.
 // Returns an empty ring and sets *problem when no polygon can be formed.
 Ring extract_corners(const Ring& ring, const std::vector<int>& labels, const std::vector<Vec2>& directions,
                      double pixel_size, const CornerOptions& options, std::string* problem);

@@ -1,6 +1,7 @@
 #include "directions/refine.hpp"
 
 #include <Eigen/Eigenvalues>
+#include <algorithm>
 #include <cmath>
 
 #include "labeling/mrf.hpp"
@@ -129,6 +130,35 @@ void refine_directions(const std::vector<Ring>& rings, EdgeLabels& labels, std::
     }
   }
   directions.swap(result);
+}
+
+int release_runs(const std::vector<Ring>& rings, EdgeLabels& labels, std::vector<Vec2>& directions, double pixel_size,
+                 const RefineOptions& o) {
+  if (o.release_px <= 0) return 0;
+  int released = 0;
+  for (std::size_t r = 0; r < rings.size(); ++r) {
+    const Ring& ring = rings[r];
+    for (auto [first, count] : label_runs(labels[r])) {
+      const int label = labels[r][first];
+      const Vec2 chord = ring[(first + count) % ring.size()] - ring[first];
+      const double length_px = chord.norm() / pixel_size;
+      if (length_px < 8 * o.release_px) continue;
+      const Eigen::Matrix2d s = run_scatter(ring, first, count, o.trim_px * pixel_size) / (pixel_size * pixel_size * pixel_size);
+      if (!well_posed(s)) continue;
+      double weight = 0;  // trimmed length, pixels (the scatter's weights)
+      for (int k = 0; k < count; ++k) weight += edge_vector(ring, (first + k) % ring.size()).norm() / pixel_size;
+      const Vec2 own = normal_of(s, directions[label]);
+      const double cos_turn = std::clamp(own.dot(directions[label]), -1.0, 1.0);
+      const double end_shift = std::sin(std::acos(cos_turn)) * 0.5 * length_px;
+      Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> eig(s);
+      const double noise = std::sqrt(std::max(eig.eigenvalues()[0], 0.0) / std::max(weight - 2 * o.trim_px, 1.0));
+      if (cos_turn <= 0 || end_shift <= o.release_px || end_shift <= 2 * noise) continue;
+      directions.push_back(own);
+      for (int k = 0; k < count; ++k) labels[r][(first + k) % ring.size()] = int(directions.size()) - 1;
+      ++released;
+    }
+  }
+  return released;
 }
 
 }  // namespace lodforge

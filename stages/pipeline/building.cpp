@@ -10,6 +10,7 @@
 #include "directions/refine.hpp"
 #include "geometry/polygon.hpp"
 #include "normals/smoothing.hpp"
+#include "peers/cgal_contours.hpp"
 #include "triangulation/triangulate.hpp"
 
 namespace lodforge {
@@ -101,6 +102,7 @@ void run_chain(const std::vector<Ring>& rings, double pixel_size, const CoreOpti
     for (std::size_t i = 0; i < labels[r].size(); ++i) input.support[labels[r][i]] += input.lengths[r][i];
   labels = label_edges(input, o.labeling);
   refine_directions(rings, labels, input.directions, pixel_size, o.refinement);
+  release_runs(rings, labels, input.directions, pixel_size, o.refinement);
   if (over_budget()) throw StageError("labeling", "time budget exceeded");
   result.directions = input.directions;
   result.labels = labels;
@@ -163,9 +165,15 @@ BuildingResult regularize_building(const std::vector<Ring>& rings, double pixel_
   return result;
 }
 
+const std::vector<std::string>& regularizer_names() {
+  static const std::vector<std::string> names = {"deformation", "cgal", "douglas_peucker", "none"};
+  return names;
+}
+
 BuildingResult regularize_with(const std::string& regularizer, const std::vector<Ring>& rings, double pixel_size,
                                const CoreOptions& options) {
   if (regularizer == "deformation") return regularize_building(rings, pixel_size, options);
+  const auto start = Clock::now();
   BuildingResult result;
   if (rings.empty()) {
     result.ok = false;
@@ -173,7 +181,21 @@ BuildingResult regularize_with(const std::string& regularizer, const std::vector
     result.reason = "no contour";
     return result;
   }
-  result.footprint = fallback_footprint(rings, regularizer == "douglas_peucker" ? options.fallback.tolerance_m : 0.0);
+  if (regularizer == "cgal") {
+    std::string problem;
+    result.footprint = cgal_regularize_contours(rings, options.cgal, &problem);
+    if (!problem.empty()) {
+      result.ok = false;
+      result.failed_stage = "cgal";
+      result.reason = problem;
+      result.footprint = fallback_footprint(rings, options.fallback.tolerance_m);
+    }
+  } else if (regularizer == "douglas_peucker" || regularizer == "none") {
+    result.footprint = fallback_footprint(rings, regularizer == "douglas_peucker" ? options.fallback.tolerance_m : 0.0);
+  } else {
+    throw std::invalid_argument("unknown regularizer '" + regularizer + "'");
+  }
+  result.seconds = std::chrono::duration<double>(Clock::now() - start).count();
   return result;
 }
 

@@ -29,9 +29,13 @@ struct BuildingResult {
 // extract_contours). pixel_size: the raster's ground sampling distance in metres.
 BuildingResult regularize_building(const std::vector<Ring>& rings, double pixel_size, const CoreOptions& options);
 
-// The same rings through a named regularizer: "deformation" (the chain above, corner route in
-// options.corners.route), "douglas_peucker" (tolerance options.fallback.tolerance_m) or "none"
-// (the raw contour, collinear vertices removed). The last two always succeed.
+// The regularizers the core offers, by name: "deformation" (the chain above, corner route in
+// options.corners.route), "cgal" (CGAL Shape_regularization, options.cgal; the fallback when it
+// fails), "douglas_peucker" (tolerance options.fallback.tolerance_m) and "none" (the raw
+// contour, collinear vertices removed). The last two always succeed.
+const std::vector<std::string>& regularizer_names();
+
+// The same rings through a named regularizer (one of regularizer_names()).
 BuildingResult regularize_with(const std::string& regularizer, const std::vector<Ring>& rings, double pixel_size,
                                const CoreOptions& options);
 

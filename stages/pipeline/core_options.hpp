@@ -8,6 +8,7 @@
 #include "directions/refine.hpp"
 #include "labeling/mrf.hpp"
 #include "normals/smoothing.hpp"
+#include "peers/cgal_contours.hpp"
 #include "triangulation/triangulate.hpp"
 
 namespace lodforge {
@@ -47,6 +48,7 @@ struct CoreOptions {
   CornerOptions corners;
   FallbackOptions fallback;
   BudgetOptions budget;
+  CgalContourOptions cgal;  // the 'cgal' peer regularizer
 
   template <class V>
   void visit(V& v) {
@@ -59,6 +61,7 @@ struct CoreOptions {
     v.section("corners", corners);
     v.section("fallback", fallback);
     v.section("budget", budget);
+    v.section("cgal", cgal);
   }
 };
 
