@@ -275,7 +275,7 @@ void merge_indexes(const fs::path& dir) {
   o.commit();
 }
 
-// The shards' run reports, as one report.json: counts summed, seconds the slowest shard's, the
+// The shards' run reports, as one report.json: counts and core seconds summed, seconds the slowest shard's, the
 // failed and too-large buildings and the per-tile lines in tile order. Every shard must be there.
 void merge_reports(const fs::path& dir) {
   std::map<int, std::vector<fs::path>> by_count;
@@ -295,7 +295,7 @@ void merge_reports(const fs::path& dir) {
   const std::vector<std::string> keys = {"tiles", "tiles_processed", "tiles_resumed", "tiles_empty", "contours", "checkpoint_buildings",
                                          "buildings", "ok", "fallback", "lod1", "dropped_small", "too_large"};
   std::map<std::string, long long> sums;
-  double seconds = 0;
+  double seconds = 0, core_seconds = 0;
   std::string job;
   std::vector<std::string> failed, too_large;
   std::vector<std::string> tiles;  // sorted, they are in tile order (names rRRRR_cCCCC lead each line)
@@ -314,6 +314,7 @@ void merge_reports(const fs::path& dir) {
           std::string key = (*it)[1];
           if (checkpoints && key == "buildings") key = "checkpoint_buildings";
           if (key == "seconds") seconds = std::max(seconds, std::stod((*it)[2]));
+          else if (key == "core_seconds") core_seconds += std::stod((*it)[2]);
           else sums[key] += std::stoll((*it)[2]);
         }
         continue;
@@ -339,7 +340,8 @@ void merge_reports(const fs::path& dir) {
     << ", \"tiles_resumed\": " << sums["tiles_resumed"] << ", \"tiles_empty\": " << sums["tiles_empty"] << ",\n  \"checkpoints_reused\": {\"contours\": "
     << sums["contours"] << ", \"buildings\": " << sums["checkpoint_buildings"] << "},\n  \"buildings\": " << sums["buildings"] << ", \"ok\": " << sums["ok"]
     << ", \"fallback\": " << sums["fallback"] << ", \"lod1\": " << sums["lod1"] << ", \"dropped_small\": " << sums["dropped_small"]
-    << ", \"too_large\": " << sums["too_large"] << ",\n  \"seconds\": " << seconds << ",\n  \"failed_buildings\": [";
+    << ", \"too_large\": " << sums["too_large"] << ",\n  \"seconds\": " << seconds << ", \"core_seconds\": " << core_seconds
+    << ",\n  \"failed_buildings\": [";
   for (std::size_t i = 0; i < failed.size(); ++i) r << (i ? ",\n    " : "\n    ") << failed[i];
   r << "],\n  \"too_large_buildings\": [";
   for (std::size_t i = 0; i < too_large.size(); ++i) r << (i ? ", " : "") << too_large[i];

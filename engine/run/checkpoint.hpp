@@ -19,6 +19,7 @@ struct BuildingOutput {
   PolygonWithHoles footprint;
   bool ok = true;
   std::string stage, reason;
+  double seconds = 0;  // regularization time (not checkpointed: 0 when restored)
 };
 
 class CheckpointStore {

@@ -37,6 +37,7 @@ std::vector<BuildingOutput> regularize_tile(const TileBuildings& tile, const Job
     o.ok = r.ok;
     o.stage = r.failed_stage;
     o.reason = r.reason;
+    o.seconds = r.seconds;
   });
   return out;
 }

@@ -45,7 +45,7 @@ struct TileResult {
   std::vector<std::string> too_large;
   std::string summary;  // kept in the done marker, replayed on resume
   cv::Mat quicklook_background;  // the tile's picture, when output.quicklook
-  double seconds = 0;
+  double seconds = 0;  // the tile's wall time
 };
 
 std::shared_ptr<TileResult> process_tile(const RunPlan& plan, int tile);
