@@ -2,7 +2,14 @@
 // stage's cost with the contour's edge count is visible. Run: build/bench/stages_bench
 #include <benchmark/benchmark.h>
 
+#include <filesystem>
+#include <gdal_priv.h>
+#include <unistd.h>
+
 #include "corners/corners.hpp"
+#include "heights/heights.hpp"
+#include "io/model_writers.hpp"
+#include "lod1/solid.hpp"
 #include "deformation/deform.hpp"
 #include "directions/ransac.hpp"
 #include "directions/refine.hpp"
@@ -19,7 +26,12 @@ namespace {
 
 // An L-shaped building, 30° rotated, scaled so that its contour has about `edges` pixel edges
 // at 0.25 m, degraded like a segmentation.
-std::vector<Ring> building(int edges) {
+struct Raster {
+  cv::Mat mask;
+  GeoTransform transform;
+};
+
+Raster building_raster(int edges) {
   const double pixel = 0.25;
   // The unit L (16 x 14 m) has ~330 staircase edges at 0.25 m when rotated 30°.
   const double scale = edges / 330.0;
@@ -34,8 +46,40 @@ std::vector<Ring> building(int edges) {
   t.c = {std::floor(lo.x() - 5), pixel, 0, std::ceil(hi.y() + 5), 0, -pixel};
   cv::Mat mask = cv::Mat::zeros(int((hi.y() - lo.y() + 10) / pixel) + 2, int((hi.x() - lo.x() + 10) / pixel) + 2, CV_8U);
   rasterize(mask, l, t);
-  mask = degrade_mask(mask, 0.5, 2.0, 7);
-  return extract_contours(mask, t, ContourOptions{}).buildings.at(0).rings;
+  return {degrade_mask(mask, 0.5, 2.0, 7), t};
+}
+
+std::vector<Ring> building(int edges) {
+  const Raster r = building_raster(edges);
+  return extract_contours(r.mask, r.transform, ContourOptions{}).buildings.at(0).rings;
+}
+
+// The chain's inputs up to a stage, computed once outside the timed loop.
+struct Prepared {
+  std::vector<Ring> rings;
+  LabelingInput input;
+  EdgeLabels labels;
+  std::vector<double> weights;
+  std::vector<Vec2> normals;
+};
+
+Prepared prepare(int edges) {
+  Prepared p;
+  p.rings = building(edges);
+  const CoreOptions o;
+  for (const Ring& ring : p.rings) {
+    p.input.normals.push_back(smooth_normals(ring, 0.25, o.smoothing));
+    p.input.lengths.emplace_back();
+    for (std::size_t i = 0; i < ring.size(); ++i) p.input.lengths.back().push_back(edge_vector(ring, i).norm());
+    p.normals.insert(p.normals.end(), p.input.normals.back().begin(), p.input.normals.back().end());
+    p.weights.insert(p.weights.end(), p.input.lengths.back().begin(), p.input.lengths.back().end());
+  }
+  for (const DominantDirection& d : detect_directions(p.normals, p.weights, o.directions)) {
+    p.input.directions.push_back(d.normal);
+    p.input.support.push_back(d.support);
+  }
+  p.labels = label_edges(p.input, o.labeling);
+  return p;
 }
 
 void set_edges(benchmark::State& state, const std::vector<Ring>& rings) {
@@ -72,6 +116,94 @@ void BM_Triangulation(benchmark::State& state) {
   set_edges(state, rings);
 }
 
+void BM_Contour(benchmark::State& state) {
+  const Raster r = building_raster(int(state.range(0)));
+  for (auto _ : state) benchmark::DoNotOptimize(extract_contours(r.mask, r.transform, ContourOptions{}));
+  set_edges(state, building(int(state.range(0))));
+}
+
+void BM_Ransac(benchmark::State& state) {
+  const Prepared p = prepare(int(state.range(0)));
+  for (auto _ : state) benchmark::DoNotOptimize(detect_directions(p.normals, p.weights, RansacOptions{}));
+  set_edges(state, p.rings);
+}
+
+void BM_Mrf(benchmark::State& state) {
+  const Prepared p = prepare(int(state.range(0)));
+  for (auto _ : state) benchmark::DoNotOptimize(label_edges(p.input, MrfOptions{}));
+  set_edges(state, p.rings);
+}
+
+void BM_Corners(benchmark::State& state) {
+  const Prepared p = prepare(int(state.range(0)));
+  std::string problem;
+  for (auto _ : state) benchmark::DoNotOptimize(extract_corners(p.rings[0], p.labels[0], p.input.directions, 0.25, CornerOptions{}, &problem));
+  set_edges(state, p.rings);
+}
+
+void BM_Deformation(benchmark::State& state) {
+  const Prepared p = prepare(int(state.range(0)));
+  const Vec2 origin = p.rings[0][0];
+  std::vector<Ring> px = p.rings;
+  for (Ring& r : px) for (Vec2& v : r) v = (v - origin) / 0.25;
+  const CoreOptions o;
+  const TriangleMesh mesh = triangulate(px, o.triangulation.size_bound_px, o.triangulation);
+  std::vector<Vec2> targets;
+  for (const BoundaryEdge& b : mesh.boundary) targets.push_back(p.input.directions[p.labels[b.ring][b.edge]]);
+  DeformationResult last;
+  for (auto _ : state) benchmark::DoNotOptimize(last = deform(mesh, targets, o.deformation, [] { return false; }));
+  set_edges(state, p.rings);
+  state.counters["iterations"] = last.iterations;
+  state.counters["rounds"] = last.rounds;
+  state.counters["triangles"] = double(mesh.triangles.size());
+}
+
+void BM_Heights(benchmark::State& state) {
+  const Raster r = building_raster(int(state.range(0)));
+  const PolygonWithHoles footprint = regularize_building(building(int(state.range(0))), 0.25, CoreOptions{}).footprint;
+  HeightRaster dsm{cv::Mat(r.mask.size(), CV_32F, cv::Scalar(12.0f)), cv::Mat::ones(r.mask.size(), CV_8U), r.transform};
+  HeightRaster dtm{cv::Mat(r.mask.size(), CV_32F, cv::Scalar(2.0f)), cv::Mat::ones(r.mask.size(), CV_8U), r.transform};
+  for (auto _ : state) benchmark::DoNotOptimize(building_heights(footprint, dsm, &dtm, HeightOptions{}));
+  set_edges(state, building(int(state.range(0))));
+}
+
+// A writer on N buildings (the 500-edge L, its LOD1 block), to a file in /tmp.
+void BM_Writer(benchmark::State& state, const std::string& format) {
+  const PolygonWithHoles footprint = regularize_building(building(500), 0.25, CoreOptions{}).footprint;
+  BuildingModel model;
+  model.footprint = footprint;
+  model.has_lod1 = true;
+  model.ground = 2;
+  model.roof = 12;
+  model.solid = extrude(footprint, 2, 12);
+  model.status = "ok";
+  model.regularizer = "deformation_original";
+  WriterContext context;
+  context.tile = "r0000_c0000";
+  context.origin = footprint.outer[0];
+  const std::string path = "/tmp/lodforge_bench_" + std::to_string(::getpid()) + extension_of(format);
+  for (auto _ : state) {
+    auto writer = make_model_writer(format, path, context);
+    for (int i = 0; i < state.range(0); ++i) {
+      model.id = i;
+      writer->add(model);
+    }
+    writer->finish();
+  }
+  std::filesystem::remove(path);
+  state.counters["buildings"] = double(state.range(0));
+}
+
+BENCHMARK(BM_Contour)->Arg(100)->Arg(500)->Arg(2000)->Arg(10000)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_Ransac)->Arg(100)->Arg(500)->Arg(2000)->Arg(10000)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_Mrf)->Arg(100)->Arg(500)->Arg(2000)->Arg(10000)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_Corners)->Arg(100)->Arg(500)->Arg(2000)->Arg(10000)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_Deformation)->Arg(100)->Arg(500)->Arg(2000)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_Heights)->Arg(100)->Arg(500)->Arg(2000)->Arg(10000)->Unit(benchmark::kMillisecond);
+BENCHMARK_CAPTURE(BM_Writer, citygml, std::string("citygml"))->Arg(100)->Arg(1000)->Unit(benchmark::kMillisecond);
+BENCHMARK_CAPTURE(BM_Writer, cityjson, std::string("cityjson"))->Arg(100)->Arg(1000)->Unit(benchmark::kMillisecond);
+BENCHMARK_CAPTURE(BM_Writer, obj, std::string("obj"))->Arg(100)->Arg(1000)->Unit(benchmark::kMillisecond);
+BENCHMARK_CAPTURE(BM_Writer, gpkg, std::string("gpkg"))->Arg(100)->Arg(1000)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_Smoothing)->Arg(100)->Arg(500)->Arg(2000)->Arg(10000)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_WholeChainOriginalRoute)->Arg(100)->Arg(500)->Arg(2000)->Arg(10000)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_Triangulation)->Arg(100)->Arg(500)->Arg(2000)->Unit(benchmark::kMillisecond);
@@ -80,4 +212,11 @@ BENCHMARK(BM_WholeChainDeformedRoute)->Arg(100)->Arg(500)->Arg(2000)->Unit(bench
 }  // namespace
 }  // namespace lodforge
 
-BENCHMARK_MAIN();
+int main(int argc, char** argv) {
+  GDALAllRegister();  // the GeoPackage writer
+  benchmark::Initialize(&argc, argv);
+  if (benchmark::ReportUnrecognizedArguments(argc, argv)) return 1;
+  benchmark::RunSpecifiedBenchmarks();
+  benchmark::Shutdown();
+  return 0;
+}

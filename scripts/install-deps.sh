@@ -18,7 +18,7 @@ packages=(
   libeigen3-dev libopencv-dev libcgal-dev libceres-dev libmaxflow-dev
   libgdal-dev gdal-bin libtbb-dev libspdlog-dev libyaml-cpp-dev
   libgtest-dev libgmock-dev libbenchmark-dev
-  libxml2-utils python3 python3-gdal python3-jsonschema python3-numpy python3-pil
+  libxml2-utils python3 python3-gdal python3-jsonschema python3-numpy python3-pil time
 )
 if [ "$tests" -eq 1 ]; then packages+=(slurm-wlm python3-yaml); fi
 missing=()

@@ -123,10 +123,10 @@ double DeformationEnergy::value(const Eigen::VectorXd& x, Eigen::VectorXd* gradi
 }
 
 double DeformationEnergy::value(const Eigen::VectorXd& x, Eigen::VectorXd& gradient,
-                                std::vector<Eigen::Triplet<double>>& exact, std::vector<Eigen::Triplet<double>>& hessian) const {
+                                std::vector<Eigen::Triplet<double>>& exact, std::vector<Eigen::Triplet<double>>* projected) const {
   gradient.setZero(x.size());
   exact.clear();
-  hessian.clear();
+  if (projected) projected->clear();
   double e = 0;
   for (std::size_t t = 0; t < mesh_.triangles.size(); ++t) {
     amips::Vec4 g;
@@ -136,18 +136,20 @@ double DeformationEnergy::value(const Eigen::VectorXd& x, Eigen::VectorXd& gradi
     if (!std::isfinite(e)) return e;
     const Matrix46 a = jacobian_map(rest_inverse_[t]);
     const Eigen::Matrix<double, 6, 1> gv = a.transpose() * g;
-    const Eigen::Matrix<double, 6, 6> hv = a.transpose() * project_psd(h) * a;
     const Eigen::Matrix<double, 6, 6> hx = a.transpose() * h * a;
+    Eigen::Matrix<double, 6, 6> hv;
+    if (projected) hv = a.transpose() * project_psd(h) * a;
     for (int k = 0; k < 3; ++k) {
       gradient.segment<2>(2 * tri[k]) += gv.segment<2>(2 * k);
       for (int l = 0; l < 3; ++l)
         for (int i = 0; i < 2; ++i)
           for (int j = 0; j < 2; ++j) {
-            hessian.emplace_back(2 * tri[k] + i, 2 * tri[l] + j, hv(2 * k + i, 2 * l + j));
             exact.emplace_back(2 * tri[k] + i, 2 * tri[l] + j, hx(2 * k + i, 2 * l + j));
+            if (projected) projected->emplace_back(2 * tri[k] + i, 2 * tri[l] + j, hv(2 * k + i, 2 * l + j));
           }
     }
   }
+  const std::size_t triangle_terms = exact.size();
   for (std::size_t k = 0; k < mesh_.boundary.size(); ++k) {
     const BoundaryEdge& b = mesh_.boundary[k];
     const Vec2& d = targets_[k];
@@ -158,17 +160,17 @@ double DeformationEnergy::value(const Eigen::VectorXd& x, Eigen::VectorXd& gradi
     const Eigen::Matrix2d block = 2 * options_.lambda_px * d * d.transpose();
     for (int i = 0; i < 2; ++i)
       for (int j = 0; j < 2; ++j) {
-        hessian.emplace_back(2 * b.a + i, 2 * b.a + j, block(i, j));
-        hessian.emplace_back(2 * b.b + i, 2 * b.b + j, block(i, j));
-        hessian.emplace_back(2 * b.a + i, 2 * b.b + j, -block(i, j));
-        hessian.emplace_back(2 * b.b + i, 2 * b.a + j, -block(i, j));
+        exact.emplace_back(2 * b.a + i, 2 * b.a + j, block(i, j));
+        exact.emplace_back(2 * b.b + i, 2 * b.b + j, block(i, j));
+        exact.emplace_back(2 * b.a + i, 2 * b.b + j, -block(i, j));
+        exact.emplace_back(2 * b.b + i, 2 * b.a + j, -block(i, j));
       }
   }
   e += options_.anchor_px * (x - anchor_).squaredNorm();
   gradient += 2 * options_.anchor_px * (x - anchor_);
-  for (int i = 0; i < int(x.size()); ++i) hessian.emplace_back(i, i, 2 * options_.anchor_px);
+  for (int i = 0; i < int(x.size()); ++i) exact.emplace_back(i, i, 2 * options_.anchor_px);
   // The alignment and anchor terms are convex quadratics: identical in both.
-  exact.insert(exact.end(), hessian.begin() + std::ptrdiff_t(exact.size()), hessian.end());
+  if (projected) projected->insert(projected->end(), exact.begin() + std::ptrdiff_t(triangle_terms), exact.end());
   return e;
 }
 
@@ -226,17 +228,36 @@ NewtonOutcome newton(const DeformationEnergy& energy, Eigen::VectorXd& x, const 
                      const std::function<bool()>& should_stop) {
   Eigen::VectorXd g, p;
   std::vector<Eigen::Triplet<double>> exact, projected;
-  Eigen::SparseMatrix<double> h(x.size(), x.size());
+  Eigen::SparseMatrix<double> h(x.size(), x.size()), assembled(x.size(), x.size());
   Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> solver;
   bool analyzed = false;
-  double e = energy.value(x, g, exact, projected);
+  double e = energy.value(x, g, exact, nullptr);
   int iteration = 0;
   double shift = 0;  // multiple of the identity added to the exact Hessian, adapted per iteration
-  std::vector<Eigen::Triplet<double>> shifted;
+  // The sparsity pattern never changes (same mesh, same triplet order in the exact and projected
+  // Hessians): the matrix is built once, then only its values are summed in place.
+  std::vector<int> slot, diagonal;
+  const std::vector<Eigen::Triplet<double>>* assembled_from = nullptr;
+  auto assemble = [&](const std::vector<Eigen::Triplet<double>>& triplets) {
+    if (slot.size() != triplets.size()) {
+      assembled.setFromTriplets(triplets.begin(), triplets.end());
+      assembled.makeCompressed();
+      slot.resize(triplets.size());
+      for (std::size_t k = 0; k < triplets.size(); ++k)
+        slot[k] = int(&assembled.coeffRef(triplets[k].row(), triplets[k].col()) - assembled.valuePtr());
+      diagonal.resize(x.size());
+      for (int i = 0; i < int(x.size()); ++i) diagonal[i] = int(&assembled.coeffRef(i, i) - assembled.valuePtr());
+    } else {
+      double* values = assembled.valuePtr();
+      std::fill(values, values + assembled.nonZeros(), 0.0);
+      for (std::size_t k = 0; k < triplets.size(); ++k) values[slot[k]] += triplets[k].value();
+    }
+    assembled_from = &triplets;
+  };
   auto factorize = [&](const std::vector<Eigen::Triplet<double>>& triplets, double tau) {
-    shifted = triplets;
-    if (tau > 0) for (int i = 0; i < int(x.size()); ++i) shifted.emplace_back(i, i, tau);
-    h.setFromTriplets(shifted.begin(), shifted.end());
+    if (assembled_from != &triplets) assemble(triplets);
+    h = assembled;
+    if (tau > 0) for (int i : diagonal) h.valuePtr()[i] += tau;
     if (!analyzed) { solver.analyzePattern(h); analyzed = true; }
     solver.factorize(h);
     return solver.info() == Eigen::Success && (solver.vectorD().array() > 0).all();
@@ -250,6 +271,8 @@ NewtonOutcome newton(const DeformationEnergy& energy, Eigen::VectorXd& x, const 
       tau = tau > 0 ? 4 * tau : 1e-6 * (1 + g.norm());
     }
     shift = 0;
+    energy.value(x, g, exact, &projected);  // the projected Hessian, only when it is needed
+    assembled_from = nullptr;
     return factorize(projected, 0);
   };
   for (; iteration < o.max_iterations; ++iteration) {
@@ -273,7 +296,8 @@ NewtonOutcome newton(const DeformationEnergy& energy, Eigen::VectorXd& x, const 
     if (!accepted) break;
     x += t * p;
     const double previous = e;
-    e = energy.value(x, g, exact, projected);
+    e = energy.value(x, g, exact, nullptr);
+    assembled_from = nullptr;
     if (previous - e <= 1e-15 * std::abs(previous)) { ++iteration; break; }
   }
   return {e, g.norm(), iteration, false};

@@ -45,10 +45,10 @@ class DeformationEnergy {
                     const std::vector<Vec2>& boundary_targets, const DeformationOptions& options);
   // Energy and (optionally) gradient; +infinity if any triangle is flipped.
   double value(const Eigen::VectorXd& x, Eigen::VectorXd* gradient = nullptr) const;
-  // Energy, gradient, the exact Hessian and the one with every triangle's block projected to
-  // positive semi-definite, as triplets (same pattern in both).
+  // Energy, gradient, the exact Hessian and, when asked for, the one with every triangle's block
+  // projected to positive semi-definite, as triplets (same pattern in both).
   double value(const Eigen::VectorXd& x, Eigen::VectorXd& gradient, std::vector<Eigen::Triplet<double>>& exact_hessian,
-               std::vector<Eigen::Triplet<double>>& projected_hessian) const;
+               std::vector<Eigen::Triplet<double>>* projected_hessian) const;
   // Largest step t in (0, 1] along p that keeps every triangle unflipped, times a margin.
   double max_step(const Eigen::VectorXd& x, const Eigen::VectorXd& p) const;
   // Unflipped triangles do not keep the boundary from folding over itself at a boundary vertex

@@ -1,0 +1,85 @@
+#!/usr/bin/env bash
+# The performance benchmark (issue 7): per-stage micro-benchmarks, and end-to-end runs of
+# `lodforge run` on procedural cities of 1x, 4x and 16x area (0.5, 2 and 8 km^2 at 0.25 m) with
+# wall time, buildings per second, peak RSS, the I/O floor (GDAL reading the same rasters, nothing
+# else), 1 vs 2 threads, and the Douglas-Peucker regularizer. Regenerates the results section of
+# docs/performance.md (between its markers). Warm page cache: every raster is read once first.
+#
+#   bench/performance.sh [--work DIR] [--scales 1,4,16] [--no-micro] [--no-docs]
+set -euo pipefail
+root="$(cd "$(dirname "$0")/.." && pwd)"
+lodforge="${LODFORGE:-$root/build/lodforge}"
+stages_bench="${STAGES_BENCH:-$root/build/bench/stages_bench}"
+work="$root/build/bench-performance"
+scales="1,4,16"
+micro=1
+docs=1
+while [ $# -gt 0 ]; do
+  case "$1" in
+    --work) work="$2"; shift 2 ;;
+    --scales) scales="$2"; shift 2 ;;
+    --no-micro) micro=0; shift ;;
+    --no-docs) docs=0; shift ;;
+    -h|--help) sed -n '2,9p' "$0"; exit 0 ;;
+    *) echo "bench/performance.sh: unknown argument '$1' (see --help)" >&2; exit 2 ;;
+  esac
+done
+[ -x "$lodforge" ] || { echo "bench/performance.sh: no lodforge binary at $lodforge; run scripts/build.sh first" >&2; exit 1; }
+command -v /usr/bin/time >/dev/null || { echo "bench/performance.sh: needs /usr/bin/time (Debian package 'time')" >&2; exit 1; }
+mkdir -p "$work"
+results="$work/results.jsonl"
+: > "$results"
+
+if [ "$micro" = 1 ]; then
+  echo "bench/performance.sh: stage micro-benchmarks" >&2
+  "$stages_bench" --benchmark_min_time=0.2 --benchmark_format=json --benchmark_out="$work/stages.json" >/dev/null
+fi
+
+IFS=, read -ra scale_list <<< "$scales"
+for s in "${scale_list[@]}"; do
+  side=$(/usr/bin/python3 -c "import math; print(round(math.sqrt(500000 * $s)))")
+  data="$work/data/x$s"
+  if [ ! -f "$data/seg_class.tif" ]; then
+    echo "bench/performance.sh: generating a ${side} m city ($s x 0.5 km^2)" >&2
+    "$lodforge" synth --size-m "$side" --pixel-size 0.25 --seed 5 --out "$data" >/dev/null 2>&1
+  fi
+  rasters=("$data/seg_class.tif" "$data/dsm.tif" "$data/dtm.tif")
+  /usr/bin/python3 "$root/bench/io_floor.py" "${rasters[@]}" >/dev/null  # warm the cache
+  floor=$(/usr/bin/python3 "$root/bench/io_floor.py" "${rasters[@]}")
+  for config in "deformation 1" "deformation 2" "douglas_peucker 2"; do
+    set -- $config
+    regularizer=$1 threads=$2
+    run="$work/run-x$s-$regularizer-t$threads"
+    rm -rf "$run"
+    mkdir -p "$run"
+    cat > "$run/job.yaml" <<YAML
+inputs:
+  segmentation: {path: $data/seg_class.tif}
+  dsm: {path: $data/dsm.tif}
+  dtm: {path: $data/dtm.tif}
+output: {dir: out, formats: [citygml, cityjson, obj, gpkg]}
+work_dir: work
+threads: $threads
+regularizer: $regularizer
+YAML
+    echo "bench/performance.sh: x$s $regularizer, $threads thread(s)" >&2
+    /usr/bin/time -f "%e %M" -o "$run/time" "$lodforge" run "$run/job.yaml" > "$run/log" 2>&1
+    read -r wall rss_kib < "$run/time"
+    /usr/bin/python3 - "$run" "$s" "$side" "$regularizer" "$threads" "$wall" "$rss_kib" "$floor" >> "$results" <<'PY'
+import json, sys
+run, s, side, reg, threads, wall, rss, floor = sys.argv[1:]
+rep = json.load(open(run + "/out/report.json"))
+print(json.dumps({"scale": int(s), "side_m": int(side), "regularizer": reg, "threads": int(threads), "wall_s": float(wall),
+                  "peak_rss_mb": int(rss) / 1024, "io_floor_s": float(floor), "buildings": rep["buildings"],
+                  "core_seconds": rep["core_seconds"], "tiles": rep["tiles"]}))
+PY
+  done
+done
+args=("$work" --cores "$(nproc)" --command "bench/performance.sh --scales $scales")
+[ "$micro" = 1 ] && args+=(--stages "$work/stages.json")
+if [ "$docs" = 1 ]; then
+  /usr/bin/python3 "$root/bench/performance_table.py" "${args[@]}" --doc "$root/docs/performance.md"
+  echo "bench/performance.sh: results written to docs/performance.md" >&2
+else
+  /usr/bin/python3 "$root/bench/performance_table.py" "${args[@]}"
+fi
