@@ -72,8 +72,8 @@ for d in "${dataset_list[@]}"; do
     out="$work/$d.$m"
     echo "bench/quality.sh: $d / $m" >&2
     # The time per building is measured around each building's regularization, on one core.
-    "$lodforge" regularize --mask "$mask" $(method_args "$m") --threads "$(nproc)" --out "$out.gpkg" --stats "$out.stats.json" 2>"$out.log"
-    "$lodforge" eval --pred "$out.gpkg" --gt "$gt" ${aoi:+--aoi "$aoi"} --json "$out.metrics.json" >/dev/null 2>>"$out.log"
+    "$lodforge" regularize --mask "$mask" $(method_args "$m") --threads "$(nproc)" --out "$out.gpkg" --stats "$out.stats.json" >"$out.log" 2>&1
+    "$lodforge" eval --pred "$out.gpkg" --gt "$gt" ${aoi:+--aoi "$aoi"} --json "$out.metrics.json" >>"$out.log" 2>&1
   done
 done
 if [ "$docs" = 1 ]; then

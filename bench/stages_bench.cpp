@@ -108,6 +108,17 @@ void BM_WholeChainDeformedRoute(benchmark::State& state) {
   set_edges(state, rings);
 }
 
+// The deformed route on a coarse mesh: runs simplified to 1 px, mesh edges up to 20 px.
+void BM_WholeChainDeformedRouteCoarse(benchmark::State& state) {
+  const auto rings = building(int(state.range(0)));
+  CoreOptions o;
+  o.corners.route = "deformed";
+  o.deformation.simplify_px = 1.0;
+  o.triangulation.size_bound_px = 20.0;
+  for (auto _ : state) benchmark::DoNotOptimize(regularize_building(rings, 0.25, o));
+  set_edges(state, rings);
+}
+
 void BM_Triangulation(benchmark::State& state) {
   auto rings = building(int(state.range(0)));
   const Vec2 origin = rings[0][0];
@@ -208,6 +219,7 @@ BENCHMARK(BM_Smoothing)->Arg(100)->Arg(500)->Arg(2000)->Arg(10000)->Unit(benchma
 BENCHMARK(BM_WholeChainOriginalRoute)->Arg(100)->Arg(500)->Arg(2000)->Arg(10000)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_Triangulation)->Arg(100)->Arg(500)->Arg(2000)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_WholeChainDeformedRoute)->Arg(100)->Arg(500)->Arg(2000)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_WholeChainDeformedRouteCoarse)->Arg(100)->Arg(500)->Arg(2000)->Arg(10000)->Unit(benchmark::kMillisecond);
 
 }  // namespace
 }  // namespace lodforge

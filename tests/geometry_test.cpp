@@ -56,5 +56,12 @@ TEST(Geometry, DouglasPeuckerKeepsCornersWithinTolerance) {
   EXPECT_GT(douglas_peucker(ring, 0.05).size(), 4u);
 }
 
+TEST(Geometry, DouglasPeuckerOpenKeepsTheEndsAndTheBump) {
+  const std::vector<Vec2> line = {{0, 0}, {1, 0.1}, {2, 0}, {3, 2}, {4, 0}, {5, -0.1}, {6, 0}};
+  const std::vector<char> keep = douglas_peucker_open(line, 0.5);
+  EXPECT_EQ(keep, (std::vector<char>{1, 0, 1, 1, 1, 0, 1}));
+  EXPECT_EQ(douglas_peucker_open(line, 5.0), (std::vector<char>{1, 0, 0, 0, 0, 0, 1}));
+}
+
 }  // namespace
 }  // namespace lodforge

@@ -75,6 +75,25 @@ TEST(Regularizers, NoiseIsNotACurve) {
   }
 }
 
+// The deformed route on a coarse mesh (each labeled run simplified to 1 px before meshing, mesh
+// edges up to 20 px): the same footprints as on the full staircase, within a few hundredths.
+TEST(Regularizers, DeformedRouteOnACoarseMeshMatchesTheFullMesh) {
+  const PolygonWithHoles truth = test::rotated({{{0, 0}, {16, 0}, {16, 6}, {6, 6}, {6, 14}, {0, 14}}, {}}, 30.0);
+  CoreOptions full, coarse;
+  full.corners.route = coarse.corners.route = "deformed";
+  coarse.deformation.simplify_px = 1.0;
+  coarse.triangulation.size_bound_px = 20.0;
+  for (std::uint64_t seed = 1; seed <= 3; ++seed) {
+    const BuildingResult a = run(truth, 0.5, seed, "deformation", full), b = run(truth, 0.5, seed, "deformation", coarse);
+    ASSERT_TRUE(a.ok && b.ok) << a.reason << b.reason;
+    EXPECT_EQ(b.footprint.outer.size(), 6u) << "seed " << seed;
+    EXPECT_GE(test::iou(b.footprint, truth), 0.95) << "seed " << seed;
+    EXPECT_NEAR(test::iou(b.footprint, truth), test::iou(a.footprint, truth), 0.02) << "seed " << seed;
+    EXPECT_LE(b.alignment_max_deg, 5.0) << "seed " << seed;
+    EXPECT_LT(b.deformation_iterations, a.deformation_iterations + 50) << "seed " << seed;
+  }
+}
+
 TEST(Regularizers, CgalPeerRegularizesARotatedRectangle) {
   const PolygonWithHoles truth = test::rotated({{{0, 0}, {24, 0}, {24, 14}, {0, 14}}, {{{6, 4}, {6, 9}, {12, 9}, {12, 4}}}}, 17.0);
   const BuildingResult r = run(truth, 0.5, 3, "cgal", CoreOptions{});

@@ -56,24 +56,6 @@ bool is_curved(const Ring& ring, int first, int count, const Line& line, const C
   return false;
 }
 
-// Douglas–Peucker on the open polyline points[a..b], appending the kept interior points.
-void simplify_open(const std::vector<Vec2>& points, std::size_t a, std::size_t b, double tolerance, Ring& out) {
-  if (b <= a + 1) return;
-  const Vec2 d = points[b] - points[a];
-  const double length = d.norm();
-  std::size_t worst = a;
-  double worst_distance = tolerance;
-  for (std::size_t k = a + 1; k < b; ++k) {
-    const Vec2 v = points[k] - points[a];
-    const double distance = length > 0 ? std::abs(cross(d, v)) / length : v.norm();
-    if (distance > worst_distance) { worst_distance = distance; worst = k; }
-  }
-  if (worst == a) return;
-  simplify_open(points, a, worst, tolerance, out);
-  out.push_back(points[worst]);
-  simplify_open(points, worst, b, tolerance, out);
-}
-
 }  // namespace
 
 void absorb_short_runs(const Ring& ring, std::vector<int>& labels, double min_length) {
@@ -117,7 +99,8 @@ Ring extract_corners(const Ring& ring, const std::vector<int>& labels, const std
     if (curved[r]) {  // the run's own contour, simplified, between its ends
       std::vector<Vec2> points;
       for (int k = 0; k <= runs[r].second; ++k) points.push_back(ring[(runs[r].first + k) % ring.size()]);
-      simplify_open(points, 0, points.size() - 1, pixel_size, out);
+      const std::vector<char> keep = douglas_peucker_open(points, pixel_size);
+      for (std::size_t k = 1; k + 1 < points.size(); ++k) if (keep[k]) out.push_back(points[k]);
     }
     const Line& a = lines[r];
     const Line& b = lines[(r + 1) % n];

@@ -214,6 +214,14 @@ void simplify_chain(const std::vector<Vec2>& pts, std::size_t first, std::size_t
 
 }  // namespace
 
+std::vector<char> douglas_peucker_open(const std::vector<Vec2>& points, double tolerance) {
+  std::vector<char> keep(points.size(), 0);
+  if (points.empty()) return keep;
+  keep.front() = keep.back() = 1;
+  if (points.size() > 2) simplify_chain(points, 0, points.size() - 1, tolerance, keep);
+  return keep;
+}
+
 Ring douglas_peucker(const Ring& ring, double tolerance) {
   const std::size_t n = ring.size();
   if (n <= 3) return ring;

@@ -29,4 +29,7 @@ Ring remove_degenerate_vertices(const Ring& ring, double eps);
 // Douglas–Peucker on a closed ring; keeps the orientation. tolerance in map units.
 Ring douglas_peucker(const Ring& ring, double tolerance);
 
+// Douglas–Peucker on an open polyline: which points to keep (both ends always).
+std::vector<char> douglas_peucker_open(const std::vector<Vec2>& points, double tolerance);
+
 }  // namespace lodforge

@@ -9,6 +9,7 @@
 #include "directions/ransac.hpp"
 #include "directions/refine.hpp"
 #include "geometry/polygon.hpp"
+#include "labeling/mrf.hpp"
 #include "normals/smoothing.hpp"
 #include "peers/cgal_contours.hpp"
 #include "triangulation/triangulate.hpp"
@@ -31,26 +32,82 @@ std::vector<Ring> translate(const std::vector<Ring>& rings, const Vec2& offset, 
   return out;
 }
 
-// The deformed positions of every ring vertex (pixel units in, pixel units out).
+// The rings with each labeled run simplified by Douglas–Peucker (run ends kept): which vertices
+// stay, per ring. Everything is kept when the simplified rings would not be a valid polygon.
+std::vector<std::vector<char>> coarse_vertices(const std::vector<Ring>& rings, const EdgeLabels& labels, double tolerance) {
+  std::vector<std::vector<char>> kept(rings.size());
+  for (std::size_t r = 0; r < rings.size(); ++r) kept[r].assign(rings[r].size(), 1);
+  if (tolerance <= 0) return kept;
+  PolygonWithHoles coarse;
+  for (std::size_t r = 0; r < rings.size(); ++r) {
+    const Ring& ring = rings[r];
+    const auto runs = label_runs(labels[r]);
+    if (runs.size() < 2) continue;
+    kept[r].assign(ring.size(), 0);
+    for (auto [first, count] : runs) {
+      std::vector<Vec2> points;
+      for (int k = 0; k <= count; ++k) points.push_back(ring[(first + k) % ring.size()]);
+      const std::vector<char> keep = douglas_peucker_open(points, tolerance);
+      for (int k = 0; k < count; ++k) if (keep[k]) kept[r][(first + k) % ring.size()] = 1;
+    }
+    Ring simplified;
+    for (std::size_t i = 0; i < ring.size(); ++i) if (kept[r][i]) simplified.push_back(ring[i]);
+    (r == 0 ? coarse.outer : coarse.holes.emplace_back()) = std::move(simplified);
+  }
+  if (!polygon_problem(coarse).empty())
+    for (std::size_t r = 0; r < rings.size(); ++r) kept[r].assign(rings[r].size(), 1);
+  return kept;
+}
+
+// The deformed positions of every ring vertex (pixel units in, pixel units out). The mesh is
+// built on the rings simplified per labeled run (options.deformation.simplify_px); a removed
+// vertex follows its simplified edge, at its arc-length position along the original run.
 std::vector<Ring> deform_rings(const std::vector<Ring>& rings_px, const EdgeLabels& labels,
                                const std::vector<Vec2>& directions, const CoreOptions& o,
                                const std::function<bool()>& over_budget, BuildingResult& result) {
+  const auto kept = coarse_vertices(rings_px, labels, o.deformation.simplify_px);
+  std::vector<Ring> coarse(rings_px.size());
+  EdgeLabels coarse_labels(rings_px.size());
+  for (std::size_t r = 0; r < rings_px.size(); ++r)
+    for (std::size_t i = 0; i < rings_px[r].size(); ++i)
+      if (kept[r][i]) {
+        coarse[r].push_back(rings_px[r][i]);
+        coarse_labels[r].push_back(labels[r][i]);  // the edge from a kept vertex lies in one run
+      }
   TriangleMesh mesh;
   try {
-    mesh = triangulate(rings_px, o.triangulation.size_bound_px, o.triangulation);
+    mesh = triangulate(coarse, o.triangulation.size_bound_px, o.triangulation);
   } catch (const std::exception& e) {
     throw StageError("triangulation", e.what());
   }
   std::vector<Vec2> targets;
-  for (const BoundaryEdge& b : mesh.boundary) targets.push_back(directions[labels[b.ring][b.edge]]);
+  for (const BoundaryEdge& b : mesh.boundary) targets.push_back(directions[coarse_labels[b.ring][b.edge]]);
   const DeformationResult d = deform(mesh, targets, o.deformation, over_budget);
   if (d.stopped) throw StageError("deformation", "time budget of " + std::to_string(o.budget.max_seconds) + " s exceeded");
   result.alignment_rms_deg = d.rms_deg;
   result.alignment_max_deg = d.max_deg;
   result.deformation_iterations = d.iterations;
   std::vector<Ring> out = rings_px;
-  for (std::size_t r = 0; r < out.size(); ++r)
-    for (std::size_t i = 0; i < out[r].size(); ++i) out[r][i] = d.vertices[mesh.ring_vertex[r][i]];
+  for (std::size_t r = 0; r < out.size(); ++r) {
+    const Ring& ring = rings_px[r];
+    const std::size_t n = ring.size();
+    std::vector<int> coarse_index(n, -1);
+    for (std::size_t i = 0, c = 0; i < n; ++i) if (kept[r][i]) coarse_index[i] = int(c++);
+    for (std::size_t i = 0; i < n; ++i) {
+      if (!kept[r][i]) continue;
+      std::size_t j = (i + 1) % n;  // the next kept vertex
+      while (!kept[r][j]) j = (j + 1) % n;
+      const Vec2 a = d.vertices[mesh.ring_vertex[r][coarse_index[i]]], b = d.vertices[mesh.ring_vertex[r][coarse_index[j]]];
+      out[r][i] = a;
+      double total = 0;
+      for (std::size_t k = i; k != j; k = (k + 1) % n) total += edge_vector(ring, k).norm();
+      double along = 0;
+      for (std::size_t k = (i + 1) % n; k != j; k = (k + 1) % n) {
+        along += edge_vector(ring, (k + n - 1) % n).norm();
+        out[r][k] = a + (total > 0 ? along / total : 0.0) * (b - a);
+      }
+    }
+  }
   return out;
 }
 
