@@ -173,7 +173,7 @@ TEST_F(ModelFiles, DelftOutputsValidateAgainstTheOfficialSchemasAndEveryShellIsC
   std::ofstream(dir / "job.yaml") << "inputs:\n  segmentation: {path: " << data << "/delft-ahn3-bgt/derived/top_class_50cm.tif}\n"
                                   << "  dsm: {path: " << data << "/delft-ahn3-bgt/derived/dsm_50cm.tif}\n"
                                   << "  dtm: {path: " << data << "/delft-ahn3-bgt/derived/dtm_50cm.tif}\n"
-                                  << "tiling: {tile_size_m: 64}\noutput: {dir: out}\nwork_dir: work\n"
+                                  << "tiling: {tile_size_m: 64}\noutput: {dir: out, quicklook: true}\nwork_dir: work\n"
                                   << "stages: {heights: {roof: percentile}}\n";
   const Output run = shell(std::string(LODFORGE_BINARY) + " run " + (dir / "job.yaml").string());
   ASSERT_EQ(run.code, 0) << run.output;

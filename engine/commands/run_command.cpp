@@ -206,9 +206,10 @@ int run_job(int argc, char** argv) {
 
   CPLSetConfigOption("OGR_CURRENT_DATE", "2000-01-01T00:00:00.000Z");  // byte-identical GeoPackages
   GDALSetCacheMax64(std::int64_t(job.tiling.gdal_cache_mb) * 1024 * 1024);
+  ReaderPool readers;  // declared before the plan that points to it; closed after the pipeline
   const RunPlan plan{job, seg.size, seg.transform, seg.crs_wkt, pixel, grid, halo_px, max_window_px, selector,
                      dsm_source, dtm_source, ortho_source, store, contour_options, core_options, heights_options,
-                     transform_text, job_key, out_dir};
+                     transform_text, job_key, out_dir, &readers};
 
   std::unique_ptr<tbb::global_control> limit;
   if (job.threads > 0) limit = std::make_unique<tbb::global_control>(tbb::global_control::max_allowed_parallelism, job.threads);

@@ -1,5 +1,9 @@
 #include "run/tile_worker.hpp"
 
+#include <map>
+
+#include <tbb/enumerable_thread_specific.h>
+
 #include <chrono>
 #include <gdal_priv.h>
 #include <opencv2/imgproc.hpp>
@@ -126,6 +130,29 @@ cv::Mat read_orthophoto(const std::string& path, const cv::Rect& w) {
 
 }  // namespace
 
+struct ReaderPool::Impl {
+  struct PerThread {
+    std::map<std::string, std::unique_ptr<MaskWindowReader>> masks;
+    std::map<std::string, std::unique_ptr<HeightWindowReader>> heights;
+  };
+  tbb::enumerable_thread_specific<PerThread> threads;
+};
+
+ReaderPool::ReaderPool() : impl_(std::make_unique<Impl>()) {}
+ReaderPool::~ReaderPool() = default;
+
+const MaskWindowReader& ReaderPool::mask(const std::string& path, const BuildingSelector& selector) {
+  auto& slot = impl_->threads.local().masks[path];
+  if (!slot) slot = std::make_unique<MaskWindowReader>(path, selector);
+  return *slot;
+}
+
+const HeightWindowReader& ReaderPool::heights(const std::string& path) {
+  auto& slot = impl_->threads.local().heights[path];
+  if (!slot) slot = std::make_unique<HeightWindowReader>(path);
+  return *slot;
+}
+
 std::shared_ptr<TileResult> process_tile(const RunPlan& plan, int tile) {
   const Job& job = plan.job;
   const TileGrid& grid = plan.grid;
@@ -142,7 +169,7 @@ std::shared_ptr<TileResult> process_tile(const RunPlan& plan, int tile) {
     r->summary = *summary;
     return r;
   }
-  const MaskWindowReader reader(job.inputs.segmentation.path, plan.selector);
+  const MaskWindowReader& reader = plan.readers->mask(job.inputs.segmentation.path, plan.selector);
   const TileWindow window = find_tile_window(reader, grid, tile, plan.halo_px, plan.max_window_px, job.stages.contour.connectivity);
   const std::uint64_t contour_key = fnv1a(plan.contour_options + plan.transform_text + std::to_string(grid.tile_px), window.hash);
   std::optional<TileBuildings> contours = store.load_contours(r->name, contour_key);
@@ -168,10 +195,10 @@ std::shared_ptr<TileResult> process_tile(const RunPlan& plan, int tile) {
       const int margin = int(std::ceil((job.stages.heights.ring_outer_m + job.stages.core.corners.max_corner_shift_m) / pixel)) + 2;
       const cv::Rect area = (contours->window + cv::Size(2 * margin, 2 * margin) - cv::Point(margin, margin)) &
               cv::Rect(0, 0, plan.size.width, plan.size.height);
-      dsm_window = HeightWindowReader(plan.dsm_source).read(area, plan.transform);
+      dsm_window = plan.readers->heights(plan.dsm_source).read(area, plan.transform);
       const HeightRaster& dsm = *dsm_window;
       std::optional<HeightRaster> dtm;
-      if (!plan.dtm_source.empty()) dtm = HeightWindowReader(plan.dtm_source).read(area, plan.transform);
+      if (!plan.dtm_source.empty()) dtm = plan.readers->heights(plan.dtm_source).read(area, plan.transform);
       heights.emplace(r->buildings.size());
       tbb::parallel_for(std::size_t(0), r->buildings.size(), [&](std::size_t i) {
         Heights& h = (*heights)[i];
@@ -201,11 +228,11 @@ std::shared_ptr<TileResult> process_tile(const RunPlan& plan, int tile) {
         // Cloned: filters must not see past the tile, exactly as with a fresh read of it.
         r->quicklook_background = hillshade(dsm_window->values(inside).clone(), dsm_window->valid(inside).clone(), pixel);
       } else {
-        const HeightRaster dsm = HeightWindowReader(plan.dsm_source).read(tile_rect, plan.transform);
+        const HeightRaster dsm = plan.readers->heights(plan.dsm_source).read(tile_rect, plan.transform);
         r->quicklook_background = hillshade(dsm.values, dsm.valid, pixel);
       }
     } else {
-      cv::Mat grey = MaskWindowReader(job.inputs.segmentation.path, plan.selector).read(tile_rect) * 120 + 40;
+      cv::Mat grey = plan.readers->mask(job.inputs.segmentation.path, plan.selector).read(tile_rect) * 120 + 40;
       cv::cvtColor(grey, r->quicklook_background, cv::COLOR_GRAY2BGR);
     }
   }

@@ -17,6 +17,24 @@
 namespace lodforge {
 
 // Everything a tile needs to know about the run, fixed before the first tile.
+class HeightWindowReader;
+
+// Raster readers kept open per worker thread for the whole run: GDAL's block cache belongs to
+// an open dataset, and tiles overlap by their halos, so readers closed after each tile decoded
+// the shared blocks again (the DSM and DTM windows most of all). Not for concurrent use of one
+// reader: each thread gets its own.
+class ReaderPool {
+ public:
+  ReaderPool();
+  ~ReaderPool();
+  const MaskWindowReader& mask(const std::string& path, const BuildingSelector& selector);
+  const HeightWindowReader& heights(const std::string& path);
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
 struct RunPlan {
   const Job& job;
   cv::Size size;  // of the segmentation raster
@@ -32,6 +50,7 @@ struct RunPlan {
   std::string contour_options, core_options, heights_options, transform_text;
   std::uint64_t job_key;  // inputs' identity, every option and the tiling: a complete tile's key
   std::filesystem::path out_dir;
+  ReaderPool* readers;  // per-thread open rasters, owned by the run
 };
 
 struct TileResult {

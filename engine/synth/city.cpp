@@ -152,9 +152,20 @@ SynthCity generate_city(const SynthOptions& o) {
     b.ground_height = terrain({corner.x() - o.origin_x, o.origin_y - corner.y()});
     b.roof_height = b.ground_height + uniform(rng, 5, 30);
     rasterize(truth, b.footprint, city.transform);
-    cv::Mat roof = cv::Mat::zeros(rows, cols, CV_8U);
-    rasterize(roof, b.footprint, city.transform);
-    city.dsm.setTo(cv::Scalar(b.roof_height), roof);
+    // The roof, in the footprint's bounding box only (a whole-raster mask per building made
+    // generation quadratic in the area).
+    Vec2 lo = b.footprint.outer.front(), hi = lo;
+    for (const Vec2& p : b.footprint.outer) { lo = lo.cwiseMin(p); hi = hi.cwiseMax(p); }
+    const cv::Rect box = cv::Rect(cv::Point(int(std::floor((lo.x() - o.origin_x) / o.pixel_size_m)) - 1, int(std::floor((o.origin_y - hi.y()) / o.pixel_size_m)) - 1),
+                                  cv::Point(int(std::ceil((hi.x() - o.origin_x) / o.pixel_size_m)) + 2, int(std::ceil((o.origin_y - lo.y()) / o.pixel_size_m)) + 2)) &
+                         cv::Rect(0, 0, cols, rows);
+    if (box.empty()) continue;
+    GeoTransform local = city.transform;
+    local.c[0] += box.x * o.pixel_size_m;
+    local.c[3] -= box.y * o.pixel_size_m;
+    cv::Mat roof = cv::Mat::zeros(box.size(), CV_8U);
+    rasterize(roof, b.footprint, local);
+    city.dsm(box).setTo(cv::Scalar(b.roof_height), roof);
   }
   cv::Mat height_noise(rows, cols, CV_32F);
   cv::RNG cv_rng(o.seed * 7919 + 1);
