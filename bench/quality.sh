@@ -13,14 +13,15 @@
 #   campus_clean the same footprints rasterized at 0.25 m, not degraded
 #   synth        a 1 km x 1 km procedural city at 0.25 m (lodforge synth --seed 11)
 # Methods: lodforge (the default regularizer), paper (deformation, the paper's deformed corner
-# route, for contours up to 2,000 edges), cgal, douglas_peucker, none (the raw contour).
+# route, for contours up to 2,000 edges), paper_coarse (the same on a coarse mesh), cgal,
+# douglas_peucker, none (the raw contour).
 set -euo pipefail
 root="$(cd "$(dirname "$0")/.." && pwd)"
 lodforge="${LODFORGE:-$root/build/lodforge}"
 shared="${LODFORGE_SHARED_DATA:-$root/../shared/data}"
 work="$root/build/bench-quality"
 datasets="delft,campus,campus_clean,synth"
-methods="lodforge,paper,cgal,douglas_peucker,none"
+methods="lodforge,paper,paper_coarse,cgal,douglas_peucker,none"
 docs=1
 while [ $# -gt 0 ]; do
   case "$1" in
@@ -59,6 +60,8 @@ method_args() {
     # The paper's route; contours over 2,000 edges take the original route (the deformation of
     # such contours takes minutes each, see docs/performance.md).
     paper) echo "--regularizer deformation --route deformed --set budget.max_deformation_edges=2000" ;;
+    # The paper's route on a coarse mesh (runs simplified to 1 px, mesh edges up to 20 px).
+    paper_coarse) echo "--regularizer deformation --route deformed --set deformation.simplify_px=1 --set triangulation.size_bound_px=20" ;;
     cgal|douglas_peucker|none) echo "--regularizer $1" ;;
     *) echo "bench/quality.sh: unknown method '$1'" >&2; exit 2 ;;
   esac
