@@ -19,13 +19,19 @@ if a.stages:
     families, sizes = {}, set()
     for b in data["benchmarks"]:
         if b.get("run_type") == "aggregate": continue
-        name, _, arg = b["name"].partition("/")
-        families.setdefault(name, {})[int(arg) if arg else 0] = b
-        sizes.add(int(arg) if arg else 0)
+        name, _, arg = b["name"].rpartition("/")  # BM_Mrf/500, BM_Writer/citygml/100
+        if not name: name, arg = arg, "0"
+        families.setdefault(name, {})[int(arg)] = b
+        sizes.add(int(arg))
     sizes = sorted(sizes)
     out.append("### Per-stage micro-benchmarks (one core)\n")
-    out.append("Fixed inputs: a noisy 30°-rotated L-shaped building at 0.25 m scaled to ~100, 500, 2,000 and 10,000 "
-               "boundary edges (stages), or N buildings (writers). Time per call; `–` = not run at that size.\n")
+    edges = {}
+    for runs in families.values():
+        for size, b in runs.items():
+            if b.get("edges"): edges[size] = int(b["edges"])
+    out.append("Fixed inputs: a noisy 30°-rotated L-shaped building at 0.25 m scaled to about 100, 500, 2,000 and 10,000 "
+               "boundary edges (exactly " + ", ".join(f"{edges[s]:,}" for s in sorted(edges)) + "), or 100 and 1,000 buildings "
+               "(writers, columns 100 and 1,000). Time per call on one core; `–` = not run at that size.\n")
     out.append("| benchmark | " + " | ".join(f"{s:,}" for s in sizes) + " |")
     out.append("|---" * (len(sizes) + 1) + "|")
     for name, runs in families.items():
@@ -36,7 +42,7 @@ if a.stages:
             t = b["real_time"]; unit = b["time_unit"]
             ms = t / 1e6 if unit == "ns" else t / 1e3 if unit == "us" else t if unit == "ms" else t * 1e3
             edges = b.get("edges")
-            cells.append(("{:.3g} ms".format(ms)) + (f" ({int(edges):,} e)" if edges else ""))
+            cells.append("{:.3g} ms".format(ms) if ms < 1000 else "{:.3g} s".format(ms / 1000))
         out.append(f"| {name.replace('BM_', '')} | " + " | ".join(cells) + " |")
     out.append("")
 

@@ -217,8 +217,10 @@ int run_job(int argc, char** argv) {
   Progress progress(tiles.size(), isatty(STDERR_FILENO));
   std::size_t next = 0, tiles_done = 0;
   const auto start = Clock::now();
-  // Serial source, parallel tiles, serial in-order writer; at most `tokens` tiles in flight.
+  // Serial source; parallel tiles, each writing its own files; serial in-order bookkeeping (the
+  // index and report follow tile order). At most `tokens` tiles in flight.
   const std::size_t tokens = std::max<std::size_t>(2, 2 * std::size_t(job.threads ? job.threads : std::thread::hardware_concurrency()));
+  using Done = std::pair<std::shared_ptr<TileResult>, std::vector<std::string>>;  // the tile and its files
   tbb::parallel_pipeline(
       tokens,
       tbb::make_filter<void, int>(tbb::filter_mode::serial_in_order,
@@ -226,10 +228,15 @@ int run_job(int argc, char** argv) {
                                     if (next >= tiles.size()) { fc.stop(); return 0; }
                                     return tiles[next++];
                                   }) &
-          tbb::make_filter<int, std::shared_ptr<TileResult>>(tbb::filter_mode::parallel,
-                                                             [&](int tile) { return process_tile(plan, tile); }) &
-          tbb::make_filter<std::shared_ptr<TileResult>, void>(tbb::filter_mode::serial_in_order, [&](std::shared_ptr<TileResult> r) {
-            record_tile(totals, plan, *r, write_tile_outputs(plan, *r));
+          tbb::make_filter<int, Done>(tbb::filter_mode::parallel,
+                                      [&](int tile) {
+                                        std::shared_ptr<TileResult> r = process_tile(plan, tile);
+                                        std::vector<std::string> files = write_tile_outputs(plan, *r);
+                                        r->quicklook_background.release();  // written; not kept while queued
+                                        return Done{std::move(r), std::move(files)};
+                                      }) &
+          tbb::make_filter<Done, void>(tbb::filter_mode::serial_in_order, [&](const Done& done) {
+            record_tile(totals, plan, *done.first, done.second);
             progress.update(++tiles_done, totals.buildings);
           }));
   progress.finish();
