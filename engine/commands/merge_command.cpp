@@ -234,24 +234,33 @@ void merge_ogr(const std::vector<fs::path>& files, const fs::path& target, const
   fs::rename(temp, target);
 }
 
-// The shards' tile indexes, as one. Every shard of one N must be there.
-void merge_indexes(const fs::path& dir) {
-  std::map<int, std::vector<fs::path>> by_count;
-  const std::regex part(R"re(tile_index\.shard-(\d+)-of-(\d+)\.geojson)re");
+// The shards' files NAME.shard-K-of-N.EXT in dir, in shard order; empty when there are none.
+// Every shard K = 0..N-1 of one N must be there; `what` names them in the errors.
+std::vector<fs::path> shard_parts(const fs::path& dir, const std::string& name, const std::string& extension, const std::string& what) {
+  std::map<int, std::map<int, fs::path>> by_count;  // N -> K -> file
+  const std::regex part(std::regex_replace(name, std::regex(R"(\.)"), R"(\.)") + R"re(\.shard-(\d+)-of-(\d+)\.)re" + extension);
   for (const auto& e : fs::directory_iterator(dir)) {
     std::smatch m;
-    const std::string name = e.path().filename().string();
-    if (std::regex_match(name, m, part)) by_count[std::stoi(m[2])].push_back(e.path());
+    const std::string file = e.path().filename().string();
+    if (std::regex_match(file, m, part)) by_count[std::stoi(m[2])][std::stoi(m[1])] = e.path();
   }
-  if (by_count.empty()) return;
+  if (by_count.empty()) return {};
   if (by_count.size() > 1)
-    throw InputError("'" + dir.string() + "': holds tile indexes of runs with different shard counts; remove the stale ones");
-  const auto& [count, parts_found] = *by_count.begin();
-  if (int(parts_found.size()) != count)
-    throw InputError("'" + dir.string() + "': " + std::to_string(parts_found.size()) + " of " + std::to_string(count) +
-                     " shards' tile indexes are there; run the missing shards first");
-  std::vector<fs::path> parts = parts_found;
-  std::sort(parts.begin(), parts.end());
+    throw InputError("'" + dir.string() + "': holds " + what + " of runs with different shard counts; remove the stale ones");
+  const auto& [count, found] = *by_count.begin();
+  std::vector<fs::path> parts;
+  for (int k = 0; k < count; ++k)
+    if (found.count(k)) parts.push_back(found.at(k));
+  if (int(parts.size()) != count)
+    throw InputError("'" + dir.string() + "': " + std::to_string(parts.size()) + " of " + std::to_string(count) + " shards' " + what +
+                     " are there; run the missing shards first");
+  return parts;
+}
+
+// The shards' tile indexes, as one. Every shard of one N must be there.
+void merge_indexes(const fs::path& dir) {
+  const std::vector<fs::path> parts = shard_parts(dir, "tile_index", "geojson", "tile indexes");
+  if (parts.empty()) return;
   std::vector<std::pair<std::string, std::string>> features;  // (tile name, feature)
   std::string header;
   const std::regex tile(R"re("tile": "([^"]+)")re");
@@ -278,22 +287,9 @@ void merge_indexes(const fs::path& dir) {
 // The shards' run reports, as one report.json: counts and core seconds summed, seconds the slowest shard's, the
 // failed and too-large buildings and the per-tile lines in tile order. Every shard must be there.
 void merge_reports(const fs::path& dir) {
-  std::map<int, std::vector<fs::path>> by_count;
-  const std::regex part(R"re(report\.shard-(\d+)-of-(\d+)\.json)re");
-  for (const auto& e : fs::directory_iterator(dir)) {
-    std::smatch m;
-    const std::string name = e.path().filename().string();
-    if (std::regex_match(name, m, part)) by_count[std::stoi(m[2])].push_back(e.path());
-  }
-  if (by_count.empty()) return;
-  if (by_count.size() > 1)
-    throw InputError("'" + dir.string() + "': holds run reports of runs with different shard counts; remove the stale ones");
-  const auto& [count, parts] = *by_count.begin();
-  if (int(parts.size()) != count)
-    throw InputError("'" + dir.string() + "': " + std::to_string(parts.size()) + " of " + std::to_string(count) +
-                     " shards' run reports are there; run the missing shards first");
-  const std::vector<std::string> keys = {"tiles", "tiles_processed", "tiles_resumed", "tiles_empty", "contours", "checkpoint_buildings",
-                                         "buildings", "ok", "fallback", "lod1", "dropped_small", "too_large"};
+  const std::vector<fs::path> parts = shard_parts(dir, "report", "json", "run reports");
+  if (parts.empty()) return;
+  const int count = int(parts.size());
   std::map<std::string, long long> sums;
   double seconds = 0, core_seconds = 0;
   std::string job;
