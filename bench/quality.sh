@@ -69,6 +69,10 @@ method_args() {
 
 IFS=, read -ra dataset_list <<< "$datasets"
 IFS=, read -ra method_list <<< "$methods"
+for m in "${method_list[@]}"; do method_args "$m" > /dev/null || exit 2; done  # a typo stops here
+for d in "${dataset_list[@]}"; do
+  case "$d" in delft|campus|campus_clean|synth) ;; *) echo "bench/quality.sh: unknown dataset '$d'" >&2; exit 2 ;; esac
+done
 for d in "${dataset_list[@]}"; do
   prepare "$d"
   for m in "${method_list[@]}"; do

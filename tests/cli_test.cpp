@@ -136,6 +136,13 @@ TEST_F(Cli, SynthFromFootprintsRegularizeWithEachMethodAndEvaluate) {
   r = lodforge("regularize --mask " + path("sim/seg_class.tif") + " --regularizer bogus --out " + path("x.gpkg"));
   EXPECT_EQ(r.code, 1);
   EXPECT_NE(r.output.find("must be one of: deformation, cgal, douglas_peucker, none"), std::string::npos) << r.output;
+  // Footprints in degrees (a GeoJSON without "crs" is WGS 84) are refused, not rasterized at 0.25°.
+  std::ofstream(path("lonlat.geojson")) << R"({"type": "FeatureCollection", "features": [{"type": "Feature", "properties": {}, "geometry": )"
+                                        << R"({"type": "Polygon", "coordinates": [[[4.37, 52.0], [4.371, 52.0], [4.371, 52.001], [4.37, 52.0]]]}}]})";
+  r = lodforge("synth --from " + path("lonlat.geojson") + " --out " + path("sim3"));
+  EXPECT_EQ(r.code, 1);
+  EXPECT_NE(r.output.find("is in a geographic CRS (degrees)"), std::string::npos) << r.output;
+  EXPECT_FALSE(fs::exists(path("sim3/seg_class.tif")));
   r = lodforge("synth --from " + path("missing.geojson") + " --out " + path("sim2"));
   EXPECT_EQ(r.code, 1);
   EXPECT_NE(r.output.find("--from '" + path("missing.geojson") + "': file not found"), std::string::npos) << r.output;

@@ -104,6 +104,18 @@ TEST_F(SynthRun, OutputsAreByteIdenticalForOneAndTwoThreads) {
   const auto one = output_bytes(dir / "one_out"), two = output_bytes(dir / "two_out");
   EXPECT_GT(one.size(), 10u);
   EXPECT_TRUE(one == two);
+  // With heights (DSM and DTM read by readers each thread keeps open) and the quick looks.
+  for (const std::string threads : {"1", "2"}) {
+    std::ofstream(dir / ("h" + threads + ".yaml")) << "inputs:\n  segmentation: {path: " << seg << "}\n  dsm: {path: " << (dir / "city" / "dsm.tif").string()
+                                                    << "}\n  dtm: {path: " << (dir / "city" / "dtm.tif").string() << "}\n"
+                                                    << "tiling: {tile_size_m: 60}\noutput: {dir: h" << threads << "_out, quicklook: true}\nwork_dir: h" << threads << "_work\n";
+    r = lodforge("run " + (dir / ("h" + threads + ".yaml")).string() + " --threads " + threads);
+    ASSERT_EQ(r.code, 0) << r.output;
+  }
+  const auto h1 = output_bytes(dir / "h1_out"), h2 = output_bytes(dir / "h2_out");
+  EXPECT_GT(h1.size(), one.size());  // the PNGs
+  EXPECT_TRUE(h1 == h2);
+  EXPECT_NE(slurp(dir / "h1_out" / "report.json").find("\"lod1\": "), std::string::npos);
 }
 
 TEST_F(Run, KilledRunResumesToTheSameBytes) {

@@ -298,6 +298,7 @@ void merge_reports(const fs::path& dir) {
   const std::regex pair(R"re("(\w+)": (-?[0-9.eE+-]+))re"), quoted(R"re("([^"]+)")re");
   for (const fs::path& p : parts) {
     std::ifstream in(p);
+    if (!in) throw InputError("'" + p.string() + "': cannot read");
     std::string line, section;
     while (std::getline(in, line)) {
       if (line.rfind("  \"job\": ", 0) == 0) { job = line; continue; }
@@ -329,7 +330,9 @@ void merge_reports(const fs::path& dir) {
   // Failed buildings in tile order, each tile's in its own order, as a single run lists them.
   const auto tile_of = [](const std::string& entry) { const std::size_t at = entry.find("\"tile\": "); return entry.substr(at, 22); };
   std::stable_sort(failed.begin(), failed.end(), [&](const std::string& a, const std::string& b) { return tile_of(a) < tile_of(b); });
-  std::sort(too_large.begin(), too_large.end());
+  // Too-large buildings in tile order too ("... around tile rRRRR_cCCCC ..."), each tile's in its order.
+  const auto tile_named = [](const std::string& text) { const std::size_t at = text.find("tile r"); return at == std::string::npos ? text : text.substr(at, 16); };
+  std::stable_sort(too_large.begin(), too_large.end(), [&](const std::string& a, const std::string& b) { return tile_named(a) < tile_named(b); });
   std::sort(tiles.begin(), tiles.end());
   std::ostringstream r;
   r << "{\n" << job << "\n  \"shard\": \"merged " << count << "\",\n  \"tiles\": " << sums["tiles"] << ", \"tiles_processed\": " << sums["tiles_processed"]

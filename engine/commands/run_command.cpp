@@ -194,6 +194,7 @@ int run_job(int argc, char** argv) {
   Job key_job = job;
   key_job.threads = 0;
   key_job.work_dir.clear();
+  key_job.tiling.gdal_cache_mb = 0;  // memory, not results: resuming with another cache size reuses every tile
   const std::string contour_options = options_text(key_job.stages.contour);
   const std::string heights_options = options_text(key_job.stages.heights) + file_identity(job.inputs.dsm.path) + file_identity(job.inputs.dtm.path);
   // Building ids are first-pixel indices, so the footprints also depend on the raster's width.

@@ -1,6 +1,7 @@
 // lodforge synth: writes a procedural city (segmentation, DSM, DTM, true footprints).
 #include <filesystem>
 #include <iostream>
+#include <ogr_spatialref.h>
 #include <opencv2/core.hpp>
 #include <spdlog/spdlog.h>
 
@@ -47,7 +48,15 @@ int run_synth(int argc, char** argv) {
   if (!errors.empty()) throw input_errors(errors);
   std::vector<PolygonWithHoles> given;
   std::string given_crs;
-  if (auto from = args.get("from")) given = read_polygons(*from, "--from", &given_crs);
+  if (auto from = args.get("from")) {
+    given = read_polygons(*from, "--from", &given_crs);
+    // Pixel size and margin are metres: the footprints must be in a projected CRS.
+    OGRSpatialReference srs;
+    if (given_crs.empty() || srs.importFromWkt(given_crs.c_str()) != OGRERR_NONE)
+      throw InputError("--from '" + *from + "': has no CRS; give the footprints in a projected CRS in metres (e.g. ogr2ogr -t_srs EPSG:28992)");
+    if (srs.IsGeographic())
+      throw InputError("--from '" + *from + "': is in a geographic CRS (degrees); reproject it to a projected CRS in metres first (e.g. ogr2ogr -t_srs EPSG:28992)");
+  }
 
   std::error_code ec;
   fs::create_directories(out, ec);

@@ -104,6 +104,23 @@ double terrain(const Vec2& local) {
 
 }  // namespace
 
+// The pixels around a footprint (a pixel of margin), clipped to the raster; north-up transform.
+static cv::Rect pixel_box(const PolygonWithHoles& footprint, const GeoTransform& t, int cols, int rows) {
+  Vec2 lo = footprint.outer.front(), hi = lo;
+  for (const Vec2& p : footprint.outer) { lo = lo.cwiseMin(p); hi = hi.cwiseMax(p); }
+  const Vec2 a = t.to_pixel({lo.x(), hi.y()}), b = t.to_pixel({hi.x(), lo.y()});
+  return cv::Rect(cv::Point(int(std::floor(a.x())) - 1, int(std::floor(a.y())) - 1), cv::Point(int(std::ceil(b.x())) + 2, int(std::ceil(b.y())) + 2)) &
+         cv::Rect(0, 0, cols, rows);
+}
+
+// The transform of a window of the raster.
+static GeoTransform shifted(const GeoTransform& t, const cv::Rect& box) {
+  GeoTransform out = t;
+  out.c[0] = t.to_map(box.x, box.y).x();
+  out.c[3] = t.to_map(box.x, box.y).y();
+  return out;
+}
+
 // The segmentation of a true 0/1 mask: rounded corners, a smooth boundary wobble, speckles.
 static cv::Mat segmentation_of(const cv::Mat& truth, const SynthOptions& o, Rng& rng) {
   const int rows = truth.rows, cols = truth.cols;
@@ -154,17 +171,10 @@ SynthCity generate_city(const SynthOptions& o) {
     rasterize(truth, b.footprint, city.transform);
     // The roof, in the footprint's bounding box only (a whole-raster mask per building made
     // generation quadratic in the area).
-    Vec2 lo = b.footprint.outer.front(), hi = lo;
-    for (const Vec2& p : b.footprint.outer) { lo = lo.cwiseMin(p); hi = hi.cwiseMax(p); }
-    const cv::Rect box = cv::Rect(cv::Point(int(std::floor((lo.x() - o.origin_x) / o.pixel_size_m)) - 1, int(std::floor((o.origin_y - hi.y()) / o.pixel_size_m)) - 1),
-                                  cv::Point(int(std::ceil((hi.x() - o.origin_x) / o.pixel_size_m)) + 2, int(std::ceil((o.origin_y - lo.y()) / o.pixel_size_m)) + 2)) &
-                         cv::Rect(0, 0, cols, rows);
+    const cv::Rect box = pixel_box(b.footprint, city.transform, cols, rows);
     if (box.empty()) continue;
-    GeoTransform local = city.transform;
-    local.c[0] += box.x * o.pixel_size_m;
-    local.c[3] -= box.y * o.pixel_size_m;
     cv::Mat roof = cv::Mat::zeros(box.size(), CV_8U);
-    rasterize(roof, b.footprint, local);
+    rasterize(roof, b.footprint, shifted(city.transform, box));
     city.dsm(box).setTo(cv::Scalar(b.roof_height), roof);
   }
   cv::Mat height_noise(rows, cols, CV_32F);
@@ -195,7 +205,11 @@ SynthCity segment_footprints(const std::vector<PolygonWithHoles>& footprints, co
   city.transform.c = {o.origin_x, px, 0, o.origin_y, 0, -px};
   cv::Mat truth = cv::Mat::zeros(rows, cols, CV_8U);
   for (const PolygonWithHoles& f : footprints) {
-    rasterize(truth, f, city.transform);
+    // Each footprint on its own, then OR-ed in: a hole must not erase a building standing in it.
+    const cv::Rect box = pixel_box(f, city.transform, cols, rows);
+    cv::Mat own = cv::Mat::zeros(box.size(), CV_8U);
+    rasterize(own, f, shifted(city.transform, box));
+    truth(box) |= own;
     city.buildings.push_back({f, "given", 0, 0});
   }
   Rng rng(o.seed);

@@ -239,7 +239,8 @@ NewtonOutcome newton(const DeformationEnergy& energy, Eigen::VectorXd& x, const 
   std::vector<int> slot, diagonal;
   const std::vector<Eigen::Triplet<double>>* assembled_from = nullptr;
   auto assemble = [&](const std::vector<Eigen::Triplet<double>>& triplets) {
-    if (slot.size() != triplets.size()) {
+    if (slot.size() != triplets.size()) {  // a new pattern: built, and analysed again below
+      analyzed = false;
       assembled.setFromTriplets(triplets.begin(), triplets.end());
       assembled.makeCompressed();
       slot.resize(triplets.size());

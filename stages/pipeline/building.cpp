@@ -42,7 +42,10 @@ std::vector<std::vector<char>> coarse_vertices(const std::vector<Ring>& rings, c
   for (std::size_t r = 0; r < rings.size(); ++r) {
     const Ring& ring = rings[r];
     const auto runs = label_runs(labels[r]);
-    if (runs.size() < 2) continue;
+    if (runs.size() < 2) {  // kept whole, and checked with the others
+      (r == 0 ? coarse.outer : coarse.holes.emplace_back()) = ring;
+      continue;
+    }
     kept[r].assign(ring.size(), 0);
     for (auto [first, count] : runs) {
       std::vector<Vec2> points;

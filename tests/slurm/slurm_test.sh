@@ -227,14 +227,14 @@ write_job killed
 submit_job killed
 log "case 2: array job $array_id, merge job $merge_id; waiting for task $killed to run and write two tiles"
 cols=$(((width + tile - 1) / tile)) rows=$(((height + tile - 1) / tile))
-shard_tiles=()  # the .gml of every tile of the shard that will be killed
+shard_tiles=()  # the done marker of every tile of the shard that will be killed
 for ((n = killed; n < cols * rows; n += shards)); do
-  shard_tiles+=("$(printf '%s/killed/out/tiles/r%04d_c%04d.gml' "$tmp" $((n / cols)) $((n % cols)))")
+  shard_tiles+=("$(printf '%s/killed/work/r%04d_c%04d.done' "$tmp" $((n / cols)) $((n % cols)))")
 done
 written() { local f c=0; for f in "${shard_tiles[@]}"; do [ -f "$f" ] && c=$((c + 1)); done; echo "$c"; }
 while :; do
   s="$(state_of "${array_id}_$killed")"
-  # two tiles written: the first one is surely complete and checkpointed, so the rerun resumes it
+  # two tiles complete (their done markers, written last): the rerun surely resumes them
   if [ "$s" = RUNNING ] && [ "$(written)" -ge 2 ]; then break; fi
   terminal_state "${s:-PENDING}" && fail "task $killed ended ($s) before it could be killed: the job is too fast for this test"
   [ "$SECONDS" -lt "$limit" ] || fail "task $killed did not start in time"
