@@ -7,6 +7,7 @@
 #include "commands/commands.hpp"
 #include "eval/metrics.hpp"
 #include "io/errors.hpp"
+#include "io/atomic_file.hpp"
 #include "io/ogr_polygon.hpp"
 
 namespace lodforge {
@@ -27,11 +28,7 @@ int run_eval(int argc, char** argv) {
   if (auto a = args.get("aoi")) aoi = read_polygons(*a, "--aoi").front();
   const EvalResult r = evaluate(predicted, truth, aoi);
   std::cout << eval_table(r);
-  if (auto j = args.get("json")) {
-    std::ofstream out(*j);
-    out << eval_json(r) << '\n';
-    if (!out) throw InputError("--json '" + *j + "': cannot write");
-  }
+  if (auto j = args.get("json")) write_text_atomically(*j, eval_json(r) + "\n");
   return 0;
 }
 

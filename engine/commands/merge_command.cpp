@@ -12,6 +12,7 @@
 
 #include "cli/args.hpp"
 #include "commands/commands.hpp"
+#include "io/atomic_file.hpp"
 #include "io/errors.hpp"
 #include "io/model_writers.hpp"
 
@@ -21,28 +22,9 @@ namespace fs = std::filesystem;
 
 namespace {
 
-class Output {
- public:
-  explicit Output(fs::path path) : path_(std::move(path)), temp_(path_.string() + ".partial") {
-    out_.open(temp_, std::ios::trunc);
-    if (!out_) throw InputError("'" + path_.string() + "': cannot create");
-  }
-  std::ofstream& out() { return out_; }
-  void commit() {
-    out_.flush();
-    out_.close();
-    if (!out_) throw InputError("'" + path_.string() + "': writing failed (disk full?)");
-    fs::rename(temp_, path_);
-  }
-
- private:
-  fs::path path_, temp_;
-  std::ofstream out_;
-};
-
 // CityGML: one header, every tile's cityObjectMember blocks, one footer.
 void merge_citygml(const std::vector<fs::path>& files, const fs::path& target) {
-  Output o(target);
+  AtomicTextFile o(target);
   for (std::size_t k = 0; k < files.size(); ++k) {
     std::ifstream in(files[k]);
     std::string line;
@@ -68,7 +50,7 @@ std::string metres(long long mm) {
 
 // OBJ: vertices moved to the first tile's origin, face indices offset.
 void merge_obj(const std::vector<fs::path>& files, const fs::path& target) {
-  Output o(target);
+  AtomicTextFile o(target);
   long long ox = 0, oy = 0;
   std::size_t offset = 0;
   const std::regex origin(R"(# origin (\S+) (\S+) )");
@@ -109,7 +91,7 @@ void merge_obj(const std::vector<fs::path>& files, const fs::path& target) {
 
 // CityJSON: CityObjects concatenated, vertices re-indexed onto one transform.
 void merge_cityjson(const std::vector<fs::path>& files, const fs::path& target) {
-  Output o(target);
+  AtomicTextFile o(target);
   std::map<std::array<long long, 3>, std::size_t> index;
   std::vector<std::array<long long, 3>> vertices;
   long long ox = 0, oy = 0;
@@ -277,7 +259,7 @@ void merge_indexes(const fs::path& dir) {
     }
   }
   std::sort(features.begin(), features.end());
-  Output o(dir / "tile_index.geojson");
+  AtomicTextFile o(dir / "tile_index.geojson");
   o.out() << header << '\n';
   for (std::size_t i = 0; i < features.size(); ++i) o.out() << features[i].second << (i + 1 < features.size() ? ",\n" : "\n");
   o.out() << "]}\n";
@@ -347,7 +329,7 @@ void merge_reports(const fs::path& dir) {
   r << "],\n  \"per_tile\": [";
   for (std::size_t i = 0; i < tiles.size(); ++i) r << (i ? ",\n    " : "\n    ") << tiles[i];
   r << "]\n}\n";
-  Output o(dir / "report.json");
+  AtomicTextFile o(dir / "report.json");
   o.out() << r.str();
   o.commit();
 }

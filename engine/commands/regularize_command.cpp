@@ -1,7 +1,7 @@
 // lodforge regularize: the per-building core on one segmentation raster, LOD0 polygons out.
 #include <algorithm>
 #include <atomic>
-#include <fstream>
+#include <sstream>
 #include <iostream>
 #include <map>
 #include <spdlog/spdlog.h>
@@ -11,6 +11,7 @@
 #include "cli/args.hpp"
 #include "commands/commands.hpp"
 #include "commands/stage_options.hpp"
+#include "io/atomic_file.hpp"
 #include "io/errors.hpp"
 #include "io/footprint_writer.hpp"
 #include "io/raster.hpp"
@@ -52,6 +53,13 @@ BuildingSelector parse_selector(const Args& args) {
   return selector;
 }
 
+// "deformation, cgal, ..." for the help and the errors.
+std::string regularizer_list() {
+  std::string list;
+  for (const std::string& n : regularizer_names()) list += (list.empty() ? "" : ", ") + n;
+  return list;
+}
+
 }  // namespace
 
 int run_regularize(int argc, char** argv) {
@@ -62,7 +70,7 @@ int run_regularize(int argc, char** argv) {
       .value("building-rgb", "R,G,B", "building colour in an RGB raster, e.g. 0,0,255 (ISPRS)")
       .value("out", "FILE", "output footprints (.gpkg or .geojson)")
       .value("route", "NAME", "corner route: 'original' (lines fitted to the raw contour) or 'deformed' (the paper)")
-      .value("regularizer", "NAME", "deformation (default: the paper's chain), cgal (CGAL Shape_regularization), douglas_peucker or none (raw contour)")
+      .value("regularizer", "NAME", "one of " + regularizer_list() + " (default: deformation, the paper's chain; see lodforge options)")
       .value("stats", "FILE", "also write a JSON summary: counts by status and the regularization time per building")
       .value("threads", "N", "worker threads (default: all cores)")
       .value("set", "KEY=VALUE", "set any stage option, e.g. labeling.kappa2=5 (see lodforge options)", true)
@@ -82,11 +90,8 @@ int run_regularize(int argc, char** argv) {
   }
   const std::string regularizer = args.get("regularizer").value_or("deformation");
   const auto& names = regularizer_names();
-  if (std::find(names.begin(), names.end(), regularizer) == names.end()) {
-    std::string list;
-    for (const std::string& n : names) list += (list.empty() ? "" : ", ") + n;
-    throw InputError("lodforge regularize: --regularizer '" + regularizer + "': must be one of: " + list);
-  }
+  if (std::find(names.begin(), names.end(), regularizer) == names.end())
+    throw InputError("lodforge regularize: --regularizer '" + regularizer + "': must be one of: " + regularizer_list());
   const BuildingSelector selector = parse_selector(args);
   check_output_path(out_path);
 
@@ -144,12 +149,11 @@ int run_regularize(int argc, char** argv) {
     double total = 0;
     for (double s : seconds) total += s;
     const auto at = [&](double q) { return seconds[std::min(seconds.size() - 1, std::size_t(q * double(seconds.size())))]; };
-    std::ofstream out(*stats);
+    std::ostringstream out;
     out << "{\"regularizer\": \"" << regularizer << "\", \"route\": \"" << options.core.corners.route << "\", \"buildings\": " << count
         << ", \"ok\": " << count - failed << ", \"fallback\": " << failed << ", \"seconds_total\": " << total
         << ", \"seconds_mean\": " << total / double(count) << ", \"seconds_median\": " << at(0.5) << ", \"seconds_p99\": " << at(0.99) << "}\n";
-    out.close();
-    if (!out) throw InputError("--stats '" + *stats + "': cannot write");
+    write_text_atomically(*stats, out.str());
   }
   return 0;
 }

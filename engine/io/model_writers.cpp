@@ -1,5 +1,7 @@
 #include "io/model_writers.hpp"
 
+#include "io/atomic_file.hpp"
+
 #include <charconv>
 
 #include <cmath>
@@ -9,7 +11,6 @@
 #include <map>
 #include <ogr_spatialref.h>
 #include <sstream>
-#include <unistd.h>
 
 #include "geometry/polygon.hpp"
 #include "io/errors.hpp"
@@ -39,7 +40,7 @@ std::string extension_of(const std::string& format) {
 
 namespace {
 
-// A coordinate with three decimals, exactly as the streams' fixed precision 3 writes it (to_chars
+// A coordinate with three decimals, exactly as a fixed precision 3 stream writes it (to_chars
 // is specified as printf's "%.3f" in the C locale) without iostream's formatting machinery, which
 // was the writers' largest cost.
 struct Fixed3 {
@@ -51,36 +52,11 @@ std::ostream& operator<<(std::ostream& out, Fixed3 f) {
   return out.write(buffer, result.ptr - buffer);
 }
 
-// A text file written to a temporary name and renamed when complete.
-class AtomicText {
- public:
-  explicit AtomicText(std::string path) : path_(std::move(path)), temp_(path_ + ".partial-" + std::to_string(getpid())) {
-    out_.open(temp_, std::ios::trunc);
-    if (!out_) throw InputError("'" + path_ + "': cannot create");
-    out_.precision(3);
-    out_ << std::fixed;
-  }
-  ~AtomicText() {
-    if (!done_) {
-      out_.close();
-      std::error_code ec;
-      fs::remove(temp_, ec);
-    }
-  }
-  std::ostream& out() { return out_; }
-  void commit() {
-    out_.flush();
-    out_.close();
-    if (!out_) throw InputError("'" + path_ + "': writing failed (disk full?)");
-    fs::rename(temp_, path_);
-    done_ = true;
-  }
-
- private:
-  std::string path_, temp_;
-  std::ofstream out_;
-  bool done_ = false;
-};
+// Every other number in the model files has three decimals too (heights, the origin).
+std::ostream& three_decimals(std::ostream& out) {
+  out.precision(3);
+  return out << std::fixed;
+}
 
 std::string gml_id(std::int64_t id) { return "lodforge_b" + std::to_string(id); }
 
@@ -115,6 +91,7 @@ std::string xml_escape(const std::string& s) {
 class CityGmlWriter : public ModelWriter {
  public:
   CityGmlWriter(const std::string& path, const WriterContext& c) : file_(path) {
+    three_decimals(file_.out());
     const std::string epsg = epsg_of(c.crs_wkt);
     srs_ = epsg.empty() ? "" : " srsName=\"" + epsg + "\"";
     auto& o = file_.out();
@@ -175,7 +152,7 @@ class CityGmlWriter : public ModelWriter {
     }
     o << pad << "</gml:Polygon>\n";
   }
-  AtomicText file_;
+  AtomicTextFile file_;
   std::string srs_;
 };
 
@@ -183,6 +160,7 @@ class CityGmlWriter : public ModelWriter {
 class CityJsonWriter : public ModelWriter {
  public:
   CityJsonWriter(const std::string& path, const WriterContext& c) : file_(path), origin_(c.origin) {
+    three_decimals(file_.out());
     const std::string epsg = epsg_of(c.crs_wkt);
     auto& o = file_.out();
     o << "{\"type\": \"CityJSON\", \"version\": \"2.0\",\n \"transform\": {\"scale\": [0.001, 0.001, 0.001], \"translate\": ["
@@ -252,7 +230,7 @@ class CityJsonWriter : public ModelWriter {
     for (const Vec2& p : r) lifted.emplace_back(p.x(), p.y(), z);
     ring3(lifted);
   }
-  AtomicText file_;
+  AtomicTextFile file_;
   Vec2 origin_;
   bool first_ = true;
   std::vector<std::array<long long, 3>> vertices_;
@@ -264,6 +242,7 @@ class CityJsonWriter : public ModelWriter {
 class ObjWriter : public ModelWriter {
  public:
   ObjWriter(const std::string& path, const WriterContext& c) : file_(path), origin_(c.origin) {
+    three_decimals(file_.out());
     file_.out() << "# lodforge OBJ, tile " << c.tile << ", CRS " << (epsg_of(c.crs_wkt).empty() ? "unknown" : epsg_of(c.crs_wkt)) << "\n"
                 << "# origin " << origin_.x() << " " << origin_.y() << " 0.000 (add to every vertex)\n";
   }
@@ -314,7 +293,7 @@ class ObjWriter : public ModelWriter {
     for (std::size_t id : ids) file_.out() << ' ' << id;
     file_.out() << '\n';
   }
-  AtomicText file_;
+  AtomicTextFile file_;
   Vec2 origin_;
   std::size_t count_ = 0;
 };

@@ -5,6 +5,7 @@
 #include <spdlog/spdlog.h>
 #include <sstream>
 
+#include "io/atomic_file.hpp"
 #include "io/errors.hpp"
 #include "io/model_writers.hpp"
 
@@ -55,15 +56,6 @@ void account(const std::string& summary, const std::string& tile, Totals& t, std
   }
 }
 
-void write_text_atomically(const fs::path& path, const std::string& text) {
-  const fs::path temp = path.string() + ".partial";
-  {
-    std::ofstream out(temp, std::ios::trunc);
-    out << text;
-    if (!out.flush()) throw InputError("'" + path.string() + "': cannot write (disk full or not writable?)");
-  }
-  fs::rename(temp, path);
-}
 
 }  // namespace
 

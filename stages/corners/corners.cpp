@@ -105,8 +105,10 @@ Ring extract_corners(const Ring& ring, const std::vector<int>& labels, const std
     const Line& a = lines[r];
     const Line& b = lines[(r + 1) % n];
     const Vec2 junction = ring[runs[(r + 1) % n].first];  // where run r ends and r+1 starts
-    if (curved[r] || curved[(r + 1) % n]) {
-      out.push_back(curved[r] ? (curved[(r + 1) % n] ? junction : b.project(junction)) : a.project(junction));
+    // Next to a curve, the junction itself, or its foot on the straight neighbour's line.
+    const bool curve_before = curved[r], curve_after = curved[(r + 1) % n];
+    if (curve_before || curve_after) {
+      out.push_back(curve_before && curve_after ? junction : curve_before ? b.project(junction) : a.project(junction));
       continue;
     }
     const double det = cross(a.normal, b.normal);

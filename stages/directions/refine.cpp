@@ -144,13 +144,14 @@ int release_runs(const std::vector<Ring>& rings, EdgeLabels& labels, std::vector
       const double length_px = chord.norm() / pixel_size;
       if (length_px < 8 * o.release_px) continue;
       const Eigen::Matrix2d s = run_scatter(ring, first, count, o.trim_px * pixel_size) / (pixel_size * pixel_size * pixel_size);
-      if (!well_posed(s)) continue;
-      double weight = 0;  // trimmed length, pixels (the scatter's weights)
+      const Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> eig(s);  // as well_posed and normal_of
+      if (!(eig.eigenvalues()[1] > 0 && eig.eigenvalues()[1] > 4 * eig.eigenvalues()[0])) continue;
+      Vec2 own = eig.eigenvectors().col(0);  // across the run
+      if (own.dot(directions[label]) < 0) own = -own;
+      double weight = 0;  // run length, pixels (the scatter's weights, before trimming)
       for (int k = 0; k < count; ++k) weight += edge_vector(ring, (first + k) % ring.size()).norm() / pixel_size;
-      const Vec2 own = normal_of(s, directions[label]);
       const double cos_turn = std::clamp(own.dot(directions[label]), -1.0, 1.0);
       const double end_shift = std::sin(std::acos(cos_turn)) * 0.5 * length_px;
-      Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> eig(s);
       const double noise = std::sqrt(std::max(eig.eigenvalues()[0], 0.0) / std::max(weight - 2 * o.trim_px, 1.0));
       if (cos_turn <= 0 || end_shift <= o.release_px || end_shift <= 2 * noise) continue;
       directions.push_back(own);

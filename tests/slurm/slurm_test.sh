@@ -13,13 +13,17 @@
 set -euo pipefail
 
 [ $# -ge 1 ] && [ $# -le 2 ] || { echo "usage: $0 LODFORGE_BINARY [SOURCE_DIR]" >&2; exit 2; }
+# The daemons live in an sbin directory that is often not on a user's PATH: look beside the
+# client tools' directory too (bin/../sbin), or where SLURM_SBIN says.
+if client="$(command -v sbatch 2>/dev/null)"; then
+  export PATH="$PATH:${SLURM_SBIN:-$(dirname "$client")/../sbin}"
+fi
 for daemon in slurmctld slurmd; do
-  if ! command -v "$daemon" >/dev/null 2>&1 && [ ! -x "/usr/sbin/$daemon" ]; then
-    echo "slurm_test: SKIP: $daemon not installed (apt-get install slurm-wlm)"
+  if ! command -v "$daemon" >/dev/null 2>&1; then
+    echo "slurm_test: SKIP: $daemon not installed (apt-get install slurm-wlm; or set SLURM_SBIN)"
     exit 77
   fi
 done
-export PATH="$PATH:/usr/sbin:/sbin"
 lodforge="$(realpath "$1")"
 src="$(realpath "${2:-$(dirname "$0")/../..}")"
 submit="$src/scripts/slurm/submit.sh"
@@ -113,7 +117,7 @@ AccountingStorageType=accounting_storage/none
 JobCompType=jobcomp/none
 SchedulerType=sched/backfill
 MinJobAge=3600
-MailProg=/bin/true
+MailProg=$(type -P true)
 PlugStackConfig=$tmp/slurm/plugstack.conf
 StateSaveLocation=$tmp/slurm/state
 SlurmdSpoolDir=$tmp/slurm/spool

@@ -1,0 +1,29 @@
+// Text outputs that never look complete when they are not: written to PATH.partial-PID and
+// renamed onto PATH by commit(); removed if never committed (an error, an exception). The PID
+// lets concurrent processes (shards) tell their own temporary files from a dead one's.
+#pragma once
+#include <filesystem>
+#include <fstream>
+#include <string>
+
+namespace lodforge {
+
+class AtomicTextFile {
+ public:
+  explicit AtomicTextFile(std::filesystem::path path);  // throws InputError if it cannot create
+  ~AtomicTextFile();
+  AtomicTextFile(const AtomicTextFile&) = delete;
+  AtomicTextFile& operator=(const AtomicTextFile&) = delete;
+  std::ostream& out() { return out_; }
+  void commit();  // flushes, checks, renames; throws InputError when writing failed (disk full?)
+
+ private:
+  std::filesystem::path path_, temp_;
+  std::ofstream out_;
+  bool done_ = false;
+};
+
+// The whole text at once.
+void write_text_atomically(const std::filesystem::path& path, const std::string& text);
+
+}  // namespace lodforge
