@@ -14,8 +14,8 @@ namespace lodforge {
 struct CornerOptions {
   std::string route = "original";  // fit the lines to the original contour, or the deformed one
   double min_run_px = 2.0;         // runs shorter than this (in pixel edges) join a neighbour
-  double parallel_angle_deg = 15.0;  // consecutive lines closer than this in angle get a step
-  double max_corner_shift_m = 3.0;   // an intersection farther than this from the run junction is
+  double parallel_angle_deg = 10.0;  // consecutive lines closer than this in angle get a step
+  double max_corner_shift_m = 1.25;  // an intersection farther than this from the run junction is
                                      // replaced by a step between the two lines
   int repair_attempts = 4;           // an invalid polygon is retried with min_run doubled this often
   double curve_px = 2.5;             // a run whose contour bows this far from its line is a curved wall (0 = off)
