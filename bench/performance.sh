@@ -5,22 +5,27 @@
 # else), 1 vs 2 threads, and the Douglas-Peucker regularizer. Regenerates the results section of
 # docs/performance.md (between its markers). Warm page cache: every raster is read once first.
 #
-#   bench/performance.sh [--work DIR] [--scales 1,4,16] [--no-micro] [--no-docs]
+#   bench/performance.sh [--work DIR] [--scales 1,4,16] [--repeat N] [--no-micro] [--no-docs]
+#
+# Each run is repeated N times (default 3), from scratch; the table keeps the run of median wall
+# time, and the I/O floor is the median of N reads.
 set -euo pipefail
 root="$(cd "$(dirname "$0")/.." && pwd)"
 lodforge="${LODFORGE:-$root/build/lodforge}"
 stages_bench="${STAGES_BENCH:-$root/build/bench/stages_bench}"
 work="$root/build/bench-performance"
 scales="1,4,16"
+repeat=3
 micro=1
 docs=1
 while [ $# -gt 0 ]; do
   case "$1" in
     --work) work="$2"; shift 2 ;;
     --scales) scales="$2"; shift 2 ;;
+    --repeat) repeat="$2"; shift 2 ;;
     --no-micro) micro=0; shift ;;
     --no-docs) docs=0; shift ;;
-    -h|--help) sed -n '2,9p' "$0"; exit 0 ;;
+    -h|--help) sed -n '2,12p' "$0"; exit 0 ;;
     *) echo "bench/performance.sh: unknown argument '$1' (see --help)" >&2; exit 2 ;;
   esac
 done
@@ -45,7 +50,7 @@ for s in "${scale_list[@]}"; do
   fi
   rasters=("$data/seg_class.tif" "$data/dsm.tif" "$data/dtm.tif")
   /usr/bin/python3 "$root/bench/io_floor.py" "${rasters[@]}" >/dev/null  # warm the cache
-  floor=$(/usr/bin/python3 "$root/bench/io_floor.py" "${rasters[@]}")
+  floor=$(for k in $(seq "$repeat"); do /usr/bin/python3 "$root/bench/io_floor.py" "${rasters[@]}"; done | sort -g | awk '{v[NR] = $1} END {print v[int((NR + 1) / 2)]}')
   for config in "deformation 1" "deformation 2" "douglas_peucker 2"; do
     set -- $config
     regularizer=$1 threads=$2
@@ -62,20 +67,27 @@ work_dir: work
 threads: $threads
 regularizer: $regularizer
 YAML
-    echo "bench/performance.sh: x$s $regularizer, $threads thread(s)" >&2
-    /usr/bin/time -f "%e %M" -o "$run/time" "$lodforge" run "$run/job.yaml" > "$run/log" 2>&1
-    read -r wall rss_kib < "$run/time"
-    /usr/bin/python3 - "$run" "$s" "$side" "$regularizer" "$threads" "$wall" "$rss_kib" "$floor" >> "$results" <<'PY'
+    echo "bench/performance.sh: x$s $regularizer, $threads thread(s), $repeat run(s)" >&2
+    for k in $(seq "$repeat"); do
+      rm -rf "$run/out" "$run/work"
+      /usr/bin/time -f "%e %M" -o "$run/time" "$lodforge" run "$run/job.yaml" > "$run/log" 2>&1
+      read -r wall rss_kib < "$run/time"
+      cp "$run/out/report.json" "$run/report-$k.json"
+      echo "$wall $rss_kib $k"
+    done > "$run/times"
+    read -r wall rss_kib k < <(sort -g "$run/times" | sed -n "$(( (repeat + 1) / 2 ))p")
+    /usr/bin/python3 - "$run" "$s" "$side" "$regularizer" "$threads" "$wall" "$rss_kib" "$floor" "$k" >> "$results" <<'PY'
 import json, sys
-run, s, side, reg, threads, wall, rss, floor = sys.argv[1:]
-rep = json.load(open(run + "/out/report.json"))
+run, s, side, reg, threads, wall, rss, floor, k = sys.argv[1:]
+rep = json.load(open(f"{run}/report-{k}.json"))
+walls = [float(l.split()[0]) for l in open(run + "/times")]
 print(json.dumps({"scale": int(s), "side_m": int(side), "regularizer": reg, "threads": int(threads), "wall_s": float(wall),
-                  "peak_rss_mb": int(rss) / 1024, "io_floor_s": float(floor), "buildings": rep["buildings"],
-                  "core_seconds": rep["core_seconds"], "tiles": rep["tiles"]}))
+                  "wall_runs_s": walls, "peak_rss_mb": int(rss) / 1024, "io_floor_s": float(floor), "buildings": rep["buildings"],
+                  "core_seconds": rep["core_seconds"], "stage_seconds": rep["stage_seconds"], "tiles": rep["tiles"]}))
 PY
   done
 done
-args=("$work" --cores "$(nproc)" --command "bench/performance.sh --scales $scales")
+args=("$work" --cores "$(nproc)" --command "bench/performance.sh --scales $scales --repeat $repeat")
 [ "$micro" = 1 ] && args+=(--stages "$work/stages.json")
 if [ "$docs" = 1 ]; then
   /usr/bin/python3 "$root/bench/performance_table.py" "${args[@]}" --doc "$root/docs/performance.md"

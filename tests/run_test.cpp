@@ -190,12 +190,25 @@ TEST_F(SynthRun, ShardsTogetherGiveTheSingleRunOutputs) {
   // ... and the shards' reports the single run's report, but for the seconds and the shard line.
   const auto without_seconds = [](std::string text) {
     text = std::regex_replace(text, std::regex(R"re("(core_)?seconds": [0-9.e+-]+)re"), "");
+    text = std::regex_replace(text, std::regex(R"re("stage_seconds": \{[^}]*\})re"), "");
     text = std::regex_replace(text, std::regex(R"re("job": "[^"]*")re"), "");
     return std::regex_replace(text, std::regex(R"re("shard": "[^"]*")re"), "");
   };
   const std::string merged = slurp(dir / "sharded_out" / "report.json");
   EXPECT_NE(merged.find("\"shard\": \"merged 3\""), std::string::npos) << merged;
   EXPECT_EQ(without_seconds(merged), without_seconds(slurp(dir / "single_out" / "report.json")));
+  // Stage seconds are summed over the shards: each stage took time (no heights: no DSM here), the
+  // regularization is the core seconds.
+  const auto number = [&](const std::string& key, const std::string& after) {
+    const std::string text = merged.substr(std::min(merged.size(), merged.find(after)));
+    std::smatch m;
+    if (!std::regex_search(text, m, std::regex("\"" + key + "\": ([0-9.e+-]+)"))) return -1.0;
+    return std::stod(m[1]);
+  };
+  for (const char* stage : {"contours", "regularization", "writing"})
+    EXPECT_GT(number(stage, "\"stage_seconds\""), 0) << stage << "\n" << merged;
+  EXPECT_EQ(number("heights", "\"stage_seconds\""), 0) << merged;
+  EXPECT_NEAR(number("regularization", "\"stage_seconds\""), number("core_seconds", ""), 1e-3 * number("core_seconds", ""));
   // A missing shard report is refused.
   fs::remove(dir / "sharded_out" / "report.shard-1-of-3.json");
   const Result incomplete = lodforge("merge " + (dir / "sharded_out").string());

@@ -266,7 +266,7 @@ void merge_indexes(const fs::path& dir) {
   o.commit();
 }
 
-// The shards' run reports, as one report.json: counts and core seconds summed, seconds the slowest shard's, the
+// The shards' run reports, as one report.json: counts, core and stage seconds summed, seconds the slowest shard's, the
 // failed and too-large buildings and the per-tile lines in tile order. Every shard must be there.
 void merge_reports(const fs::path& dir) {
   const std::vector<fs::path> parts = shard_parts(dir, "report", "json", "run reports");
@@ -274,6 +274,7 @@ void merge_reports(const fs::path& dir) {
   const int count = int(parts.size());
   std::map<std::string, long long> sums;
   double seconds = 0, core_seconds = 0;
+  std::map<std::string, double> stage_seconds;
   std::string job;
   std::vector<std::string> failed, too_large;
   std::vector<std::string> tiles;  // sorted, they are in tile order (names rRRRR_cCCCC lead each line)
@@ -289,8 +290,10 @@ void merge_reports(const fs::path& dir) {
       else if (line.rfind("  \"per_tile\": [", 0) == 0) section = "per_tile";
       if (section.empty()) {
         const bool checkpoints = line.rfind("  \"checkpoints_reused\"", 0) == 0;
+        const bool stages = line.rfind("  \"stage_seconds\"", 0) == 0;
         for (std::sregex_iterator it(line.begin(), line.end(), pair), stop; it != stop; ++it) {
           std::string key = (*it)[1];
+          if (stages) { stage_seconds[key] += std::stod((*it)[2]); continue; }
           if (checkpoints && key == "buildings") key = "checkpoint_buildings";
           if (key == "seconds") seconds = std::max(seconds, std::stod((*it)[2]));
           else if (key == "core_seconds") core_seconds += std::stod((*it)[2]);
@@ -322,7 +325,8 @@ void merge_reports(const fs::path& dir) {
     << sums["contours"] << ", \"buildings\": " << sums["checkpoint_buildings"] << "},\n  \"buildings\": " << sums["buildings"] << ", \"ok\": " << sums["ok"]
     << ", \"fallback\": " << sums["fallback"] << ", \"lod1\": " << sums["lod1"] << ", \"dropped_small\": " << sums["dropped_small"]
     << ", \"too_large\": " << sums["too_large"] << ",\n  \"seconds\": " << seconds << ", \"core_seconds\": " << core_seconds
-    << ",\n  \"failed_buildings\": [";
+    << ",\n  \"stage_seconds\": {\"contours\": " << stage_seconds["contours"] << ", \"regularization\": " << stage_seconds["regularization"]
+    << ", \"heights\": " << stage_seconds["heights"] << ", \"writing\": " << stage_seconds["writing"] << "},\n  \"failed_buildings\": [";
   for (std::size_t i = 0; i < failed.size(); ++i) r << (i ? ",\n    " : "\n    ") << failed[i];
   r << "],\n  \"too_large_buildings\": [";
   for (std::size_t i = 0; i < too_large.size(); ++i) r << (i ? ", " : "") << too_large[i];

@@ -206,8 +206,11 @@ int run_job(int argc, char** argv) {
   for (double c : seg.transform.c) transform_text += std::to_string(c) + ",";
 
   CPLSetConfigOption("OGR_CURRENT_DATE", "2000-01-01T00:00:00.000Z");  // byte-identical GeoPackages
-  GDALSetCacheMax64(std::int64_t(job.tiling.gdal_cache_mb) * 1024 * 1024);
-  ReaderPool readers;  // declared before the plan that points to it; closed after the pipeline
+  // The block budget: three quarters for the decoded blocks the threads share, a quarter for
+  // GDAL's own cache (which holds a block while it is decoded, and strips read in parts).
+  const std::size_t cache_bytes = std::size_t(job.tiling.gdal_cache_mb) * 1024 * 1024;
+  GDALSetCacheMax64(std::int64_t(cache_bytes / 4));
+  ReaderPool readers(cache_bytes - cache_bytes / 4);  // declared before the plan that points to it; closed after the pipeline
   const RunPlan plan{job, seg.size, seg.transform, seg.crs_wkt, pixel, grid, halo_px, max_window_px, selector,
                      dsm_source, dtm_source, ortho_source, store, contour_options, core_options, heights_options,
                      transform_text, job_key, out_dir, &readers};

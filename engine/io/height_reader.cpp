@@ -1,5 +1,7 @@
 #include "io/height_reader.hpp"
 
+#include "io/block_cache.hpp"
+
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -58,10 +60,12 @@ std::string aligned_source(const std::string& path, const GridSpec& grid, const 
 struct HeightWindowReader::Impl {
   GDALDataset* dataset = nullptr;
   std::string path;
+  BlockCache* cache = nullptr;
 };
 
-HeightWindowReader::HeightWindowReader(const std::string& path) : impl_(new Impl) {
+HeightWindowReader::HeightWindowReader(const std::string& path, BlockCache* cache) : impl_(new Impl) {
   impl_->path = path;
+  impl_->cache = cache;
   impl_->dataset = static_cast<GDALDataset*>(GDALOpenEx(path.c_str(), GDAL_OF_RASTER | GDAL_OF_READONLY, nullptr, nullptr, nullptr));
   if (!impl_->dataset) {
     delete impl_;
@@ -78,7 +82,9 @@ HeightRaster HeightWindowReader::read(const cv::Rect& w, const GeoTransform& gri
   HeightRaster r;
   r.values.create(w.height, w.width, CV_32F);
   GDALRasterBand* band = impl_->dataset->GetRasterBand(1);
-  if (band->RasterIO(GF_Read, w.x, w.y, w.width, w.height, r.values.data, w.width, w.height, GDT_Float32, 0, 0) != CE_None)
+  if (impl_->cache)
+    impl_->cache->read(*impl_->dataset, impl_->path, 1, GDT_Float32, w, r.values.data);
+  else if (band->RasterIO(GF_Read, w.x, w.y, w.width, w.height, r.values.data, w.width, w.height, GDT_Float32, 0, 0) != CE_None)
     throw InputError("'" + impl_->path + "': cannot read: " + CPLGetLastErrorMsg());
   int has_nodata = 0;
   const double nodata = band->GetNoDataValue(&has_nodata);

@@ -20,9 +20,12 @@ struct GridSpec {
 std::string aligned_source(const std::string& path, const GridSpec& grid, const std::string& vrt_path, bool heights);
 
 // One per thread.
+class BlockCache;
+
 class HeightWindowReader {
  public:
-  explicit HeightWindowReader(const std::string& path);
+  // cache: blocks shared with the other threads' readers (nullptr: GDAL's own, per handle).
+  explicit HeightWindowReader(const std::string& path, BlockCache* cache = nullptr);
   ~HeightWindowReader();
   HeightWindowReader(const HeightWindowReader&) = delete;
   HeightWindowReader& operator=(const HeightWindowReader&) = delete;

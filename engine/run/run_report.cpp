@@ -66,7 +66,10 @@ void record_tile(Totals& totals, const RunPlan& plan, const TileResult& result, 
   account(r->summary, r->name, totals, count);
   (r->skipped ? totals.tiles_skipped : totals.tiles_processed)++;
   totals.contours_reused += r->contours_reused;
-  for (const BuildingOutput& b : r->buildings) totals.core_seconds += b.seconds;
+  if (!r->buildings_reused) for (const BuildingOutput& b : r->buildings) totals.core_seconds += b.seconds;
+  totals.contour_seconds += r->contour_seconds;
+  totals.heights_seconds += r->heights_seconds;
+  totals.write_seconds += r->write_seconds;
   totals.buildings_reused += r->buildings_reused;
   if (count == 0) totals.tiles_empty++;
   const cv::Rect rect = grid.rect(r->tile);
@@ -108,7 +111,9 @@ void write_index_and_report(const Totals& totals, const RunPlan& plan, const std
          << "\",\n  \"tiles\": " << tiles.size() << ", \"tiles_processed\": " << totals.tiles_processed << ", \"tiles_resumed\": "
          << totals.tiles_skipped << ", \"tiles_empty\": " << totals.tiles_empty << ",\n  \"checkpoints_reused\": {\"contours\": " << totals.contours_reused << ", \"buildings\": " << totals.buildings_reused << "},\n  \"buildings\": " << totals.buildings
          << ", \"ok\": " << totals.ok << ", \"fallback\": " << totals.fallback << ", \"lod1\": " << totals.lod1 << ", \"dropped_small\": " << totals.dropped_small
-         << ", \"too_large\": " << totals.too_large.size() << ",\n  \"seconds\": " << elapsed << ", \"core_seconds\": " << totals.core_seconds << ",\n  \"failed_buildings\": [";
+         << ", \"too_large\": " << totals.too_large.size() << ",\n  \"seconds\": " << elapsed << ", \"core_seconds\": " << totals.core_seconds << ",\n  \"stage_seconds\": {\"contours\": "
+         << totals.contour_seconds << ", \"regularization\": " << totals.core_seconds << ", \"heights\": " << totals.heights_seconds
+         << ", \"writing\": " << totals.write_seconds << "},\n  \"failed_buildings\": [";
   for (std::size_t i = 0; i < totals.failed_json.size(); ++i) report << (i ? ",\n    " : "\n    ") << totals.failed_json[i];
   report << "],\n  \"too_large_buildings\": [";
   for (std::size_t i = 0; i < totals.too_large.size(); ++i) report << (i ? ", " : "") << '"' << json_escape(totals.too_large[i]) << '"';

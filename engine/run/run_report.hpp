@@ -12,6 +12,8 @@ struct Totals {
   std::size_t buildings = 0, ok = 0, fallback = 0, dropped_small = 0, tiles_processed = 0, tiles_skipped = 0, tiles_empty = 0;
   std::size_t contours_reused = 0, buildings_reused = 0, lod1 = 0;
   double core_seconds = 0;  // summed regularization time of the buildings computed (not resumed)
+  // Summed one-core time of the other per-building stages (TileResult), reads excluded.
+  double contour_seconds = 0, heights_seconds = 0, write_seconds = 0;
   std::vector<std::string> failed_json, too_large, tile_json, index_features;
 };
 

@@ -11,6 +11,7 @@
 #include <sstream>
 #include <tbb/parallel_for.h>
 
+#include "io/block_cache.hpp"
 #include "io/errors.hpp"
 #include "io/height_reader.hpp"
 #include "io/model_writers.hpp"
@@ -136,20 +137,25 @@ struct ReaderPool::Impl {
     std::map<std::string, std::unique_ptr<HeightWindowReader>> heights;
   };
   tbb::enumerable_thread_specific<PerThread> threads;
+  std::unique_ptr<BlockCache> cache;
 };
 
-ReaderPool::ReaderPool() : impl_(std::make_unique<Impl>()) {}
+ReaderPool::ReaderPool(std::size_t cache_bytes) : impl_(std::make_unique<Impl>()) {
+  if (cache_bytes > 0) impl_->cache = std::make_unique<BlockCache>(cache_bytes);
+}
+
+std::size_t ReaderPool::decoded_blocks() const { return impl_->cache ? impl_->cache->decoded_blocks() : 0; }
 ReaderPool::~ReaderPool() = default;
 
 const MaskWindowReader& ReaderPool::mask(const std::string& path, const BuildingSelector& selector) {
   auto& slot = impl_->threads.local().masks[path];
-  if (!slot) slot = std::make_unique<MaskWindowReader>(path, selector);
+  if (!slot) slot = std::make_unique<MaskWindowReader>(path, selector, impl_->cache.get());
   return *slot;
 }
 
 const HeightWindowReader& ReaderPool::heights(const std::string& path) {
   auto& slot = impl_->threads.local().heights[path];
-  if (!slot) slot = std::make_unique<HeightWindowReader>(path);
+  if (!slot) slot = std::make_unique<HeightWindowReader>(path, impl_->cache.get());
   return *slot;
 }
 
@@ -175,7 +181,9 @@ std::shared_ptr<TileResult> process_tile(const RunPlan& plan, int tile) {
   std::optional<TileBuildings> contours = store.load_contours(r->name, contour_key);
   r->contours_reused = contours.has_value();
   if (!contours) {
+    const auto traced = Clock::now();
     contours = trace_tile(window, grid, tile, plan.transform, job.stages.contour);
+    r->contour_seconds = seconds_since(traced);
     store.save_contours(r->name, contour_key, *contours);
   }
   const std::uint64_t buildings_key = fnv1a(plan.core_options, contour_key);
@@ -200,7 +208,9 @@ std::shared_ptr<TileResult> process_tile(const RunPlan& plan, int tile) {
       std::optional<HeightRaster> dtm;
       if (!plan.dtm_source.empty()) dtm = plan.readers->heights(plan.dtm_source).read(area, plan.transform);
       heights.emplace(r->buildings.size());
+      std::vector<double> seconds(r->buildings.size());
       tbb::parallel_for(std::size_t(0), r->buildings.size(), [&](std::size_t i) {
+        const auto started = Clock::now();
         Heights& h = (*heights)[i];
         h = building_heights(r->buildings[i].footprint, dsm, dtm ? &*dtm : nullptr, job.stages.heights);
         // The block must be a valid shell to count as LOD1; decided here so that the report,
@@ -211,7 +221,9 @@ std::shared_ptr<TileResult> process_tile(const RunPlan& plan, int tile) {
             h.reason = "lod1: invalid shell: " + problem;
           }
         }
+        seconds[i] = seconds_since(started);
       });
+      for (double s : seconds) r->heights_seconds += s;
       store.save_blob("heights", r->name, heights_key, serialize_heights(*heights));
     }
     r->heights = std::move(*heights);
@@ -243,12 +255,12 @@ std::shared_ptr<TileResult> process_tile(const RunPlan& plan, int tile) {
   return r;
 }
 
-std::vector<std::string> write_tile_outputs(const RunPlan& plan, const TileResult& result) {
+std::vector<std::string> write_tile_outputs(const RunPlan& plan, TileResult& result) {
   const Job& job = plan.job;
   const TileGrid& grid = plan.grid;
   const CheckpointStore& store = plan.store;
   const fs::path& out_dir = plan.out_dir;
-  const TileResult* r = &result;
+  TileResult* r = &result;
 
   std::vector<std::string> outputs;
   const cv::Rect tile_rect = grid.rect(r->tile);
@@ -264,10 +276,12 @@ std::vector<std::string> write_tile_outputs(const RunPlan& plan, const TileResul
     for (const std::string& format : job.output.formats) {
       const std::string relative = "tiles/" + r->name + extension_of(format);
       if (!r->skipped) {
+        const auto started = Clock::now();
         const auto writer = make_model_writer(format, (out_dir / relative).string(), context);
         for (std::size_t i = 0; i < r->buildings.size(); ++i)
           writer->add(model_of(r->buildings[i], r->heights.empty() ? nullptr : &r->heights[i], r->name, job));
         writer->finish();
+        r->write_seconds += seconds_since(started);
       }
       if (fs::exists(out_dir / relative)) outputs.push_back(relative);
     }

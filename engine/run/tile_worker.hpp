@@ -25,7 +25,9 @@ class HeightWindowReader;
 // reader: each thread gets its own.
 class ReaderPool {
  public:
-  ReaderPool();
+  // cache_bytes: the budget of the decoded blocks the threads share (0: none, GDAL's per handle).
+  explicit ReaderPool(std::size_t cache_bytes = 0);
+  std::size_t decoded_blocks() const;
   ~ReaderPool();
   const MaskWindowReader& mask(const std::string& path, const BuildingSelector& selector);
   const HeightWindowReader& heights(const std::string& path);
@@ -65,12 +67,16 @@ struct TileResult {
   std::string summary;  // kept in the done marker, replayed on resume
   cv::Mat quicklook_background;  // the tile's picture, when output.quicklook
   double seconds = 0;  // the tile's wall time
+  // Time in the per-building stages on one core, reads excluded (the run report's stage_seconds;
+  // the regularization is each building's own seconds): contour tracing, heights and the LOD1
+  // check, writing every format.
+  double contour_seconds = 0, heights_seconds = 0, write_seconds = 0;
 };
 
 std::shared_ptr<TileResult> process_tile(const RunPlan& plan, int tile);
 
 // Writes the tile's files (every format and the quick look) and marks it complete; returns the
 // files it has, relative to out_dir.
-std::vector<std::string> write_tile_outputs(const RunPlan& plan, const TileResult& result);
+std::vector<std::string> write_tile_outputs(const RunPlan& plan, TileResult& result);
 
 }  // namespace lodforge

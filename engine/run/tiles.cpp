@@ -4,6 +4,7 @@
 #include <gdal_priv.h>
 #include <opencv2/imgproc.hpp>
 
+#include "io/block_cache.hpp"
 #include "io/errors.hpp"
 
 namespace lodforge {
@@ -27,10 +28,12 @@ struct MaskWindowReader::Impl {
   GDALDataset* dataset = nullptr;
   BuildingSelector selector;
   std::string path;
+  BlockCache* cache = nullptr;
 };
 
-MaskWindowReader::MaskWindowReader(const std::string& path, const BuildingSelector& selector) : impl_(new Impl) {
+MaskWindowReader::MaskWindowReader(const std::string& path, const BuildingSelector& selector, BlockCache* cache) : impl_(new Impl) {
   impl_->selector = selector;
+  impl_->cache = cache;
   impl_->path = path;
   impl_->dataset = static_cast<GDALDataset*>(GDALOpenEx(path.c_str(), GDAL_OF_RASTER | GDAL_OF_READONLY, nullptr, nullptr, nullptr));
   if (!impl_->dataset) {
@@ -52,6 +55,10 @@ MaskWindowReader::~MaskWindowReader() {
 cv::Mat MaskWindowReader::read(const cv::Rect& w) const {
   auto band = [&](int b) {
     cv::Mat m(w.height, w.width, CV_32S);
+    if (impl_->cache) {
+      impl_->cache->read(*impl_->dataset, impl_->path, b, GDT_Int32, w, m.data);
+      return m;
+    }
     if (impl_->dataset->GetRasterBand(b)->RasterIO(GF_Read, w.x, w.y, w.width, w.height, m.data, w.width, w.height,
                                                    GDT_Int32, 0, 0) != CE_None)
       throw InputError("'" + impl_->path + "': cannot read band " + std::to_string(b) + ": " + CPLGetLastErrorMsg());

@@ -25,9 +25,12 @@ struct TileGrid {
 
 // Reads windows of a segmentation raster as a 0/1 building mask. One per thread (GDAL dataset
 // handles are not shared between threads).
+class BlockCache;
+
 class MaskWindowReader {
  public:
-  MaskWindowReader(const std::string& path, const BuildingSelector& selector);
+  // cache: blocks shared with the other threads' readers (nullptr: GDAL's own, per handle).
+  MaskWindowReader(const std::string& path, const BuildingSelector& selector, BlockCache* cache = nullptr);
   ~MaskWindowReader();
   MaskWindowReader(const MaskWindowReader&) = delete;
   MaskWindowReader& operator=(const MaskWindowReader&) = delete;

@@ -1,0 +1,131 @@
+#include "io/block_cache.hpp"
+
+#include <future>
+#include <gdal_priv.h>
+#include <list>
+#include <map>
+#include <mutex>
+#include <vector>
+
+#include "io/errors.hpp"
+
+namespace lodforge {
+
+namespace {
+
+using Block = std::vector<unsigned char>;
+
+struct Key {
+  std::string path;
+  int band, bx, by;
+  auto operator<=>(const Key&) const = default;
+};
+
+// The blocks a band is cut into: its own when they are of a sensible size, else 512 pixels a side
+// (a whole-image block), or a few strips together (one-row strips).
+cv::Size block_grid(GDALRasterBand& band) {
+  int bw = 0, bh = 0;
+  band.GetBlockSize(&bw, &bh);
+  if (bw <= 0 || bw > 1024) bw = 512;
+  if (bh <= 0 || bh > 1024) bh = 512;
+  else if (bh < 16) bh = ((256 + bh - 1) / bh) * bh;
+  return {bw, bh};
+}
+
+}  // namespace
+
+struct BlockCache::Impl {
+  struct Entry {
+    std::shared_future<std::shared_ptr<const Block>> block;
+    std::size_t bytes = 0;  // 0 while being decoded (never evicted then)
+    std::list<Key>::iterator recent;
+  };
+  std::size_t budget;
+  std::size_t used = 0, decoded = 0;
+  mutable std::mutex mutex;
+  std::map<Key, Entry> entries;
+  std::list<Key> recency;  // most recently used first
+
+  void evict() {  // with the mutex held
+    for (auto k = recency.end(); used > budget && k != recency.begin();) {
+      --k;
+      auto e = entries.find(*k);
+      if (e->second.bytes == 0) continue;
+      used -= e->second.bytes;
+      entries.erase(e);
+      k = recency.erase(k);
+    }
+  }
+
+  std::shared_ptr<const Block> get(GDALRasterBand& band, const std::string& path, const Key& key, const cv::Rect& rect) {
+    std::unique_lock lock(mutex);
+    if (auto found = entries.find(key); found != entries.end()) {
+      recency.splice(recency.begin(), recency, found->second.recent);
+      std::shared_future<std::shared_ptr<const Block>> block = found->second.block;
+      lock.unlock();
+      return block.get();  // waits while another thread decodes it; rethrows its error
+    }
+    std::promise<std::shared_ptr<const Block>> promise;
+    Entry& entry = entries[key];
+    entry.block = promise.get_future().share();
+    recency.push_front(key);
+    entry.recent = recency.begin();
+    lock.unlock();
+
+    const GDALDataType type = band.GetRasterDataType();
+    auto block = std::make_shared<Block>(std::size_t(rect.area()) * GDALGetDataTypeSizeBytes(type));
+    if (band.RasterIO(GF_Read, rect.x, rect.y, rect.width, rect.height, block->data(), rect.width, rect.height, type, 0, 0) != CE_None) {
+      const InputError error("'" + path + "': cannot read band " + std::to_string(key.band) + ": " + CPLGetLastErrorMsg());
+      lock.lock();
+      recency.erase(entry.recent);
+      entries.erase(key);
+      lock.unlock();
+      promise.set_exception(std::make_exception_ptr(error));
+      throw error;
+    }
+    promise.set_value(block);
+    lock.lock();
+    entry.bytes = std::max<std::size_t>(block->size(), 1);
+    used += entry.bytes;
+    ++decoded;
+    evict();
+    return block;
+  }
+};
+
+BlockCache::BlockCache(std::size_t budget_bytes) : impl_(std::make_unique<Impl>()) { impl_->budget = budget_bytes; }
+BlockCache::~BlockCache() = default;
+
+void BlockCache::read(GDALDataset& dataset, const std::string& path, int band_index, int type, const cv::Rect& w, void* out) {
+  GDALRasterBand* band = dataset.GetRasterBand(band_index);
+  if (!band) throw InputError("'" + path + "': has no band " + std::to_string(band_index));
+  const cv::Rect bounds(0, 0, dataset.GetRasterXSize(), dataset.GetRasterYSize());
+  const auto out_type = static_cast<GDALDataType>(type);
+  if ((w & bounds) != w || w.empty()) {  // GDAL's own answer, error included
+    if (band->RasterIO(GF_Read, w.x, w.y, w.width, w.height, out, w.width, w.height, out_type, 0, 0) != CE_None)
+      throw InputError("'" + path + "': cannot read band " + std::to_string(band_index) + ": " + CPLGetLastErrorMsg());
+    return;
+  }
+  const cv::Size grid = block_grid(*band);
+  const GDALDataType native = band->GetRasterDataType();
+  const int in_size = GDALGetDataTypeSizeBytes(native), out_size = GDALGetDataTypeSizeBytes(out_type);
+  for (int by = w.y / grid.height; by <= (w.y + w.height - 1) / grid.height; ++by)
+    for (int bx = w.x / grid.width; bx <= (w.x + w.width - 1) / grid.width; ++bx) {
+      const cv::Rect rect = cv::Rect(bx * grid.width, by * grid.height, grid.width, grid.height) & bounds;
+      const std::shared_ptr<const Block> block = impl_->get(*band, path, Key{path, band_index, bx, by}, rect);
+      const cv::Rect part = rect & w;
+      for (int y = part.y; y < part.y + part.height; ++y) {
+        const unsigned char* from = block->data() + (std::size_t(y - rect.y) * rect.width + (part.x - rect.x)) * in_size;
+        auto* to = static_cast<unsigned char*>(out) + (std::size_t(y - w.y) * w.width + (part.x - w.x)) * out_size;
+        // The conversion RasterIO itself applies, so the values are the same as a direct read.
+        GDALCopyWords64(from, native, in_size, to, out_type, out_size, part.width);
+      }
+    }
+}
+
+std::size_t BlockCache::decoded_blocks() const {
+  std::lock_guard lock(impl_->mutex);
+  return impl_->decoded;
+}
+
+}  // namespace lodforge
