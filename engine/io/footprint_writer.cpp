@@ -71,7 +71,14 @@ FootprintFileWriter::FootprintFileWriter(const std::string& path, const Footprin
                                                    impl_->final_path.extension().string());
   GDALDriver* driver = GetGDALDriverManager()->GetDriverByName(driver_name.c_str());
   fs::remove(impl_->temp);
+  // A GeoPackage is an SQLite database written to a temporary name and renamed when complete, so
+  // SQLite's rollback journal and its syncs protect nothing here (an interrupted file is never
+  // renamed); without them a tile's file is written about twice as fast. This thread only.
+  CPLSetThreadLocalConfigOption("OGR_SQLITE_JOURNAL", "MEMORY");
+  CPLSetThreadLocalConfigOption("OGR_SQLITE_SYNCHRONOUS", "OFF");
   impl_->dataset = driver ? driver->Create(impl_->temp.c_str(), 0, 0, 0, GDT_Unknown, nullptr) : nullptr;
+  CPLSetThreadLocalConfigOption("OGR_SQLITE_JOURNAL", nullptr);
+  CPLSetThreadLocalConfigOption("OGR_SQLITE_SYNCHRONOUS", nullptr);
   if (!impl_->dataset) {
     const std::string message = "'" + path + "': cannot create: " + CPLGetLastErrorMsg();
     delete impl_;

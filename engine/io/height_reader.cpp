@@ -3,10 +3,12 @@
 #include "io/block_cache.hpp"
 
 #include <cmath>
+#include <limits>
 #include <cstdio>
 #include <filesystem>
 #include <unistd.h>
 #include <gdal_priv.h>
+#include <opencv2/core.hpp>
 #include <gdal_utils.h>
 #include <ogr_spatialref.h>
 
@@ -88,12 +90,14 @@ HeightRaster HeightWindowReader::read(const cv::Rect& w, const GeoTransform& gri
     throw InputError("'" + impl_->path + "': cannot read: " + CPLGetLastErrorMsg());
   int has_nodata = 0;
   const double nodata = band->GetNoDataValue(&has_nodata);
-  r.valid = cv::Mat::ones(w.height, w.width, CV_8U);
-  for (int y = 0; y < w.height; ++y)
-    for (int x = 0; x < w.width; ++x) {
-      const float v = r.values.at<float>(y, x);
-      if (!std::isfinite(v) || (has_nodata && float(nodata) == v)) r.valid.at<uint8_t>(y, x) = 0;
-    }
+  // Valid: finite (|v| <= FLT_MAX is false for NaN and infinities) and not nodata; 1 or 0.
+  cv::compare(cv::abs(r.values), std::numeric_limits<float>::max(), r.valid, cv::CMP_LE);
+  if (has_nodata && std::isfinite(nodata)) {  // a NaN nodata is not finite already
+    cv::Mat data;
+    cv::compare(r.values, float(nodata), data, cv::CMP_NE);
+    r.valid &= data;
+  }
+  r.valid /= 255;
   r.transform = grid;
   r.transform.c[0] = grid.c[0] + w.x * grid.c[1] + w.y * grid.c[2];
   r.transform.c[3] = grid.c[3] + w.x * grid.c[4] + w.y * grid.c[5];
