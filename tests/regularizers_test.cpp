@@ -59,7 +59,9 @@ TEST(Regularizers, CurvedWallsFollowTheContour) {
   const BuildingResult without = run(truth, 0.0, 1, "deformation", straight);
   ASSERT_TRUE(with.ok) << with.failed_stage << ": " << with.reason;
   EXPECT_GE(test::iou(with.footprint, truth), 0.99);
-  if (without.ok) EXPECT_GT(test::iou(with.footprint, truth), test::iou(without.footprint, truth) + 0.005);
+  if (without.ok) {
+    EXPECT_GT(test::iou(with.footprint, truth), test::iou(without.footprint, truth) + 0.005);
+  }
   // Simplified to a pixel: far fewer vertices than the contour, more than a polygon of lines.
   EXPECT_LT(with.footprint.outer.size(), 80u);
   EXPECT_GT(with.footprint.outer.size(), 12u);

@@ -112,8 +112,9 @@ TileWindow find_tile_window(const MaskWindowReader& reader, const TileGrid& grid
   out.window = (tile_rect + cv::Size(2 * halo_px, 2 * halo_px) - cv::Point(halo_px, halo_px)) & bounds;
   while (true) {
     out.mask = reader.read(out.window);
-    cv::Mat labels, stats, centroids;
-    const int count = cv::connectedComponentsWithStats(out.mask, labels, stats, centroids, connectivity == 4 ? 4 : 8, CV_32S);
+    out.components = label_components(out.mask, connectivity);
+    const cv::Mat& stats = out.components.stats;
+    const int count = out.components.count;
     cv::Rect grown = out.window;
     out.too_large.clear();
     for (int k = 1; k < count; ++k) {
@@ -149,7 +150,7 @@ TileBuildings trace_tile(const TileWindow& w, const TileGrid& grid, int tile, co
   local.c[0] = transform.c[0] + window.x * transform.c[1] + window.y * transform.c[2];
   local.c[3] = transform.c[3] + window.x * transform.c[4] + window.y * transform.c[5];
   const cv::Size raster = grid.raster;
-  const ContourResult contours = extract_contours(w.mask, local, options, [&](const cv::Rect& box, const cv::Point& first) {
+  const ContourResult contours = extract_contours(w.components, local, options, [&](const cv::Rect& box, const cv::Point& first) {
     // Owned (first pixel in the tile) and whole (else it was reported as too large).
     return tile_rect.contains(first + window.tl()) && !touches_inner_border(box, window, raster);
   });

@@ -82,21 +82,35 @@ std::vector<Ring> trace_component(cv::Mat m) {
   return rings;
 }
 
+Components label_components(const cv::Mat& mask, int connectivity) {
+  CV_Assert(mask.type() == CV_8U);
+  Components c;
+  cv::Mat centroids;
+  c.count = cv::connectedComponentsWithStats(mask != 0, c.labels, c.stats, centroids, connectivity == 4 ? 4 : 8, CV_32S);
+  return c;
+}
+
 ContourResult extract_contours(const cv::Mat& mask, const GeoTransform& transform,
                                const ContourOptions& options, const ComponentFilter& keep) {
-  CV_Assert(mask.type() == CV_8U);
+  return extract_contours(label_components(mask, options.connectivity), transform, options, keep);
+}
+
+ContourResult extract_contours(const Components& components, const GeoTransform& transform,
+                               const ContourOptions& options, const ComponentFilter& keep) {
   ContourResult result;
-  cv::Mat binary = mask != 0;
-  cv::Mat labels, stats, centroids;
-  const int count = cv::connectedComponentsWithStats(binary, labels, stats, centroids,
-                                                     options.connectivity == 4 ? 4 : 8, CV_32S);
-  // First pixel of each component in raster order: the building's stable identity.
+  const cv::Mat& labels = components.labels;
+  const cv::Mat& stats = components.stats;
+  const int count = components.count;
+  // First pixel of each component in raster order, its stable identity: the leftmost in its top row.
   std::vector<cv::Point> first(count, cv::Point(-1, -1));
-  for (int y = 0; y < labels.rows; ++y) {
-    const int* row = labels.ptr<int>(y);
-    for (int x = 0; x < labels.cols; ++x) {
-      if (row[x] > 0 && first[row[x]].x < 0) first[row[x]] = {x, y};
-    }
+  for (int k = 1; k < count; ++k) {
+    const int top = stats.at<int>(k, cv::CC_STAT_TOP), left = stats.at<int>(k, cv::CC_STAT_LEFT);
+    const int* row = labels.ptr<int>(top);
+    for (int x = left; x < left + stats.at<int>(k, cv::CC_STAT_WIDTH); ++x)
+      if (row[x] == k) {
+        first[k] = {x, top};
+        break;
+      }
   }
   const double pixel_area = transform.pixel_size() * transform.pixel_size();
   std::vector<int> order;

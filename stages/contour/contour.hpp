@@ -41,9 +41,21 @@ struct ContourResult {
 // A component's pixel bounding box and first pixel, in mask coordinates.
 using ComponentFilter = std::function<bool(const cv::Rect& bbox, const cv::Point& first)>;
 
+// The connected components of a mask (CV_8U, non-zero = building): labels (CV_32S, 0 =
+// background) and OpenCV's per-label stats.
+struct Components {
+  cv::Mat labels, stats;
+  int count = 0;  // labels, background included
+};
+Components label_components(const cv::Mat& mask, int connectivity);
+
 // mask: CV_8U, non-zero = building. keep (optional) selects which components to trace; the others
 // are skipped and not counted.
 ContourResult extract_contours(const cv::Mat& mask, const GeoTransform& transform,
+                               const ContourOptions& options, const ComponentFilter& keep = {});
+// The same from the mask's components (label_components with options.connectivity), when the
+// caller has them already.
+ContourResult extract_contours(const Components& components, const GeoTransform& transform,
                                const ContourOptions& options, const ComponentFilter& keep = {});
 
 // Traces one component given as a CV_8U 0/1 image; returns rings in pixel-corner coordinates
