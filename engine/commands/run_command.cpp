@@ -4,6 +4,7 @@
 #include <csignal>
 #include <chrono>
 #include <filesystem>
+#include <tuple>
 #include <fstream>
 #include <gdal_priv.h>
 #include <opencv2/imgproc.hpp>
@@ -211,6 +212,16 @@ int run_job(int argc, char** argv) {
   const std::size_t cache_bytes = std::size_t(job.tiling.gdal_cache_mb) * 1024 * 1024;
   GDALSetCacheMax64(std::int64_t(cache_bytes / 4));
   ReaderPool readers(cache_bytes - cache_bytes / 4);  // declared before the plan that points to it; closed after the pipeline
+  // Tiles are processed in bands of columns, row by row within a band, so that a tile finds the
+  // blocks it shares with its upper neighbour still in the block cache (in raster order they
+  // were decoded a whole raster width earlier and are gone). A band's tile windows, a row of them,
+  // take about 16 KB of decoded blocks per pixel column (three rasters, 250 m tiles at 0.25 m):
+  // 3 tiles of 1,000 pixels at the default cache. The files list the tiles in tile order all the same.
+  const int band_cols = std::max(1, int((cache_bytes - cache_bytes / 4) / 16384) / grid.tile_px);
+  std::stable_sort(tiles.begin(), tiles.end(), [&](int a, int b) {
+    return std::make_tuple(a % grid.cols / band_cols, a / grid.cols, a % grid.cols) <
+           std::make_tuple(b % grid.cols / band_cols, b / grid.cols, b % grid.cols);
+  });
   const RunPlan plan{job, seg.size, seg.transform, seg.crs_wkt, pixel, grid, halo_px, max_window_px, selector,
                      dsm_source, dtm_source, ortho_source, store, contour_options, core_options, heights_options,
                      transform_text, job_key, out_dir, &readers};
@@ -222,7 +233,7 @@ int run_job(int argc, char** argv) {
   std::size_t next = 0, tiles_done = 0;
   const auto start = Clock::now();
   // Serial source; parallel tiles, each writing its own files; serial in-order bookkeeping (the
-  // index and report follow tile order). At most `tokens` tiles in flight.
+  // index and report are sorted into tile order when written). At most `tokens` tiles in flight.
   const std::size_t tokens = std::max<std::size_t>(2, 2 * std::size_t(job.threads ? job.threads : std::thread::hardware_concurrency()));
   using Done = std::pair<std::shared_ptr<TileResult>, std::vector<std::string>>;  // the tile and its files
   tbb::parallel_pipeline(
@@ -245,6 +256,7 @@ int run_job(int argc, char** argv) {
           }));
   progress.finish();
   write_index_and_report(totals, plan, job_path, shard.index, shard.count, tiles.size(), seconds_since(start));
+  spdlog::debug("{} raster blocks decoded", readers.decoded_blocks());
   return 0;
 }
 

@@ -1,5 +1,6 @@
 #include "run/run_report.hpp"
 
+#include <algorithm>
 #include <filesystem>
 #include <fstream>
 #include <spdlog/spdlog.h>
@@ -27,7 +28,7 @@ std::string json_escape(const std::string& s) {
 }
 
 
-void account(const std::string& summary, const std::string& tile, Totals& t, std::size_t& buildings_in_tile) {
+void account(const std::string& summary, const std::string& tile, int tile_index, Totals& t, std::size_t& buildings_in_tile) {
   std::istringstream in(summary);
   std::size_t n = 0, ok = 0, fb = 0, dropped = 0, lod1 = 0;
   in >> n >> ok >> fb >> dropped >> lod1;
@@ -49,13 +50,25 @@ void account(const std::string& summary, const std::string& tile, Totals& t, std
       std::getline(fields, c);
       t.failed_json.push_back("{\"id\": " + a + ", \"tile\": \"" + tile + "\", \"stage\": \"" + json_escape(b) +
                               "\", \"reason\": \"" + json_escape(c) + "\"}");
+      t.failed_tile.push_back(tile_index);
     } else if (kind == "too_large") {
       std::getline(fields, a);
       t.too_large.push_back(a);
+      t.too_large_tile.push_back(tile_index);
     }
   }
 }
 
+
+// items in the order of their tiles (stable: a tile's own entries keep their order).
+std::vector<std::string> in_tile_order(const std::vector<std::string>& items, const std::vector<int>& tiles) {
+  std::vector<std::size_t> order(items.size());
+  for (std::size_t i = 0; i < order.size(); ++i) order[i] = i;
+  std::stable_sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) { return tiles[a] < tiles[b]; });
+  std::vector<std::string> out;
+  for (std::size_t i : order) out.push_back(items[i]);
+  return out;
+}
 
 }  // namespace
 
@@ -63,7 +76,7 @@ void record_tile(Totals& totals, const RunPlan& plan, const TileResult& result, 
   const TileGrid& grid = plan.grid;
   const TileResult* r = &result;
   std::size_t count = 0;
-  account(r->summary, r->name, totals, count);
+  account(r->summary, r->name, r->tile, totals, count);
   (r->skipped ? totals.tiles_skipped : totals.tiles_processed)++;
   totals.contours_reused += r->contours_reused;
   if (!r->buildings_reused) for (const BuildingOutput& b : r->buildings) totals.core_seconds += b.seconds;
@@ -88,11 +101,16 @@ void record_tile(Totals& totals, const RunPlan& plan, const TileResult& result, 
   tile_json << "{\"tile\": \"" << r->name << "\", \"buildings\": " << count << ", \"skipped\": " << (r->skipped ? "true" : "false")
             << ", \"seconds\": " << r->seconds << "}";
   totals.tile_json.push_back(tile_json.str());
+  totals.tile_of.push_back(r->tile);
 }
 
 void write_index_and_report(const Totals& totals, const RunPlan& plan, const std::string& job_path, int shard_index,
                             int shard_count, std::size_t tiles_count, double elapsed) {
   const Job& job = plan.job;
+  const std::vector<std::string> index_features = in_tile_order(totals.index_features, totals.tile_of);
+  const std::vector<std::string> tile_json = in_tile_order(totals.tile_json, totals.tile_of);
+  const std::vector<std::string> failed_json = in_tile_order(totals.failed_json, totals.failed_tile);
+  const std::vector<std::string> too_large = in_tile_order(totals.too_large, totals.too_large_tile);
   const fs::path& out_dir = plan.out_dir;
   struct { int index, count; } shard{shard_index, shard_count};
   struct { std::size_t n; std::size_t size() const { return n; } } tiles{tiles_count};
@@ -103,7 +121,7 @@ void write_index_and_report(const Totals& totals, const RunPlan& plan, const std
   if (const std::string crs = epsg_of(plan.crs_wkt); !crs.empty())
     index << ", \"crs\": {\"type\": \"name\", \"properties\": {\"name\": \"urn:ogc:def:crs:" << crs.substr(0, crs.find(':')) << "::" << crs.substr(crs.find(':') + 1) << "\"}}";
   index << ", \"features\": [\n";
-  for (std::size_t i = 0; i < totals.index_features.size(); ++i) index << totals.index_features[i] << (i + 1 < totals.index_features.size() ? ",\n" : "\n");
+  for (std::size_t i = 0; i < index_features.size(); ++i) index << index_features[i] << (i + 1 < index_features.size() ? ",\n" : "\n");
   index << "]}\n";
   write_text_atomically(out_dir / ("tile_index" + suffix + ".geojson"), index.str());
   std::ostringstream report;
@@ -114,11 +132,11 @@ void write_index_and_report(const Totals& totals, const RunPlan& plan, const std
          << ", \"too_large\": " << totals.too_large.size() << ",\n  \"seconds\": " << elapsed << ", \"core_seconds\": " << totals.core_seconds << ",\n  \"stage_seconds\": {\"contours\": "
          << totals.contour_seconds << ", \"regularization\": " << totals.core_seconds << ", \"heights\": " << totals.heights_seconds
          << ", \"writing\": " << totals.write_seconds << "},\n  \"failed_buildings\": [";
-  for (std::size_t i = 0; i < totals.failed_json.size(); ++i) report << (i ? ",\n    " : "\n    ") << totals.failed_json[i];
+  for (std::size_t i = 0; i < failed_json.size(); ++i) report << (i ? ",\n    " : "\n    ") << failed_json[i];
   report << "],\n  \"too_large_buildings\": [";
-  for (std::size_t i = 0; i < totals.too_large.size(); ++i) report << (i ? ", " : "") << '"' << json_escape(totals.too_large[i]) << '"';
+  for (std::size_t i = 0; i < too_large.size(); ++i) report << (i ? ", " : "") << '"' << json_escape(too_large[i]) << '"';
   report << "],\n  \"per_tile\": [";
-  for (std::size_t i = 0; i < totals.tile_json.size(); ++i) report << (i ? ",\n    " : "\n    ") << totals.tile_json[i];
+  for (std::size_t i = 0; i < tile_json.size(); ++i) report << (i ? ",\n    " : "\n    ") << tile_json[i];
   report << "]\n}\n";
   write_text_atomically(out_dir / ("report" + suffix + ".json"), report.str());
   spdlog::info("{} tiles ({} computed, {} resumed from {}), {} buildings: {} ok, {} fallback, {} with LOD1; {} small components dropped{}; {:.1f} s",

@@ -15,6 +15,9 @@ struct Totals {
   // Summed one-core time of the other per-building stages (TileResult), reads excluded.
   double contour_seconds = 0, heights_seconds = 0, write_seconds = 0;
   std::vector<std::string> failed_json, too_large, tile_json, index_features;
+  // The tile of each entry above (tile_json and index_features: one per tile): tiles are
+  // recorded in the order they are processed, the files list them in tile order.
+  std::vector<int> failed_tile, too_large_tile, tile_of;
 };
 
 // Adds a finished (or resumed) tile to the totals and the index.
