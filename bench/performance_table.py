@@ -62,7 +62,7 @@ if rows:
                "each run repeated from scratch, the run of median wall time shown. "
                "*I/O floor*: GDAL reading every pixel of the three rasters and nothing else (`bench/io_floor.py`, median). "
                "*stages*: the summed one-core time of the per-building stages, reads excluded (report.json `stage_seconds`: "
-               "contour tracing + regularization + heights and the LOD1 check + writing the four formats); *reg.*: the "
+               "contour labeling and tracing + regularization + heights and the LOD1 check + writing the four formats); *reg.*: the "
                "regularization alone (`core_seconds`). *engine ratio*: wall / (I/O floor + stages / threads), target ≤ 1.25; "
                "*reg. ratio*: the same with the regularization alone in place of every stage (the stricter reading).\n")
     out.append("| area | buildings | regularizer | threads | wall (s) | buildings/s | peak RSS (MB) | I/O floor (s) | stages (s) | reg. (s) | engine ratio | reg. ratio | wall / I/O floor |")

@@ -68,7 +68,7 @@ struct TileResult {
   cv::Mat quicklook_background;  // the tile's picture, when output.quicklook
   double seconds = 0;  // the tile's wall time
   // Time in the per-building stages on one core, reads excluded (the run report's stage_seconds;
-  // the regularization is each building's own seconds): contour tracing, heights and the LOD1
+  // the regularization is each building's own seconds): contour labeling and tracing, heights and the LOD1
   // check, writing every format.
   double contour_seconds = 0, heights_seconds = 0, write_seconds = 0;
 };

@@ -1,5 +1,6 @@
 #include "run/tiles.hpp"
 
+#include <chrono>
 #include <cstdio>
 #include <gdal_priv.h>
 #include <opencv2/imgproc.hpp>
@@ -112,7 +113,9 @@ TileWindow find_tile_window(const MaskWindowReader& reader, const TileGrid& grid
   out.window = (tile_rect + cv::Size(2 * halo_px, 2 * halo_px) - cv::Point(halo_px, halo_px)) & bounds;
   while (true) {
     out.mask = reader.read(out.window);
+    const auto labeling = std::chrono::steady_clock::now();
     out.components = label_components(out.mask, connectivity);
+    out.label_seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - labeling).count();
     const cv::Mat& stats = out.components.stats;
     const int count = out.components.count;
     cv::Rect grown = out.window;

@@ -55,6 +55,7 @@ struct TileWindow {
   std::vector<std::string> too_large;  // owned buildings that do not fit max_window_px
   std::uint64_t hash = 0;              // of the mask and the window, for checkpoints
   Components components;               // of the mask, for the tracing
+  double label_seconds = 0;            // spent labeling them (the contour stage's first step)
 };
 TileWindow find_tile_window(const MaskWindowReader& reader, const TileGrid& grid, int tile, int halo_px,
                             int max_window_px, int connectivity);
