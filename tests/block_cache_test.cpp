@@ -94,6 +94,29 @@ TEST_F(BlockCacheTest, ThreadsShareBlocksAndASmallBudgetStaysCorrect) {
   }
 }
 
+TEST_F(BlockCacheTest, StripsAreReadWholeAndGrouped) {
+  // The same values in 3-row strips (an untiled GeoTIFF): cached as whole-width groups of strips.
+  const std::string strips = (dir / "strips.tif").string();
+  char** options = CSLSetNameValue(nullptr, "BLOCKYSIZE", "3");
+  GDALDataset* source = static_cast<GDALDataset*>(GDALOpen(path.c_str(), GA_ReadOnly));
+  GDALClose(GetGDALDriverManager()->GetDriverByName("GTiff")->CreateCopy(strips.c_str(), source, FALSE, options, nullptr, nullptr));
+  GDALClose(source);
+  CSLDestroy(options);
+  Dataset d(strips);
+  int bw = 0, bh = 0;
+  d.d->GetRasterBand(1)->GetBlockSize(&bw, &bh);
+  ASSERT_EQ(bw, 300);
+  ASSERT_EQ(bh, 3);
+  BlockCache cache(64 << 20);
+  for (const cv::Rect& w : {cv::Rect(0, 0, 300, 200), cv::Rect(17, 101, 40, 60), cv::Rect(299, 199, 1, 1)}) {
+    std::vector<float> f(w.area());
+    cache.read(*d.d, strips, 1, GDT_Float32, w, f.data());
+    EXPECT_EQ(f, direct<float>(w, GDT_Float32)) << w.x << "," << w.y;
+  }
+  // 1 MB groups of 3.6 KB strips: 291 strips, i.e. the 67 strips of the raster in one block.
+  EXPECT_EQ(cache.decoded_blocks(), 1u);
+}
+
 TEST_F(BlockCacheTest, AWindowOutsideTheRasterIsAnErrorNamingTheFile) {
   BlockCache cache(1 << 20);
   Dataset d(path);

@@ -1,5 +1,6 @@
 #include "io/block_cache.hpp"
 
+#include <algorithm>
 #include <future>
 #include <gdal_priv.h>
 #include <list>
@@ -21,15 +22,22 @@ struct Key {
   auto operator<=>(const Key&) const = default;
 };
 
-// The blocks a band is cut into: its own when they are of a sensible size, else 512 pixels a side
-// (a whole-image block), or a few strips together (one-row strips).
-cv::Size block_grid(GDALRasterBand& band) {
+// The blocks a band is cut into: its own when they hold at most 4 MB, whole strips grouped to
+// about 1 MB (a strip is as wide as the raster: cutting it would decode it once per piece), and
+// 512-pixel squares of larger blocks (a whole-image block; GDAL's cache holds it meanwhile).
+cv::Size block_grid(GDALRasterBand& band, cv::Size raster) {
   int bw = 0, bh = 0;
   band.GetBlockSize(&bw, &bh);
-  if (bw <= 0 || bw > 1024) bw = 512;
-  if (bh <= 0 || bh > 1024) bh = 512;
-  else if (bh < 16) bh = ((256 + bh - 1) / bh) * bh;
-  return {bw, bh};
+  bw = std::clamp(bw, 1, raster.width);
+  bh = std::clamp(bh, 1, raster.height);
+  const std::size_t pixel = std::max(1, GDALGetDataTypeSizeBytes(band.GetRasterDataType()));
+  const std::size_t bytes = std::size_t(bw) * bh * pixel;
+  if (bw == raster.width && bh < raster.height) {  // strips
+    const std::size_t group = std::max<std::size_t>(1, (std::size_t(1) << 20) / bytes);
+    return {bw, int(std::min<std::size_t>(std::size_t(bh) * group, raster.height))};
+  }
+  if (bytes <= (std::size_t(4) << 20)) return {bw, bh};
+  return {std::min(bw, 512), std::min(bh, 512)};
 }
 
 }  // namespace
@@ -50,6 +58,10 @@ struct BlockCache::Impl {
     for (auto k = recency.end(); used > budget && k != recency.begin();) {
       --k;
       auto e = entries.find(*k);
+      if (e == entries.end()) {  // its entry could not be made
+        k = recency.erase(k);
+        continue;
+      }
       if (e->second.bytes == 0) continue;
       used -= e->second.bytes;
       entries.erase(e);
@@ -66,22 +78,25 @@ struct BlockCache::Impl {
       return block.get();  // waits while another thread decodes it; rethrows its error
     }
     std::promise<std::shared_ptr<const Block>> promise;
+    recency.push_front(key);  // first, so that a failure here leaves no entry without its node
     Entry& entry = entries[key];
     entry.block = promise.get_future().share();
-    recency.push_front(key);
     entry.recent = recency.begin();
     lock.unlock();
 
-    const GDALDataType type = band.GetRasterDataType();
-    auto block = std::make_shared<Block>(std::size_t(rect.area()) * GDALGetDataTypeSizeBytes(type));
-    if (band.RasterIO(GF_Read, rect.x, rect.y, rect.width, rect.height, block->data(), rect.width, rect.height, type, 0, 0) != CE_None) {
-      const InputError error("'" + path + "': cannot read band " + std::to_string(key.band) + ": " + CPLGetLastErrorMsg());
+    std::shared_ptr<Block> block;
+    try {
+      const GDALDataType type = band.GetRasterDataType();
+      block = std::make_shared<Block>(std::size_t(rect.area()) * GDALGetDataTypeSizeBytes(type));
+      if (band.RasterIO(GF_Read, rect.x, rect.y, rect.width, rect.height, block->data(), rect.width, rect.height, type, 0, 0) != CE_None)
+        throw InputError("'" + path + "': cannot read band " + std::to_string(key.band) + ": " + CPLGetLastErrorMsg());
+    } catch (...) {  // no entry stays behind: the waiters get the error, a later read tries again
       lock.lock();
       recency.erase(entry.recent);
       entries.erase(key);
       lock.unlock();
-      promise.set_exception(std::make_exception_ptr(error));
-      throw error;
+      promise.set_exception(std::current_exception());
+      throw;
     }
     promise.set_value(block);
     lock.lock();
@@ -106,7 +121,7 @@ void BlockCache::read(GDALDataset& dataset, const std::string& path, int band_in
       throw InputError("'" + path + "': cannot read band " + std::to_string(band_index) + ": " + CPLGetLastErrorMsg());
     return;
   }
-  const cv::Size grid = block_grid(*band);
+  const cv::Size grid = block_grid(*band, bounds.size());
   const GDALDataType native = band->GetRasterDataType();
   const int in_size = GDALGetDataTypeSizeBytes(native), out_size = GDALGetDataTypeSizeBytes(out_type);
   for (int by = w.y / grid.height; by <= (w.y + w.height - 1) / grid.height; ++by)

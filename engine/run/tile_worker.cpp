@@ -180,11 +180,11 @@ std::shared_ptr<TileResult> process_tile(const RunPlan& plan, int tile) {
   const std::uint64_t contour_key = fnv1a(plan.contour_options + plan.transform_text + std::to_string(grid.tile_px), window.hash);
   std::optional<TileBuildings> contours = store.load_contours(r->name, contour_key);
   r->contours_reused = contours.has_value();
-  r->contour_seconds = window.label_seconds;  // the labeling is the contour stage's, done for the window search
   if (!contours) {
     const auto traced = Clock::now();
     contours = trace_tile(window, grid, tile, plan.transform, job.stages.contour);
-    r->contour_seconds += seconds_since(traced);
+    // The labeling, done in the window search, is the contour stage's first step.
+    r->contour_seconds = window.label_seconds + seconds_since(traced);
     store.save_contours(r->name, contour_key, *contours);
   }
   const std::uint64_t buildings_key = fnv1a(plan.core_options, contour_key);
