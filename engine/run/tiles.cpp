@@ -55,13 +55,16 @@ MaskWindowReader::~MaskWindowReader() {
 
 cv::Mat MaskWindowReader::read(const cv::Rect& w) const {
   auto band = [&](int b) {
-    cv::Mat m(w.height, w.width, CV_32S);
+    // A byte band is compared as bytes (a quarter of the memory traffic); anything else as Int32.
+    const bool bytes = impl_->dataset->GetRasterBand(b)->GetRasterDataType() == GDT_Byte;
+    cv::Mat m(w.height, w.width, bytes ? CV_8U : CV_32S);
+    const GDALDataType type = bytes ? GDT_Byte : GDT_Int32;
     if (impl_->cache) {
-      impl_->cache->read(*impl_->dataset, impl_->path, b, GDT_Int32, w, m.data);
+      impl_->cache->read(*impl_->dataset, impl_->path, b, type, w, m.data);
       return m;
     }
     if (impl_->dataset->GetRasterBand(b)->RasterIO(GF_Read, w.x, w.y, w.width, w.height, m.data, w.width, w.height,
-                                                   GDT_Int32, 0, 0) != CE_None)
+                                                   type, 0, 0) != CE_None)
       throw InputError("'" + impl_->path + "': cannot read band " + std::to_string(b) + ": " + CPLGetLastErrorMsg());
     return m;
   };
@@ -69,13 +72,17 @@ cv::Mat MaskWindowReader::read(const cv::Rect& w) const {
   if (impl_->selector.rgb) {
     mask = cv::Mat::ones(w.size(), CV_8U);
     for (int b = 0; b < 3; ++b) {
-      cv::Mat match = band(b + 1) == (*impl_->selector.rgb)[b];
+      const cv::Mat values = band(b + 1);
+      const int v = (*impl_->selector.rgb)[b];
+      if (values.type() == CV_8U && (v < 0 || v > 255)) return cv::Mat::zeros(w.size(), CV_8U);  // no byte equals it
+      cv::Mat match = values == v;
       cv::bitwise_and(mask, match / 255, mask);
     }
   } else {
     const cv::Mat values = band(1);
     mask = cv::Mat::zeros(w.size(), CV_8U);
     for (int v : impl_->selector.values) {
+      if (values.type() == CV_8U && (v < 0 || v > 255)) continue;  // no byte equals it
       cv::Mat match = values == v;
       cv::bitwise_or(mask, match / 255, mask);
     }
