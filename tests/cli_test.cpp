@@ -4,6 +4,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <regex>
 #include <gdal_priv.h>
 #include <ogrsf_frmts.h>
 
@@ -126,6 +127,13 @@ TEST_F(Cli, SynthFromFootprintsRegularizeWithEachMethodAndEvaluate) {
     ASSERT_EQ(r.code, 0) << name << ": " << r.output;
     const std::string stats = test::slurp(dir / (name + ".json"));
     EXPECT_NE(stats.find("\"regularizer\": \"" + name + "\", \"route\": \"original\", \"buildings\": 2, \"ok\": 2"), std::string::npos) << stats;
+    // Every building in one size class.
+    const std::string by_size = stats.substr(std::min(stats.size(), stats.find("\"by_size\"")));
+    int in_classes = 0;
+    const std::regex count(R"re("buildings": ([0-9]+))re");
+    for (std::sregex_iterator it(by_size.begin(), by_size.end(), count), end; it != end; ++it)
+      in_classes += std::stoi((*it)[1]);
+    EXPECT_EQ(in_classes, 2) << stats;
     r = lodforge("eval --pred " + path(name + ".gpkg") + " --gt " + path("truth.geojson") + " --json " + path(name + ".eval.json"));
     ASSERT_EQ(r.code, 0) << r.output;
     const std::string metrics = test::slurp(dir / (name + ".eval.json"));

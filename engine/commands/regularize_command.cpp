@@ -1,5 +1,6 @@
 // lodforge regularize: the per-building core on one segmentation raster, LOD0 polygons out.
 #include <algorithm>
+#include <cstdint>
 #include <atomic>
 #include <sstream>
 #include <iostream>
@@ -71,7 +72,7 @@ int run_regularize(int argc, char** argv) {
       .value("out", "FILE", "output footprints (.gpkg or .geojson)")
       .value("route", "NAME", "corner route: 'original' (lines fitted to the raw contour) or 'deformed' (the paper)")
       .value("regularizer", "NAME", "one of " + regularizer_list() + " (default: deformation, the paper's chain; see lodforge options)")
-      .value("stats", "FILE", "also write a JSON summary: counts by status and the regularization time per building")
+      .value("stats", "FILE", "also write a JSON summary: counts by status and the regularization time per building (mean, median, p99; also by contour size)")
       .value("threads", "N", "worker threads (default: all cores)")
       .value("set", "KEY=VALUE", "set any stage option, e.g. labeling.kappa2=5 (see lodforge options)", true)
       .flag("help", "show this help");
@@ -143,16 +144,33 @@ int run_regularize(int argc, char** argv) {
   if (!by_stage.empty()) by_stage += ")";
   spdlog::info("wrote {} footprints to {}: {} ok, {} fallback{}", count, out_path, count - failed, failed, by_stage);
   if (auto stats = args.get("stats")) {
-    std::vector<double> seconds;
-    for (const BuildingResult& r : results) seconds.push_back(r.seconds);
-    std::sort(seconds.begin(), seconds.end());
-    double total = 0;
-    for (double s : seconds) total += s;
-    const auto at = [&](double q) { return seconds[std::min(seconds.size() - 1, std::size_t(q * double(seconds.size())))]; };
+    // Times overall, then by contour size (edges of all rings): the cost grows with it.
+    struct Bucket { const char* name; std::size_t from, to; std::vector<double> seconds; };
+    std::vector<Bucket> buckets = {{"all", 0, SIZE_MAX, {}}, {"edges_below_250", 0, 250, {}},
+                                   {"edges_250_to_1000", 250, 1000, {}}, {"edges_1000_and_more", 1000, SIZE_MAX, {}}};
+    for (std::size_t i = 0; i < count; ++i) {
+      std::size_t edges = 0;
+      for (const Ring& ring : contours.buildings[i].rings) edges += ring.size();
+      for (Bucket& b : buckets) if (edges >= b.from && edges < b.to) b.seconds.push_back(results[i].seconds);
+    }
+    const auto summary = [](std::vector<double> seconds, bool with_total) {
+      std::sort(seconds.begin(), seconds.end());
+      double total = 0;
+      for (double s : seconds) total += s;
+      const auto at = [&](double q) { return seconds.empty() ? 0.0 : seconds[std::min(seconds.size() - 1, std::size_t(q * double(seconds.size())))]; };
+      std::ostringstream o;
+      if (with_total) o << "\"seconds_total\": " << total << ", ";
+      else o << "\"buildings\": " << seconds.size() << ", ";
+      o << "\"seconds_mean\": " << (seconds.empty() ? 0.0 : total / double(seconds.size())) << ", \"seconds_median\": " << at(0.5)
+        << ", \"seconds_p99\": " << at(0.99);
+      return o.str();
+    };
     std::ostringstream out;
     out << "{\"regularizer\": \"" << regularizer << "\", \"route\": \"" << options.core.corners.route << "\", \"buildings\": " << count
-        << ", \"ok\": " << count - failed << ", \"fallback\": " << failed << ", \"seconds_total\": " << total
-        << ", \"seconds_mean\": " << total / double(count) << ", \"seconds_median\": " << at(0.5) << ", \"seconds_p99\": " << at(0.99) << "}\n";
+        << ", \"ok\": " << count - failed << ", \"fallback\": " << failed << ", " << summary(buckets[0].seconds, true) << ",\n \"by_size\": {";
+    for (std::size_t b = 1; b < buckets.size(); ++b)
+      out << (b > 1 ? ",\n  " : "\n  ") << "\"" << buckets[b].name << "\": {" << summary(buckets[b].seconds, false) << "}";
+    out << "}}\n";
     write_text_atomically(*stats, out.str());
   }
   return 0;
