@@ -130,5 +130,23 @@ TEST(Deformation, RoundsAlignTheBoundaryWithoutFlips) {
   }
 }
 
+TEST(Deformation, RoundsStopWhenTheAlignmentStalls) {
+  // Targets no closed boundary can meet (every edge asked to face the same way): the rounds stop
+  // once one no longer improves the alignment, with the alignment all ten rounds would reach.
+  Problem p = l_shape_problem(1);
+  for (Vec2& t : p.targets) t = Vec2(0, 1);
+  DeformationOptions stalled;
+  const DeformationResult early = deform(p.mesh, p.targets, stalled);
+  DeformationOptions all = stalled;
+  all.min_round_gain = 0;
+  const DeformationResult full = deform(p.mesh, p.targets, all);
+  EXPECT_EQ(full.rounds, all.max_rounds);
+  EXPECT_LT(early.rounds, full.rounds);
+  EXPECT_GT(early.rms_deg, 3 * stalled.target_rms_deg);  // it stopped short of the target, stalled
+  EXPECT_NEAR(early.rms_deg, full.rms_deg, 0.02 * full.rms_deg);
+  for (const auto& t : p.mesh.triangles)
+    EXPECT_GT(cross(early.vertices[t[1]] - early.vertices[t[0]], early.vertices[t[2]] - early.vertices[t[0]]), 0);
+}
+
 }  // namespace
 }  // namespace lodforge

@@ -312,6 +312,7 @@ DeformationResult deform(const TriangleMesh& mesh, const std::vector<Vec2>& targ
   std::vector<Eigen::Vector2d> rest(mesh.vertices.begin(), mesh.vertices.end());
   Eigen::VectorXd x(2 * mesh.vertices.size());
   for (std::size_t i = 0; i < mesh.vertices.size(); ++i) x.segment<2>(2 * i) = mesh.vertices[i];
+  double previous_rms = std::numeric_limits<double>::infinity();
   for (int round = 0; round < o.max_rounds; ++round) {
     const DeformationEnergy energy(mesh, rest, targets, o);
     const NewtonOutcome outcome = newton(energy, x, o, should_stop);
@@ -323,6 +324,10 @@ DeformationResult deform(const TriangleMesh& mesh, const std::vector<Vec2>& targ
     std::tie(result.rms_deg, result.max_deg) = alignment_error_deg(mesh, rest, targets);
     if (outcome.stopped) { result.stopped = true; break; }
     if (result.rms_deg <= o.target_rms_deg) break;
+    // Stalled: the boundary cannot align further (a fold the simplicity check blocks, targets
+    // that contradict each other); more rounds would only repeat the same iterations.
+    if (result.rms_deg > (1 - o.min_round_gain) * previous_rms) break;
+    previous_rms = result.rms_deg;
   }
   result.vertices.assign(rest.begin(), rest.end());
   return result;

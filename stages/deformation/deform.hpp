@@ -21,6 +21,7 @@ struct DeformationOptions {
   int max_iterations = 100;    // Newton iterations per round
   int max_rounds = 10;         // rounds; each re-solves from the current shape as rest shape
   double target_rms_deg = 0.3; // rounds stop once the boundary is aligned this well
+  double min_round_gain = 0.01; // ... or once a round lowers the RMS deviation by less than this share
   double relative_tolerance = 1e-12;
   double simplify_px = 0.0;    // each labeled run simplified to this before meshing (0 = full staircase)
   bool keep_boundary_simple = true;  // reject steps that fold the boundary over itself  // Newton stops when the decrement is below this * energy
@@ -33,6 +34,7 @@ struct DeformationOptions {
     v("max_iterations", max_iterations, "Newton iterations per round at most", Check::at_least(1));
     v("max_rounds", max_rounds, "rounds with an updated rest shape at most (1 = the paper's single solve)", Check::at_least(1));
     v("target_rms_deg", target_rms_deg, "rounds stop when the boundary's RMS deviation from its targets is below this (degrees)", Check::at_least(0));
+    v("min_round_gain", min_round_gain, "rounds also stop when one lowers that RMS deviation by less than this share of it (0 = only target_rms_deg and max_rounds stop them)", Check::between(0, 1));
     v("simplify_px", simplify_px, "before meshing, each run of one label is simplified by Douglas-Peucker to this (pixels; run ends kept, removed vertices follow their simplified edge); 0 = mesh the full staircase (the paper)", Check::at_least(0));
     v("keep_boundary_simple", keep_boundary_simple, "reject Newton steps that fold the boundary over itself (off: the paper's unconstrained energy)");
     v("relative_tolerance", relative_tolerance, "Newton stops when the decrement falls below this share of the energy", Check::above(0));
