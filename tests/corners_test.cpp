@@ -53,6 +53,41 @@ TEST(Corners, ParallelNeighboursGetAStep) {
   EXPECT_NEAR(signed_area(out), 55.0, 0.5);
 }
 
+TEST(Corners, ARunSteppingBetweenTwoParallelOffsetsIsSplit) {
+  // A 40 x 20 block whose bottom wall steps 3 px at x = 20 (two row houses out of line), all of
+  // it labeled as one run by the labeling (the riser included).
+  Ring ring;
+  std::vector<int> labels;
+  for (int x = 0; x < 20; ++x) { ring.emplace_back(x, 0); labels.push_back(0); }
+  for (int y = 0; y < 3; ++y) { ring.emplace_back(20, y); labels.push_back(0); }
+  for (int x = 20; x < 40; ++x) { ring.emplace_back(x, 3); labels.push_back(0); }
+  for (int y = 3; y < 20; ++y) { ring.emplace_back(40, y); labels.push_back(1); }
+  for (int x = 40; x > 0; --x) { ring.emplace_back(x, 20); labels.push_back(2); }
+  for (int y = 20; y > 0; --y) { ring.emplace_back(0, y); labels.push_back(3); }
+  CornerOptions o;
+  o.curve_px = 0;              // (a 3 px step is also a departure the curve test would keep as a contour)
+  o.max_corner_shift_m = 5;    // (the one-line fit's corners lie 1.5 px from the contour's)
+  const auto near = [](const Ring& r, const Vec2& p) {
+    for (const Vec2& v : r) if ((v - p).norm() < 0.6) return true;
+    return false;
+  };
+  std::string problem;
+  const Ring split = extract_corners(ring, labels, axis_normals, 1.0, o, &problem);
+  ASSERT_EQ(split.size(), 6u) << problem;
+  EXPECT_EQ(ring_problem(split), "");
+  EXPECT_TRUE(near(split, {20, 0}) && near(split, {20, 3}) && near(split, {0, 0}) && near(split, {40, 3}));
+  // Without it, one line between the two walls.
+  CornerOptions off = o;
+  off.split_px = 0;
+  const Ring one_line = extract_corners(ring, labels, axis_normals, 1.0, off, &problem);
+  EXPECT_EQ(one_line.size(), 4u);
+  EXPECT_FALSE(near(one_line, {20, 3}));
+  // A step smaller than split_px stays one line.
+  CornerOptions strict = o;
+  strict.split_px = 4;
+  EXPECT_EQ(extract_corners(ring, labels, axis_normals, 1.0, strict, &problem).size(), 4u);
+}
+
 TEST(Corners, TooFewRunsIsAProblem) {
   Ring ring = {{0, 0}, {1, 0}, {1, 1}, {0, 1}};
   std::string problem;

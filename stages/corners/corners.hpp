@@ -20,6 +20,7 @@ struct CornerOptions {
   int repair_attempts = 4;           // an invalid polygon is retried with min_run doubled this often
   double curve_px = 2.5;             // a run whose contour bows this far from its line is a curved wall (0 = off)
   double curve_window_px = 16.0;     // ... measured as the mean offset over windows of this length
+  double split_px = 2.0;             // a run whose two parts lie this far apart (parallel) becomes two lines and a step (0 = off)
 
   template <class V>
   void visit(V& v) {
@@ -30,6 +31,7 @@ struct CornerOptions {
     v("repair_attempts", repair_attempts, "retries of an invalid polygon with min_run_px doubled each time", Check::between(0, 20));
     v("curve_px", curve_px, "a run whose contour departs from its fitted line by more than this on average over a window (pixels) is kept as a curve: its contour, simplified, replaces the line (0 = off)", Check::at_least(0));
     v("curve_window_px", curve_window_px, "length of the windows over which a run's departure from its line is averaged (pixels)", Check::above(0));
+    v("split_px", split_px, "a straight run whose contour is best explained by two parallel lines this far apart or more (pixels; each part at least 4 times as long) becomes two lines joined by a step (0 = off)", Check::at_least(0));
   }
 };
 
