@@ -95,5 +95,19 @@ TEST(Contour, BuildingsAreOrderedByFirstPixelInRasterOrder) {
   EXPECT_EQ(result.buildings[2].pixel_count, 1);
 }
 
+TEST(Contour, AnyNonZeroValueIsBuildingAndTheFirstPixelIsTheLeftmostOfTheTopRow) {
+  // A component whose top row starts right of where lower rows start, in a 0/255 mask.
+  const std::vector<std::string> rows = {".....", "...##", ".####", "##..."};
+  const cv::Mat ones = mask_from(rows);
+  const cv::Mat full = ones * 255;
+  const auto a = extract_contours(ones, transform(), no_minimum()), b = extract_contours(full, transform(), no_minimum());
+  ASSERT_EQ(a.buildings.size(), 1u);
+  ASSERT_EQ(b.buildings.size(), 1u);
+  EXPECT_EQ(a.buildings[0].rings, b.buildings[0].rings);
+  EXPECT_EQ(b.buildings[0].first_row, 1);
+  EXPECT_EQ(b.buildings[0].first_col, 3);
+  EXPECT_EQ(b.buildings[0].pixel_count, 8);
+}
+
 }  // namespace
 }  // namespace lodforge

@@ -86,7 +86,8 @@ Components label_components(const cv::Mat& mask, int connectivity) {
   CV_Assert(mask.type() == CV_8U);
   Components c;
   cv::Mat centroids;
-  c.count = cv::connectedComponentsWithStats(mask != 0, c.labels, c.stats, centroids, connectivity == 4 ? 4 : 8, CV_32S);
+  // Any non-zero pixel is foreground to OpenCV's labeling: no 0/1 copy of the mask is needed.
+  c.count = cv::connectedComponentsWithStats(mask, c.labels, c.stats, centroids, connectivity == 4 ? 4 : 8, CV_32S);
   return c;
 }
 
