@@ -143,6 +143,9 @@ void write_index_and_report(const Totals& totals, const RunPlan& plan, const std
                tiles.size(), totals.tiles_processed, totals.tiles_skipped, job.work_dir, totals.buildings, totals.ok, totals.fallback, totals.lod1,
                totals.dropped_small, totals.too_large.empty() ? "" : "; " + std::to_string(totals.too_large.size()) + " too large (see report)",
                elapsed);
+  if (totals.tiles_processed > 0)
+    spdlog::info("one-core time by stage: contours {:.1f} s, regularization {:.1f} s, heights {:.1f} s, writing {:.1f} s",
+                 totals.contour_seconds, totals.core_seconds, totals.heights_seconds, totals.write_seconds);
   spdlog::info("outputs in {} (tile_index{}.geojson, report{}.json)", out_dir.string(), suffix, suffix);
 }
 
