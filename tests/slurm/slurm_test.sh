@@ -36,7 +36,7 @@ done
 start=$SECONDS
 limit=$((SECONDS + ${LODFORGE_SLURM_TEST_LIMIT:-600}))  # every wait ends by then (ctest's TIMEOUT is longer)
 log() { echo "slurm_test [$((SECONDS - start)) s]: $*"; }
-tmp="$(mktemp -d "${TMPDIR:-/tmp}/lodforge-slurm-test.XXXXXX")"
+tmp="$(mktemp -d -t lodforge-slurm-test.XXXXXX)"  # in $TMPDIR, else the system default
 chmod 755 "$tmp"
 export SLURM_CONF="$tmp/slurm/slurm.conf"
 mkdir -p "$tmp/slurm/state" "$tmp/slurm/spool" "$tmp/logs"

@@ -12,7 +12,7 @@ set -euo pipefail
 lodforge="$(realpath "$1")"
 src="$(realpath "${2:-$(dirname "$0")/../..}")"
 slurm="$src/scripts/slurm"
-tmp="$(cd "$(mktemp -d "${TMPDIR:-/tmp}/lodforge-submit-test.XXXXXX")" && pwd -P)"
+tmp="$(cd "$(mktemp -d -t lodforge-submit-test.XXXXXX)" && pwd -P)"
 trap 'rm -rf "$tmp"' EXIT
 failures=0
 fail() { echo "submit_test: FAIL: $*" >&2; failures=$((failures + 1)); }
@@ -41,7 +41,7 @@ expect 1 "--shards N is required" "$slurm/submit.sh" "$job"
 for bad in 0 -3 abc 04 2.5; do
   expect 1 "N must be a positive integer, got '$bad'" "$slurm/submit.sh" "$job" --shards "$bad"
 done
-expect 1 "'/nonexistent/sbatch' not found" env SBATCH=/nonexistent/sbatch "$slurm/submit.sh" "$job" --shards 2
+expect 1 "'$tmp/no-sbatch' not found" env SBATCH="$tmp/no-sbatch" "$slurm/submit.sh" "$job" --shards 2
 expect 1 "'--array=0-3' is set by" "$slurm/submit.sh" "$job" --shards 4 --array=0-3
 expect 1 "is not an executable" "$slurm/submit.sh" "$job" --shards 4 --lodforge "$tmp/none" --dry-run
 expect 0 "--array=0-2 -p big -c 8 $slurm/lodforge-array.sbatch $job 3" "$slurm/submit.sh" "$job" --shards 3 --dry-run -p big -c 8
