@@ -144,32 +144,35 @@ int run_regularize(int argc, char** argv) {
   if (!by_stage.empty()) by_stage += ")";
   spdlog::info("wrote {} footprints to {}: {} ok, {} fallback{}", count, out_path, count - failed, failed, by_stage);
   if (auto stats = args.get("stats")) {
-    // Times overall, then by contour size (edges of all rings): the cost grows with it.
-    struct Bucket { const char* name; std::size_t from, to; std::vector<double> seconds; };
-    std::vector<Bucket> buckets = {{"all", 0, SIZE_MAX, {}}, {"edges_below_250", 0, 250, {}},
-                                   {"edges_250_to_1000", 250, 1000, {}}, {"edges_1000_and_more", 1000, SIZE_MAX, {}}};
+    // Times overall, then by contour size (edges of all rings), which the cost grows with.
+    struct SizeClass { const char* name; std::size_t below; std::vector<double> seconds; };
+    std::vector<SizeClass> classes = {{"edges_below_250", 250, {}}, {"edges_250_to_1000", 1000, {}}, {"edges_1000_and_more", SIZE_MAX, {}}};
+    std::vector<double> all;
     for (std::size_t i = 0; i < count; ++i) {
       std::size_t edges = 0;
       for (const Ring& ring : contours.buildings[i].rings) edges += ring.size();
-      for (Bucket& b : buckets) if (edges >= b.from && edges < b.to) b.seconds.push_back(results[i].seconds);
+      std::find_if(classes.begin(), classes.end(), [&](const SizeClass& c) { return edges < c.below; })->seconds.push_back(results[i].seconds);
+      all.push_back(results[i].seconds);
     }
-    const auto summary = [](std::vector<double> seconds, bool with_total) {
+    const auto times = [](std::vector<double> seconds) {  // "seconds_mean": ..., "seconds_median": ..., "seconds_p99": ...
       std::sort(seconds.begin(), seconds.end());
       double total = 0;
       for (double s : seconds) total += s;
       const auto at = [&](double q) { return seconds.empty() ? 0.0 : seconds[std::min(seconds.size() - 1, std::size_t(q * double(seconds.size())))]; };
       std::ostringstream o;
-      if (with_total) o << "\"seconds_total\": " << total << ", ";
-      else o << "\"buildings\": " << seconds.size() << ", ";
       o << "\"seconds_mean\": " << (seconds.empty() ? 0.0 : total / double(seconds.size())) << ", \"seconds_median\": " << at(0.5)
         << ", \"seconds_p99\": " << at(0.99);
       return o.str();
     };
+    double total = 0;
+    for (double s : all) total += s;
     std::ostringstream out;
     out << "{\"regularizer\": \"" << regularizer << "\", \"route\": \"" << options.core.corners.route << "\", \"buildings\": " << count
-        << ", \"ok\": " << count - failed << ", \"fallback\": " << failed << ", " << summary(buckets[0].seconds, true) << ",\n \"by_size\": {";
-    for (std::size_t b = 1; b < buckets.size(); ++b)
-      out << (b > 1 ? ",\n  " : "\n  ") << "\"" << buckets[b].name << "\": {" << summary(buckets[b].seconds, false) << "}";
+        << ", \"ok\": " << count - failed << ", \"fallback\": " << failed << ", \"seconds_total\": " << total << ", " << times(all)
+        << ",\n \"by_size\": {";
+    for (std::size_t c = 0; c < classes.size(); ++c)
+      out << (c ? ",\n  " : "\n  ") << "\"" << classes[c].name << "\": {\"buildings\": " << classes[c].seconds.size() << ", "
+          << times(classes[c].seconds) << "}";
     out << "}}\n";
     write_text_atomically(*stats, out.str());
   }

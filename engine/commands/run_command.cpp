@@ -209,15 +209,15 @@ int run_job(int argc, char** argv) {
   CPLSetConfigOption("OGR_CURRENT_DATE", "2000-01-01T00:00:00.000Z");  // byte-identical GeoPackages
   // The block budget: three quarters for the decoded blocks the threads share, a quarter for
   // GDAL's own cache (which holds a block while it is decoded, and strips read in parts).
-  const std::size_t cache_bytes = std::size_t(job.tiling.gdal_cache_mb) * 1024 * 1024;
-  GDALSetCacheMax64(std::int64_t(cache_bytes / 4));
-  ReaderPool readers(cache_bytes - cache_bytes / 4);  // declared before the plan that points to it; closed after the pipeline
+  const std::size_t cache_bytes = std::size_t(job.tiling.gdal_cache_mb) * 1024 * 1024, shared_bytes = cache_bytes - cache_bytes / 4;
+  GDALSetCacheMax64(std::int64_t(cache_bytes - shared_bytes));
+  ReaderPool readers(shared_bytes);  // declared before the plan that points to it; closed after the pipeline
   // Tiles are processed in bands of columns, row by row within a band, so that a tile finds the
   // blocks it shares with its upper neighbour still in the block cache (in raster order they
   // were decoded a whole raster width earlier and are gone). A band's tile windows, a row of them,
   // take about 16 KB of decoded blocks per pixel column (three rasters, 250 m tiles at 0.25 m):
   // 3 tiles of 1,000 pixels at the default cache. The files list the tiles in tile order all the same.
-  const int band_cols = std::max(1, int((cache_bytes - cache_bytes / 4) / 16384) / grid.tile_px);
+  const int band_cols = std::max(1, int(shared_bytes / 16384) / grid.tile_px);
   std::stable_sort(tiles.begin(), tiles.end(), [&](int a, int b) {
     return std::make_tuple(a % grid.cols / band_cols, a / grid.cols, a % grid.cols) <
            std::make_tuple(b % grid.cols / band_cols, b / grid.cols, b % grid.cols);
@@ -256,7 +256,6 @@ int run_job(int argc, char** argv) {
           }));
   progress.finish();
   write_index_and_report(totals, plan, job_path, shard.index, shard.count, tiles.size(), seconds_since(start));
-  spdlog::debug("{} raster blocks decoded", readers.decoded_blocks());
   return 0;
 }
 

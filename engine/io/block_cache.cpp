@@ -40,6 +40,11 @@ cv::Size block_grid(GDALRasterBand& band, cv::Size raster) {
   return {std::min(bw, 512), std::min(bh, 512)};
 }
 
+void read_direct(GDALRasterBand& band, const std::string& path, int band_index, GDALDataType type, const cv::Rect& w, void* out) {
+  if (band.RasterIO(GF_Read, w.x, w.y, w.width, w.height, out, w.width, w.height, type, 0, 0) != CE_None)
+    throw InputError("'" + path + "': cannot read band " + std::to_string(band_index) + ": " + CPLGetLastErrorMsg());
+}
+
 }  // namespace
 
 struct BlockCache::Impl {
@@ -88,8 +93,7 @@ struct BlockCache::Impl {
     try {
       const GDALDataType type = band.GetRasterDataType();
       block = std::make_shared<Block>(std::size_t(rect.area()) * GDALGetDataTypeSizeBytes(type));
-      if (band.RasterIO(GF_Read, rect.x, rect.y, rect.width, rect.height, block->data(), rect.width, rect.height, type, 0, 0) != CE_None)
-        throw InputError("'" + path + "': cannot read band " + std::to_string(key.band) + ": " + CPLGetLastErrorMsg());
+      read_direct(band, path, key.band, type, rect, block->data());
     } catch (...) {  // no entry stays behind: the waiters get the error, a later read tries again
       lock.lock();
       recency.erase(entry.recent);
@@ -116,11 +120,7 @@ void BlockCache::read(GDALDataset& dataset, const std::string& path, int band_in
   if (!band) throw InputError("'" + path + "': has no band " + std::to_string(band_index));
   const cv::Rect bounds(0, 0, dataset.GetRasterXSize(), dataset.GetRasterYSize());
   const auto out_type = static_cast<GDALDataType>(type);
-  if ((w & bounds) != w || w.empty()) {  // GDAL's own answer, error included
-    if (band->RasterIO(GF_Read, w.x, w.y, w.width, w.height, out, w.width, w.height, out_type, 0, 0) != CE_None)
-      throw InputError("'" + path + "': cannot read band " + std::to_string(band_index) + ": " + CPLGetLastErrorMsg());
-    return;
-  }
+  if ((w & bounds) != w || w.empty()) return read_direct(*band, path, band_index, out_type, w, out);  // GDAL's own answer, error included
   const cv::Size grid = block_grid(*band, bounds.size());
   const GDALDataType native = band->GetRasterDataType();
   const int in_size = GDALGetDataTypeSizeBytes(native), out_size = GDALGetDataTypeSizeBytes(out_type);
@@ -136,6 +136,14 @@ void BlockCache::read(GDALDataset& dataset, const std::string& path, int band_in
         GDALCopyWords64(from, native, in_size, to, out_type, out_size, part.width);
       }
     }
+}
+
+void read_window(BlockCache* cache, GDALDataset& dataset, const std::string& path, int band, int type, const cv::Rect& w,
+                 void* out) {
+  if (cache) return cache->read(dataset, path, band, type, w, out);
+  GDALRasterBand* b = dataset.GetRasterBand(band);
+  if (!b) throw InputError("'" + path + "': has no band " + std::to_string(band));
+  read_direct(*b, path, band, static_cast<GDALDataType>(type), w, out);
 }
 
 std::size_t BlockCache::decoded_blocks() const {

@@ -33,4 +33,9 @@ class BlockCache {
   std::unique_ptr<Impl> impl_;
 };
 
+// Window w of a band as `type` through cache, or straight from GDAL when cache is null: the same
+// values and the same errors either way.
+void read_window(BlockCache* cache, GDALDataset& dataset, const std::string& path, int band, int type, const cv::Rect& w,
+                 void* out);
+
 }  // namespace lodforge

@@ -84,10 +84,7 @@ HeightRaster HeightWindowReader::read(const cv::Rect& w, const GeoTransform& gri
   HeightRaster r;
   r.values.create(w.height, w.width, CV_32F);
   GDALRasterBand* band = impl_->dataset->GetRasterBand(1);
-  if (impl_->cache)
-    impl_->cache->read(*impl_->dataset, impl_->path, 1, GDT_Float32, w, r.values.data);
-  else if (band->RasterIO(GF_Read, w.x, w.y, w.width, w.height, r.values.data, w.width, w.height, GDT_Float32, 0, 0) != CE_None)
-    throw InputError("'" + impl_->path + "': cannot read: " + CPLGetLastErrorMsg());
+  read_window(impl_->cache, *impl_->dataset, impl_->path, 1, GDT_Float32, w, r.values.data);
   int has_nodata = 0;
   const double nodata = band->GetNoDataValue(&has_nodata);
   // Valid: finite (|v| <= FLT_MAX is false for NaN and infinities) and not nodata; 1 or 0.

@@ -48,25 +48,21 @@ void account(const std::string& summary, const std::string& tile, int tile_index
       std::getline(fields, a, '\t');
       std::getline(fields, b, '\t');
       std::getline(fields, c);
-      t.failed_json.push_back("{\"id\": " + a + ", \"tile\": \"" + tile + "\", \"stage\": \"" + json_escape(b) +
-                              "\", \"reason\": \"" + json_escape(c) + "\"}");
-      t.failed_tile.push_back(tile_index);
+      t.failed_json.emplace_back(tile_index, "{\"id\": " + a + ", \"tile\": \"" + tile + "\", \"stage\": \"" + json_escape(b) +
+                                                 "\", \"reason\": \"" + json_escape(c) + "\"}");
     } else if (kind == "too_large") {
       std::getline(fields, a);
-      t.too_large.push_back(a);
-      t.too_large_tile.push_back(tile_index);
+      t.too_large.emplace_back(tile_index, a);
     }
   }
 }
 
 
-// items in the order of their tiles (stable: a tile's own entries keep their order).
-std::vector<std::string> in_tile_order(const std::vector<std::string>& items, const std::vector<int>& tiles) {
-  std::vector<std::size_t> order(items.size());
-  for (std::size_t i = 0; i < order.size(); ++i) order[i] = i;
-  std::stable_sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) { return tiles[a] < tiles[b]; });
+// The entries in the order of their tiles (stable: a tile's own entries keep their order).
+std::vector<std::string> in_tile_order(std::vector<std::pair<int, std::string>> entries) {
+  std::stable_sort(entries.begin(), entries.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
   std::vector<std::string> out;
-  for (std::size_t i : order) out.push_back(items[i]);
+  for (auto& e : entries) out.push_back(std::move(e.second));
   return out;
 }
 
@@ -96,21 +92,18 @@ void record_tile(Totals& totals, const RunPlan& plan, const TileResult& result, 
   feature << "]}, \"geometry\": {\"type\": \"Polygon\", \"coordinates\": [[[" << a.x() << ", " << a.y() << "], [" << b.x()
           << ", " << a.y() << "], [" << b.x() << ", " << b.y() << "], [" << a.x() << ", " << b.y() << "], [" << a.x()
           << ", " << a.y() << "]]]}}";
-  totals.index_features.push_back(feature.str());
+  totals.index_features.emplace_back(r->tile, feature.str());
   std::ostringstream tile_json;
   tile_json << "{\"tile\": \"" << r->name << "\", \"buildings\": " << count << ", \"skipped\": " << (r->skipped ? "true" : "false")
             << ", \"seconds\": " << r->seconds << "}";
-  totals.tile_json.push_back(tile_json.str());
-  totals.tile_of.push_back(r->tile);
+  totals.tile_json.emplace_back(r->tile, tile_json.str());
 }
 
 void write_index_and_report(const Totals& totals, const RunPlan& plan, const std::string& job_path, int shard_index,
                             int shard_count, std::size_t tiles_count, double elapsed) {
   const Job& job = plan.job;
-  const std::vector<std::string> index_features = in_tile_order(totals.index_features, totals.tile_of);
-  const std::vector<std::string> tile_json = in_tile_order(totals.tile_json, totals.tile_of);
-  const std::vector<std::string> failed_json = in_tile_order(totals.failed_json, totals.failed_tile);
-  const std::vector<std::string> too_large = in_tile_order(totals.too_large, totals.too_large_tile);
+  const std::vector<std::string> index_features = in_tile_order(totals.index_features), tile_json = in_tile_order(totals.tile_json),
+                                 failed_json = in_tile_order(totals.failed_json), too_large = in_tile_order(totals.too_large);
   const fs::path& out_dir = plan.out_dir;
   struct { int index, count; } shard{shard_index, shard_count};
   struct { std::size_t n; std::size_t size() const { return n; } } tiles{tiles_count};

@@ -2,6 +2,7 @@
 #pragma once
 #include <cstddef>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "run/tile_worker.hpp"
@@ -14,10 +15,9 @@ struct Totals {
   double core_seconds = 0;  // summed regularization time of the buildings computed (not resumed)
   // Summed one-core time of the other per-building stages (TileResult), reads excluded.
   double contour_seconds = 0, heights_seconds = 0, write_seconds = 0;
-  std::vector<std::string> failed_json, too_large, tile_json, index_features;
-  // The tile of each entry above (tile_json and index_features: one per tile): tiles are
-  // recorded in the order they are processed, the files list them in tile order.
-  std::vector<int> failed_tile, too_large_tile, tile_of;
+  // Each entry with its tile: tiles are recorded in the order they are processed, the files list
+  // them in tile order.
+  std::vector<std::pair<int, std::string>> failed_json, too_large, tile_json, index_features;
 };
 
 // Adds a finished (or resumed) tile to the totals and the index.

@@ -144,7 +144,6 @@ ReaderPool::ReaderPool(std::size_t cache_bytes) : impl_(std::make_unique<Impl>()
   if (cache_bytes > 0) impl_->cache = std::make_unique<BlockCache>(cache_bytes);
 }
 
-std::size_t ReaderPool::decoded_blocks() const { return impl_->cache ? impl_->cache->decoded_blocks() : 0; }
 ReaderPool::~ReaderPool() = default;
 
 const MaskWindowReader& ReaderPool::mask(const std::string& path, const BuildingSelector& selector) {

@@ -27,7 +27,6 @@ class ReaderPool {
  public:
   // cache_bytes: the budget of the decoded blocks the threads share (0: none, GDAL's per handle).
   explicit ReaderPool(std::size_t cache_bytes = 0);
-  std::size_t decoded_blocks() const;
   ~ReaderPool();
   const MaskWindowReader& mask(const std::string& path, const BuildingSelector& selector);
   const HeightWindowReader& heights(const std::string& path);

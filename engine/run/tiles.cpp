@@ -30,11 +30,15 @@ struct MaskWindowReader::Impl {
   BuildingSelector selector;
   std::string path;
   BlockCache* cache = nullptr;
+  bool byte_values = true;  // every selected value fits a byte: a byte band is read and compared as bytes
 };
 
 MaskWindowReader::MaskWindowReader(const std::string& path, const BuildingSelector& selector, BlockCache* cache) : impl_(new Impl) {
   impl_->selector = selector;
   impl_->cache = cache;
+  const auto fits = [](int v) { return v >= 0 && v <= 255; };
+  if (selector.rgb) for (int v : *selector.rgb) impl_->byte_values &= fits(v);
+  for (int v : selector.values) impl_->byte_values &= fits(v);
   impl_->path = path;
   impl_->dataset = static_cast<GDALDataset*>(GDALOpenEx(path.c_str(), GDAL_OF_RASTER | GDAL_OF_READONLY, nullptr, nullptr, nullptr));
   if (!impl_->dataset) {
@@ -56,33 +60,22 @@ MaskWindowReader::~MaskWindowReader() {
 cv::Mat MaskWindowReader::read(const cv::Rect& w) const {
   auto band = [&](int b) {
     // A byte band is compared as bytes (a quarter of the memory traffic); anything else as Int32.
-    const bool bytes = impl_->dataset->GetRasterBand(b)->GetRasterDataType() == GDT_Byte;
+    const bool bytes = impl_->byte_values && impl_->dataset->GetRasterBand(b)->GetRasterDataType() == GDT_Byte;
     cv::Mat m(w.height, w.width, bytes ? CV_8U : CV_32S);
-    const GDALDataType type = bytes ? GDT_Byte : GDT_Int32;
-    if (impl_->cache) {
-      impl_->cache->read(*impl_->dataset, impl_->path, b, type, w, m.data);
-      return m;
-    }
-    if (impl_->dataset->GetRasterBand(b)->RasterIO(GF_Read, w.x, w.y, w.width, w.height, m.data, w.width, w.height,
-                                                   type, 0, 0) != CE_None)
-      throw InputError("'" + impl_->path + "': cannot read band " + std::to_string(b) + ": " + CPLGetLastErrorMsg());
+    read_window(impl_->cache, *impl_->dataset, impl_->path, b, bytes ? GDT_Byte : GDT_Int32, w, m.data);
     return m;
   };
   cv::Mat mask;
   if (impl_->selector.rgb) {
     mask = cv::Mat::ones(w.size(), CV_8U);
     for (int b = 0; b < 3; ++b) {
-      const cv::Mat values = band(b + 1);
-      const int v = (*impl_->selector.rgb)[b];
-      if (values.type() == CV_8U && (v < 0 || v > 255)) return cv::Mat::zeros(w.size(), CV_8U);  // no byte equals it
-      cv::Mat match = values == v;
+      cv::Mat match = band(b + 1) == (*impl_->selector.rgb)[b];
       cv::bitwise_and(mask, match / 255, mask);
     }
   } else {
     const cv::Mat values = band(1);
     mask = cv::Mat::zeros(w.size(), CV_8U);
     for (int v : impl_->selector.values) {
-      if (values.type() == CV_8U && (v < 0 || v > 255)) continue;  // no byte equals it
       cv::Mat match = values == v;
       cv::bitwise_or(mask, match / 255, mask);
     }

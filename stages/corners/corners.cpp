@@ -63,14 +63,14 @@ bool is_curved(const Ring& ring, int first, int count, const Line& line, const C
 void split_parallel(const Ring& ring, int first, int count, const Vec2& normal, double split, int depth,
                     std::vector<std::pair<int, int>>& out) {
   if (split <= 0 || depth > 3 || count < 4) { out.push_back({first, count}); return; }
-  std::vector<double> w(count), s(count), q(count);  // prefix sums of length, length * offset, length * offset^2
+  std::vector<double> w(count), s(count);  // prefix sums of length and length * offset
   double W = 0, S = 0, Q = 0;
   for (int k = 0; k < count; ++k) {
     const std::size_t i = (first + k) % ring.size();
     const Vec2 e = edge_vector(ring, i);
     const double len = e.norm(), offset = normal.dot(ring[i] + 0.5 * e);
     W += len; S += len * offset; Q += len * offset * offset;
-    w[k] = W; s[k] = S; q[k] = Q;
+    w[k] = W; s[k] = S;
   }
   const double whole = Q - S * S / W;
   int best = -1;
