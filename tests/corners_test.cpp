@@ -88,6 +88,62 @@ TEST(Corners, ARunSteppingBetweenTwoParallelOffsetsIsSplit) {
   EXPECT_EQ(extract_corners(ring, labels, axis_normals, 1.0, strict, &problem).size(), 4u);
 }
 
+TEST(Corners, RowOfHousesSteppingBackAndForthGetsOneLinePerHouse) {
+  // The bottom wall (one label, as the MRF leaves it: the 2 px risers are too short for their
+  // own) steps back and forth: y = 0 over x 0-15, y = 2 over 15-30, y = 0 over 30-45. No single
+  // cut explains it, three offsets do.
+  Ring ring;
+  std::vector<int> labels;
+  const auto wall = [&](int x0, int x1, int y) { for (int x = x0; x < x1; ++x) { ring.emplace_back(x, y); labels.push_back(0); } };
+  wall(0, 15, 0);
+  for (int y = 0; y < 2; ++y) { ring.emplace_back(15, y); labels.push_back(0); }
+  wall(15, 30, 2);
+  for (int y = 2; y > 0; --y) { ring.emplace_back(30, y); labels.push_back(0); }
+  wall(30, 45, 0);
+  for (int y = 0; y < 20; ++y) { ring.emplace_back(45, y); labels.push_back(1); }
+  for (int x = 45; x > 0; --x) { ring.emplace_back(x, 20); labels.push_back(2); }
+  for (int y = 20; y > 0; --y) { ring.emplace_back(0, y); labels.push_back(3); }
+  CornerOptions o;
+  o.curve_px = 0;
+  o.max_corner_shift_m = 5;
+  const auto near = [](const Ring& r, const Vec2& p) {
+    for (const Vec2& v : r) if ((v - p).norm() < 0.6) return true;
+    return false;
+  };
+  std::string problem;
+  const Ring steps = extract_corners(ring, labels, axis_normals, 1.0, o, &problem);
+  ASSERT_EQ(steps.size(), 8u) << problem;
+  EXPECT_EQ(ring_problem(steps), "");
+  for (const Vec2& corner : {Vec2(15, 0), Vec2(15, 2), Vec2(30, 2), Vec2(30, 0), Vec2(0, 0), Vec2(45, 0)})
+    EXPECT_TRUE(near(steps, corner)) << corner.transpose();
+  // Offsets closer than split_m (here in the ring's units, as extract_corners takes them) stay one line.
+  CornerOptions coarse = o;
+  coarse.split_m = 3;
+  EXPECT_EQ(extract_corners(ring, labels, axis_normals, 1.0, coarse, &problem).size(), 4u);
+}
+
+TEST(Corners, AWobblingWallIsNotSplit) {
+  // A wall whose pixels wobble by up to 2 px (a smooth wave over 24 px): a few offsets 1 px apart
+  // do not explain it, so it stays one line.
+  Ring ring;
+  std::vector<int> labels;
+  int y = 0;
+  for (int x = 0; x < 96; ++x) {
+    const int target = int(std::lround(2.0 * std::sin(2 * M_PI * x / 24.0)));
+    while (y != target) { ring.emplace_back(x, y); labels.push_back(0); y += target > y ? 1 : -1; }
+    ring.emplace_back(x, y); labels.push_back(0);
+  }
+  while (y != 0) { ring.emplace_back(96, y); labels.push_back(0); y += y < 0 ? 1 : -1; }
+  for (int v = 0; v < 30; ++v) { ring.emplace_back(96, v); labels.push_back(1); }
+  for (int x = 96; x > 0; --x) { ring.emplace_back(x, 30); labels.push_back(2); }
+  for (int v = 30; v > 0; --v) { ring.emplace_back(0, v); labels.push_back(3); }
+  CornerOptions o;
+  o.curve_px = 0;
+  o.max_corner_shift_m = 5;
+  std::string problem;
+  EXPECT_EQ(extract_corners(ring, labels, axis_normals, 1.0, o, &problem).size(), 4u) << problem;
+}
+
 TEST(Corners, TooFewRunsIsAProblem) {
   Ring ring = {{0, 0}, {1, 0}, {1, 1}, {0, 1}};
   std::string problem;

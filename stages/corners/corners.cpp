@@ -1,5 +1,6 @@
 #include "corners/corners.hpp"
 
+#include <algorithm>
 #include <cmath>
 
 #include "geometry/polygon.hpp"
@@ -56,39 +57,58 @@ bool is_curved(const Ring& ring, int first, int count, const Line& line, const C
   return false;
 }
 
-// Appends run [first, first + count) to out, split where its contour steps between two parallel
-// offsets at least `split` apart (each part at least 4 * split long, and the two offsets
-// explaining 95 % of the contour's spread about one line, which a wobble or an arc does not),
-// recursively, three levels at most.
-void split_parallel(const Ring& ring, int first, int count, const Vec2& normal, double split, int depth,
-                    std::vector<std::pair<int, int>>& out) {
-  if (split <= 0 || depth > 3 || count < 4) { out.push_back({first, count}); return; }
-  std::vector<double> w(count), s(count);  // prefix sums of length and length * offset
-  double W = 0, S = 0, Q = 0;
+// Appends run [first, first + count) to out, split where its contour steps between parallel
+// offsets (a row of houses stepping back and forth under one label). The run is cut greedily,
+// each cut where it removes most of the spread about the pieces' own offsets (pieces at least
+// 4 * split long, up to 8 pieces), and the fewest pieces that explain the contour are kept:
+// what is left of the spread about one line at most split_max_residual of it and at most
+// split_max_rms_px (the staircase of a slanted wall alone leaves ~0.3 px), with neighbouring
+// offsets at least `split` apart. A wobble or an arc is not explained that well by a few
+// offsets that far apart.
+void split_parallel(const Ring& ring, int first, int count, const Vec2& normal, const CornerOptions& o,
+                    double pixel_size, std::vector<std::pair<int, int>>& out) {
+  constexpr int max_pieces = 8;
+  const double split = std::max(o.split_px * pixel_size, o.split_m);
+  if (o.split_px <= 0 || count < 4) { out.push_back({first, count}); return; }
+  std::vector<double> w(count + 1, 0.0), s(count + 1, 0.0), q(count + 1, 0.0);  // prefix sums
   for (int k = 0; k < count; ++k) {
     const std::size_t i = (first + k) % ring.size();
     const Vec2 e = edge_vector(ring, i);
     const double len = e.norm(), offset = normal.dot(ring[i] + 0.5 * e);
-    W += len; S += len * offset; Q += len * offset * offset;
-    w[k] = W; s[k] = S;
+    w[k + 1] = w[k] + len; s[k + 1] = s[k] + len * offset; q[k + 1] = q[k] + len * offset * offset;
   }
-  const double whole = Q - S * S / W;
-  int best = -1;
-  double best_sse = whole;
-  for (int k = 1; k < count; ++k) {  // parts [0, k) and [k, count)
-    const double wl = w[k - 1], sl = s[k - 1], wr = W - wl, sr = S - sl;
-    if (wl < 4 * split || wr < 4 * split) continue;
-    const double sse = Q - sl * sl / wl - sr * sr / wr;
-    if (sse < best_sse) { best_sse = sse; best = k; }
-  }
-  if (best > 0) {
-    const double wl = w[best - 1], sl = s[best - 1];
-    const double step = std::abs(sl / wl - (S - sl) / (W - wl));
-    if (step >= split && best_sse <= 0.05 * whole) {
-      split_parallel(ring, first, best, normal, split, depth + 1, out);
-      split_parallel(ring, int((first + best) % ring.size()), count - best, normal, split, depth + 1, out);
-      return;
+  auto sse = [&](int a, int b) {  // spread of edges [a, b) about their own offset
+    const double W = w[b] - w[a], S = s[b] - s[a];
+    return W > 0 ? q[b] - q[a] - S * S / W : 0.0;
+  };
+  auto offset = [&](int a, int b) { return (s[b] - s[a]) / (w[b] - w[a]); };
+  const double whole = sse(0, count);
+  std::vector<int> cuts = {0, count};  // piece p is [cuts[p], cuts[p + 1])
+  double total = whole;
+  while (int(cuts.size()) - 1 < max_pieces) {
+    int best_cut = -1;
+    double best_gain = 0;
+    for (std::size_t p = 0; p + 1 < cuts.size(); ++p) {
+      const int a = cuts[p], b = cuts[p + 1];
+      const double own = sse(a, b);
+      for (int k = a + 1; k < b; ++k) {
+        if (w[k] - w[a] < 4 * split || w[b] - w[k] < 4 * split) continue;
+        const double gain = own - sse(a, k) - sse(k, b);
+        if (gain > best_gain) { best_gain = gain; best_cut = k; }
+      }
     }
+    if (best_cut < 0) break;
+    cuts.insert(std::upper_bound(cuts.begin(), cuts.end(), best_cut), best_cut);
+    total -= best_gain;
+    const double max_rms = o.split_max_rms_px * pixel_size;
+    if (total > o.split_max_residual * whole || total > max_rms * max_rms * w[count]) continue;
+    bool apart = true;
+    for (std::size_t p = 1; p + 1 < cuts.size(); ++p)
+      apart &= std::abs(offset(cuts[p - 1], cuts[p]) - offset(cuts[p], cuts[p + 1])) >= split;
+    if (!apart) break;
+    for (std::size_t p = 0; p + 1 < cuts.size(); ++p)
+      out.push_back({int((first + cuts[p]) % ring.size()), cuts[p + 1] - cuts[p]});
+    return;
   }
   out.push_back({first, count});
 }
@@ -121,7 +141,7 @@ Ring extract_corners(const Ring& ring, const std::vector<int>& labels, const std
   absorb_short_runs(ring, own, o.min_run_px * pixel_size);
   std::vector<std::pair<int, int>> runs;
   for (auto [first, count] : label_runs(own))
-    split_parallel(ring, first, count, directions[own[first]], o.split_px * pixel_size, 0, runs);
+    split_parallel(ring, first, count, directions[own[first]], o, pixel_size, runs);
   const int n = int(runs.size());
   std::vector<Line> lines;
   for (auto [first, count] : runs) lines.push_back(fit_line(ring, first, count, directions[own[first]]));

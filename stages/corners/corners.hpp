@@ -20,7 +20,10 @@ struct CornerOptions {
   int repair_attempts = 4;           // an invalid polygon is retried with min_run doubled this often
   double curve_px = 2.5;             // a run whose contour bows this far from its line is a curved wall (0 = off)
   double curve_window_px = 16.0;     // ... measured as the mean offset over windows of this length
-  double split_px = 2.0;             // a run whose two parts lie this far apart (parallel) becomes two lines and a step (0 = off)
+  double split_px = 1.0;             // a run whose parts lie this far apart (parallel) becomes lines and steps (0 = off)
+  double split_m = 0.5;              // ... and at least this far in metres
+  double split_max_residual = 0.15;  // ... when the parts leave at most this share of the spread about one line
+  double split_max_rms_px = 0.5;     // ... and at most this RMS distance to their own lines
 
   template <class V>
   void visit(V& v) {
@@ -31,7 +34,10 @@ struct CornerOptions {
     v("repair_attempts", repair_attempts, "retries of an invalid polygon with min_run_px doubled each time", Check::between(0, 20));
     v("curve_px", curve_px, "a run whose contour departs from its fitted line by more than this on average over a window (pixels) is kept as a curve: its contour, simplified, replaces the line (0 = off)", Check::at_least(0));
     v("curve_window_px", curve_window_px, "length of the windows over which a run's departure from its line is averaged (pixels)", Check::above(0));
-    v("split_px", split_px, "a straight run whose contour is best explained by two parallel lines this far apart or more (pixels; each part at least 4 times as long) becomes two lines joined by a step (0 = off)", Check::at_least(0));
+    v("split_px", split_px, "a straight run whose contour is explained by parallel lines this far apart or more (pixels, and split_m; each part at least 4 times as long) becomes those lines joined by steps (0 = off)", Check::at_least(0));
+    v("split_m", split_m, "the least offset between parallel parts of a run that splits it, in metres (the larger of this and split_px applies)", Check::at_least(0));
+    v("split_max_residual", split_max_residual, "parts split a run only when they leave at most this share of its contour's spread about one line", Check::between(0, 1));
+    v("split_max_rms_px", split_max_rms_px, "... and at most this RMS distance of the contour to the parts' lines (pixels)", Check::above(0));
   }
 };
 

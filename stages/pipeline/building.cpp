@@ -173,10 +173,12 @@ void run_chain(const std::vector<Ring>& rings, double pixel_size, const CoreOpti
   std::vector<Ring> fit_rings = rings_px;
   if (o.corners.route == "deformed" && edges <= std::size_t(o.budget.max_deformation_edges))
     fit_rings = deform_rings(rings_px, labels, input.directions, o, over_budget, result);
-  // Corners, validated; an invalid polygon is retried with coarser run absorption (short runs
-  // are where crossings come from) before the building is given up to the fallback.
+  // Corners (lengths in metres converted to the frame), validated; an invalid polygon is retried
+  // with coarser run absorption (short runs are where crossings come from) before the building
+  // is given up to the fallback.
   CornerOptions corner_options = o.corners;
   corner_options.max_corner_shift_m = o.corners.max_corner_shift_m / pixel_size;
+  corner_options.split_m = o.corners.split_m / pixel_size;
   std::string problem;
   PolygonWithHoles footprint;
   for (int attempt = 0; attempt <= o.corners.repair_attempts; ++attempt) {
