@@ -38,6 +38,20 @@ TEST_P(Delft, EveryBuildingGetsAValidPolygonAndAStatus) {
 
 INSTANTIATE_TEST_SUITE_P(Routes, Delft, ::testing::Values("original", "deformed"));
 
+TEST(DelftRepair, SplitRunsThatMakeTheRingCrossAreRetriedUnsplit) {
+  // A ragged tree blob at the raster's edge (first pixel row 387, col 9): with its runs split
+  // at parallel offsets every repair attempt crosses itself; unsplit, one is valid.
+  const MaskRaster raster = read_building_mask(delft("top_class_50cm.tif"), BuildingSelector{});
+  const ContourResult contours = extract_contours(raster.mask, raster.transform, ContourOptions{});
+  const BuildingContour* blob = nullptr;
+  for (const BuildingContour& b : contours.buildings)
+    if (b.first_row == 387 && b.first_col == 9) blob = &b;
+  ASSERT_NE(blob, nullptr);
+  const BuildingResult r = regularize_building(blob->rings, 0.5, CoreOptions{});
+  EXPECT_TRUE(r.ok) << r.failed_stage << ": " << r.reason;
+  EXPECT_EQ(polygon_problem(r.footprint), "");
+}
+
 TEST(DelftColours, IsprsColoursGiveTheSameMask) {
   const MaskRaster classes = read_building_mask(delft("top_class_50cm.tif"), BuildingSelector{});
   BuildingSelector blue;

@@ -31,7 +31,7 @@ struct CornerOptions {
     v("min_run_px", min_run_px, "runs of one direction shorter than this (pixel lengths) join their neighbours", Check::at_least(0));
     v("parallel_angle_deg", parallel_angle_deg, "consecutive lines closer than this in angle are joined by a perpendicular step (degrees)", Check::between(0, 89));
     v("max_corner_shift_m", max_corner_shift_m, "an intersection farther than this from where the runs meet is replaced by a step (m)", Check::above(0));
-    v("repair_attempts", repair_attempts, "retries of an invalid polygon with min_run_px doubled each time", Check::between(0, 20));
+    v("repair_attempts", repair_attempts, "retries of an invalid polygon with min_run_px doubled each time (when all fail, they are made again with runs unsplit)", Check::between(0, 20));
     v("curve_px", curve_px, "a run whose contour departs from its fitted line by more than this on average over a window (pixels) is kept as a curve: its contour, simplified, replaces the line (0 = off)", Check::at_least(0));
     v("curve_window_px", curve_window_px, "length of the windows over which a run's departure from its line is averaged (pixels)", Check::above(0));
     v("split_px", split_px, "a straight run whose contour is explained by parallel lines this far apart or more (pixels, and split_m; each part at least 4 times as long) becomes those lines joined by steps (0 = off)", Check::at_least(0));

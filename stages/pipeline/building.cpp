@@ -181,11 +181,17 @@ void run_chain(const std::vector<Ring>& rings, double pixel_size, const CoreOpti
   corner_options.split_m = o.corners.split_m / pixel_size;
   std::string problem;
   PolygonWithHoles footprint;
-  for (int attempt = 0; attempt <= o.corners.repair_attempts; ++attempt) {
-    footprint = corner_polygon(fit_rings, labels, input.directions, corner_options, origin, pixel_size);
-    problem = polygon_problem(footprint);
-    if (problem.empty()) break;
-    corner_options.min_run_px = std::max(2.0, 2 * corner_options.min_run_px);
+  // When every attempt fails, they are made again with runs left unsplit (steps are short too).
+  for (const double split_px : {o.corners.split_px, 0.0}) {
+    corner_options.split_px = split_px;
+    corner_options.min_run_px = o.corners.min_run_px;
+    for (int attempt = 0; attempt <= o.corners.repair_attempts; ++attempt) {
+      footprint = corner_polygon(fit_rings, labels, input.directions, corner_options, origin, pixel_size);
+      problem = polygon_problem(footprint);
+      if (problem.empty()) break;
+      corner_options.min_run_px = std::max(2.0, 2 * corner_options.min_run_px);
+    }
+    if (problem.empty() || split_px == 0) break;
   }
   if (!problem.empty()) throw StageError("validation", problem);
   result.footprint = std::move(footprint);
