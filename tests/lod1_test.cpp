@@ -6,6 +6,7 @@
 #include <array>
 #include <filesystem>
 #include <fstream>
+#include <limits>
 #include <gdal_priv.h>
 #include <map>
 #include <ogrsf_frmts.h>
@@ -158,6 +159,30 @@ class ModelFiles : public ::testing::Test {
   void TearDown() override { fs::remove_all(dir); }
   fs::path dir;
 };
+
+TEST_F(ModelFiles, HeightWindowsMarkNodataNanAndInfinityInvalid) {
+  cv::Mat dsm(3, 4, CV_32F, cv::Scalar(12.5f));
+  dsm.at<float>(0, 1) = -9999.0f;                                     // nodata
+  dsm.at<float>(1, 2) = std::numeric_limits<float>::quiet_NaN();
+  dsm.at<float>(2, 3) = std::numeric_limits<float>::infinity();
+  dsm.at<float>(2, 0) = -std::numeric_limits<float>::infinity();
+  RasterMeta meta;
+  meta.transform.c = {1000, 0.5, 0, 2000, 0, -0.5};
+  meta.has_nodata = true;
+  meta.nodata = -9999;
+  const std::string path = (dir / "dsm.tif").string();
+  write_geotiff(path, {dsm}, meta);
+  const HeightRaster r = HeightWindowReader(path).read(cv::Rect(0, 1, 4, 2), meta.transform);
+  ASSERT_EQ(r.valid.size(), cv::Size(4, 2));
+  const std::vector<uint8_t> expected = {1, 1, 0, 1, 0, 1, 1, 0};  // rows 1 and 2
+  EXPECT_EQ(std::vector<uint8_t>(r.valid.begin<uint8_t>(), r.valid.end<uint8_t>()), expected);
+  EXPECT_FLOAT_EQ(r.values.at<float>(0, 0), 12.5f);
+  EXPECT_DOUBLE_EQ(r.transform.c[3], 2000 - 0.5);  // the window's origin, one row down
+  // Without a nodata value, -9999 is a height like any other.
+  meta.has_nodata = false;
+  write_geotiff(path, {dsm}, meta);
+  EXPECT_EQ(HeightWindowReader(path).read(cv::Rect(0, 0, 4, 1), meta.transform).valid.at<uint8_t>(0, 1), 1);
+}
 
 std::vector<fs::path> files_with(const fs::path& d, const std::string& suffix) {
   std::vector<fs::path> out;

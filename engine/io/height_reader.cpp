@@ -87,14 +87,15 @@ HeightRaster HeightWindowReader::read(const cv::Rect& w, const GeoTransform& gri
   read_window(impl_->cache, *impl_->dataset, impl_->path, 1, GDT_Float32, w, r.values.data);
   int has_nodata = 0;
   const double nodata = band->GetNoDataValue(&has_nodata);
-  // Valid: finite (|v| <= FLT_MAX is false for NaN and infinities) and not nodata; 1 or 0.
-  cv::compare(cv::abs(r.values), std::numeric_limits<float>::max(), r.valid, cv::CMP_LE);
-  if (has_nodata && std::isfinite(nodata)) {  // a NaN nodata is not finite already
-    cv::Mat data;
-    cv::compare(r.values, float(nodata), data, cv::CMP_NE);
-    r.valid &= data;
-  }
-  r.valid /= 255;
+  // Valid: finite (|v| <= FLT_MAX is false for NaN and infinities) and not nodata; 1 or 0. One
+  // pass, vectorised by the compiler (a NaN nodata is not finite already, so it never matches).
+  r.valid.create(w.height, w.width, CV_8U);
+  const float* v = r.values.ptr<float>();
+  uint8_t* valid = r.valid.ptr<uint8_t>();
+  const float no = has_nodata && std::isfinite(nodata) ? float(nodata) : std::numeric_limits<float>::quiet_NaN();
+  const std::size_t n = r.values.total();
+  for (std::size_t i = 0; i < n; ++i)
+    valid[i] = uint8_t((std::abs(v[i]) <= std::numeric_limits<float>::max()) & (v[i] != no));
   r.transform = grid;
   r.transform.c[0] = grid.c[0] + w.x * grid.c[1] + w.y * grid.c[2];
   r.transform.c[3] = grid.c[3] + w.x * grid.c[4] + w.y * grid.c[5];

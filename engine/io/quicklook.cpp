@@ -2,7 +2,7 @@
 
 #include <cmath>
 #include <filesystem>
-#include <opencv2/imgcodecs.hpp>
+#include <gdal_priv.h>
 #include <opencv2/imgproc.hpp>
 #include <unistd.h>
 
@@ -52,9 +52,25 @@ void write_quicklook(const std::string& path, cv::Mat image, const GeoTransform&
     draw(o.footprint.outer, colour);
     for (const Ring& h : o.footprint.holes) draw(h, colour);
   }
+  // Written by GDAL's PNG driver from an in-memory copy (bands in RGB order), with fast deflate:
+  // a quick look is for the eye, and level 1 writes it several times faster.
   const std::string temp = path + ".partial-" + std::to_string(getpid()) + ".png";
-  // Fast deflate: a quick look is for the eye, and level 1 writes it several times faster.
-  if (!cv::imwrite(temp, image, {cv::IMWRITE_PNG_COMPRESSION, 1})) throw InputError("'" + path + "': cannot write the quick-look image");
+  GDALAllRegister();
+  GDALDataset* memory = GetGDALDriverManager()->GetDriverByName("MEM")->Create("", image.cols, image.rows, 3, GDT_Byte, nullptr);
+  int bgr_to_rgb[3] = {3, 2, 1};
+  bool ok = memory && memory->RasterIO(GF_Write, 0, 0, image.cols, image.rows, image.data, image.cols, image.rows, GDT_Byte, 3,
+                                       bgr_to_rgb, 3, GSpacing(image.step), 1, nullptr) == CE_None;
+  if (ok) {
+    const char* options[] = {"ZLEVEL=1", nullptr};
+    GDALDataset* png = GetGDALDriverManager()->GetDriverByName("PNG")->CreateCopy(temp.c_str(), memory, FALSE, const_cast<char**>(options), nullptr, nullptr);
+    ok = png != nullptr;
+    if (png) GDALClose(png);  // (the PNG driver writes the whole file in CreateCopy)
+  }
+  if (memory) GDALClose(memory);
+  if (!ok) {
+    std::filesystem::remove(temp);
+    throw InputError("'" + path + "': cannot write the quick-look image: " + CPLGetLastErrorMsg());
+  }
   std::filesystem::rename(temp, path);
 }
 
