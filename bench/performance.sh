@@ -1,18 +1,19 @@
 #!/usr/bin/env bash
 # The performance benchmark (issue 7): per-stage micro-benchmarks, and end-to-end runs of
 # `lodforge run` on procedural cities of 1x, 4x and 16x area (0.5, 2 and 8 km^2 at 0.25 m) with
-# wall time, buildings per second, peak RSS, the I/O floor (GDAL reading the same rasters, nothing
-# else), 1 vs 2 threads, and the Douglas-Peucker regularizer. Regenerates the results section of
+# wall time, buildings per second, peak RSS, the I/O floor (a process that only reads the same
+# rasters with GDAL: build/bench/io_floor), 1 vs 2 threads, and the Douglas-Peucker regularizer. Regenerates the results section of
 # docs/performance.md (between its markers). Warm page cache: every raster is read once first.
 #
 #   bench/performance.sh [--work DIR] [--scales 1,4,16] [--repeat N] [--no-micro] [--no-docs]
 #
 # Each run is repeated N times (default 3), from scratch; the table keeps the run of median wall
-# time, and the I/O floor is the median of N reads.
+# time, and the I/O floor is the median of N reads. Wall times and peak RSS by bench/timed.py.
 set -euo pipefail
 root="$(cd "$(dirname "$0")/.." && pwd)"
 lodforge="${LODFORGE:-$root/build/lodforge}"
 stages_bench="${STAGES_BENCH:-$root/build/bench/stages_bench}"
+io_floor="${IO_FLOOR:-$root/build/bench/io_floor}"
 work="$root/build/bench-performance"
 scales="1,4,16"
 repeat=3
@@ -30,7 +31,7 @@ while [ $# -gt 0 ]; do
   esac
 done
 [ -x "$lodforge" ] || { echo "bench/performance.sh: no lodforge binary at $lodforge; run scripts/build.sh first" >&2; exit 1; }
-command -v /usr/bin/time >/dev/null || { echo "bench/performance.sh: needs /usr/bin/time (Debian package 'time')" >&2; exit 1; }
+[ -x "$io_floor" ] || { echo "bench/performance.sh: no io_floor binary at $io_floor; run scripts/build.sh first" >&2; exit 1; }
 mkdir -p "$work"
 results="$work/results.jsonl"
 : > "$results"
@@ -49,8 +50,14 @@ for s in "${scale_list[@]}"; do
     "$lodforge" synth --size-m "$side" --pixel-size 0.25 --seed 5 --out "$data" >/dev/null 2>&1
   fi
   rasters=("$data/seg_class.tif" "$data/dsm.tif" "$data/dtm.tif")
-  /usr/bin/python3 "$root/bench/io_floor.py" "${rasters[@]}" >/dev/null  # warm the cache
-  floor=$(for k in $(seq "$repeat"); do /usr/bin/python3 "$root/bench/io_floor.py" "${rasters[@]}"; done | sort -g | awk '{v[NR] = $1} END {print v[int((NR + 1) / 2)]}')
+  "$io_floor" "${rasters[@]}" >/dev/null  # warm the page cache
+  # The floor: the whole process's wall time (start-up and loading GDAL, as in a run), median of
+  # N, with the seconds of its reads alone.
+  floors=$(for k in $(seq "$repeat"); do
+    reads=$("$root/bench/timed.py" "$work/floor.time" "$io_floor" "${rasters[@]}")
+    echo "$(cut -d' ' -f1 "$work/floor.time") $reads"
+  done | sort -g | sed -n "$(( (repeat + 1) / 2 ))p")
+  read -r floor floor_reads <<< "$floors"
   for config in "deformation 1" "deformation 2" "douglas_peucker 2"; do
     set -- $config
     regularizer=$1 threads=$2
@@ -70,19 +77,19 @@ YAML
     echo "bench/performance.sh: x$s $regularizer, $threads thread(s), $repeat run(s)" >&2
     for k in $(seq "$repeat"); do
       rm -rf "$run/out" "$run/work"
-      /usr/bin/time -f "%e %M" -o "$run/time" "$lodforge" run "$run/job.yaml" > "$run/log" 2>&1
+      "$root/bench/timed.py" "$run/time" "$lodforge" run "$run/job.yaml" > "$run/log" 2>&1
       read -r wall rss_kib < "$run/time"
       cp "$run/out/report.json" "$run/report-$k.json"
       echo "$wall $rss_kib $k"
     done > "$run/times"
     read -r wall rss_kib k < <(sort -g "$run/times" | sed -n "$(( (repeat + 1) / 2 ))p")
-    /usr/bin/python3 - "$run" "$s" "$side" "$regularizer" "$threads" "$wall" "$rss_kib" "$floor" "$k" >> "$results" <<'PY'
+    /usr/bin/python3 - "$run" "$s" "$side" "$regularizer" "$threads" "$wall" "$rss_kib" "$floor" "$floor_reads" "$k" >> "$results" <<'PY'
 import json, sys
-run, s, side, reg, threads, wall, rss, floor, k = sys.argv[1:]
+run, s, side, reg, threads, wall, rss, floor, floor_reads, k = sys.argv[1:]
 rep = json.load(open(f"{run}/report-{k}.json"))
 walls = [float(l.split()[0]) for l in open(run + "/times")]
 print(json.dumps({"scale": int(s), "side_m": int(side), "regularizer": reg, "threads": int(threads), "wall_s": float(wall),
-                  "wall_runs_s": walls, "peak_rss_mb": int(rss) / 1024, "io_floor_s": float(floor), "buildings": rep["buildings"],
+                  "wall_runs_s": walls, "peak_rss_mb": int(rss) / 1024, "io_floor_s": float(floor), "io_reads_s": float(floor_reads), "buildings": rep["buildings"],
                   "core_seconds": rep["core_seconds"], "stage_seconds": rep["stage_seconds"], "tiles": rep["tiles"]}))
 PY
   done

@@ -10,6 +10,7 @@
 #include <optional>
 #include <sstream>
 #include <tbb/parallel_for.h>
+#include <tbb/parallel_invoke.h>
 
 #include "io/block_cache.hpp"
 #include "io/errors.hpp"
@@ -203,10 +204,12 @@ std::shared_ptr<TileResult> process_tile(const RunPlan& plan, int tile) {
       const int margin = int(std::ceil((job.stages.heights.ring_outer_m + job.stages.core.corners.max_corner_shift_m) / pixel)) + 2;
       const cv::Rect area = (contours->window + cv::Size(2 * margin, 2 * margin) - cv::Point(margin, margin)) &
               cv::Rect(0, 0, plan.size.width, plan.size.height);
-      dsm_window = plan.readers->heights(plan.dsm_source).read(area, plan.transform);
-      const HeightRaster& dsm = *dsm_window;
+      // DSM and DTM read side by side: a thread with no tile left to take helps the last ones.
+      // (Each thread reads through its own dataset handles, ReaderPool's thread-local readers.)
       std::optional<HeightRaster> dtm;
-      if (!plan.dtm_source.empty()) dtm = plan.readers->heights(plan.dtm_source).read(area, plan.transform);
+      tbb::parallel_invoke([&] { dsm_window = plan.readers->heights(plan.dsm_source).read(area, plan.transform); },
+                           [&] { if (!plan.dtm_source.empty()) dtm = plan.readers->heights(plan.dtm_source).read(area, plan.transform); });
+      const HeightRaster& dsm = *dsm_window;
       heights.emplace(r->buildings.size());
       std::vector<double> seconds(r->buildings.size());
       tbb::parallel_for(std::size_t(0), r->buildings.size(), [&](std::size_t i) {
@@ -273,16 +276,23 @@ std::vector<std::string> write_tile_outputs(const RunPlan& plan, TileResult& res
   }
   WriterContext context{plan.crs_wkt, r->name, plan.transform.to_map(tile_rect.x, tile_rect.y + tile_rect.height)};
   if (!r->buildings.empty() || r->skipped) {
-    for (const std::string& format : job.output.formats) {
-      const std::string relative = "tiles/" + r->name + extension_of(format);
-      if (!r->skipped) {
+    const std::vector<std::string>& formats = job.output.formats;
+    if (!r->skipped) {
+      // The formats are written side by side (each its own file); a thread with no tile left to
+      // take helps the last ones. An error in any is rethrown here, after all have stopped.
+      std::vector<double> seconds(formats.size());
+      tbb::parallel_for(std::size_t(0), formats.size(), [&](std::size_t f) {
         const auto started = Clock::now();
-        const auto writer = make_model_writer(format, (out_dir / relative).string(), context);
+        const auto writer = make_model_writer(formats[f], (out_dir / ("tiles/" + r->name + extension_of(formats[f]))).string(), context);
         for (std::size_t i = 0; i < r->buildings.size(); ++i)
           writer->add(model_of(r->buildings[i], r->heights.empty() ? nullptr : &r->heights[i], r->name, job));
         writer->finish();
-        r->write_seconds += seconds_since(started);
-      }
+        seconds[f] = seconds_since(started);
+      });
+      for (double s : seconds) r->write_seconds += s;
+    }
+    for (const std::string& format : formats) {
+      const std::string relative = "tiles/" + r->name + extension_of(format);
       if (fs::exists(out_dir / relative)) outputs.push_back(relative);
     }
   }

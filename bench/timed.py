@@ -1,0 +1,12 @@
+#!/usr/bin/python3
+"""Runs a command and writes its wall seconds (to 0.1 ms) and peak RSS (KiB) to a file, as
+"WALL RSS"; the command's output passes through, its exit code is returned.
+usage: timed.py OUT_FILE COMMAND [ARG...]"""
+import resource, subprocess, sys, time
+out, command = sys.argv[1], sys.argv[2:]
+start = time.perf_counter()
+code = subprocess.call(command)
+wall = time.perf_counter() - start
+with open(out, "w") as f:
+    f.write("%.4f %d\n" % (wall, resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss))
+sys.exit(code)
