@@ -70,6 +70,29 @@ TEST_F(BlockCacheTest, WindowsEqualDirectReadsAndEachBlockIsDecodedOnce) {
   EXPECT_EQ(cache.decoded_blocks(), 5u * 4u);  // the first window touched them all; the rest were hits
 }
 
+TEST_F(BlockCacheTest, KeepOnlyFreesTheBlocksNoNeededWindowOverlaps) {
+  BlockCache cache(64 << 20);
+  Dataset d(path);
+  std::vector<float> all(300 * 200);
+  cache.read(*d.d, path, 1, GDT_Float32, {0, 0, 300, 200}, all.data());
+  ASSERT_EQ(cache.decoded_blocks(), 20u);
+  const std::size_t block = 64 * 64 * sizeof(float);
+  // Keep what a window over blocks (1..2, 1) needs: 2 full blocks stay, 18 are freed.
+  cache.keep_only({{70, 70, 60, 10}});
+  EXPECT_EQ(cache.held_bytes(), 2 * block);
+  std::vector<float> w(60 * 10);
+  cache.read(*d.d, path, 1, GDT_Float32, {70, 70, 60, 10}, w.data());
+  EXPECT_EQ(cache.decoded_blocks(), 20u);  // still cached
+  EXPECT_EQ(w, direct<float>({70, 70, 60, 10}, GDT_Float32));
+  // A freed block read again is decoded again, with the same values.
+  std::vector<float> corner(5 * 5);
+  cache.read(*d.d, path, 1, GDT_Float32, {0, 0, 5, 5}, corner.data());
+  EXPECT_EQ(cache.decoded_blocks(), 21u);
+  EXPECT_EQ(corner, direct<float>({0, 0, 5, 5}, GDT_Float32));
+  cache.keep_only({});
+  EXPECT_EQ(cache.held_bytes(), 0u);
+}
+
 TEST_F(BlockCacheTest, ThreadsShareBlocksAndASmallBudgetStaysCorrect) {
   for (const std::size_t budget : {std::size_t(64) << 20, std::size_t(20000)}) {  // all blocks, or ~1 block
     BlockCache cache(budget);

@@ -326,7 +326,7 @@ void merge_reports(const fs::path& dir) {
     << ", \"fallback\": " << sums["fallback"] << ", \"lod1\": " << sums["lod1"] << ", \"dropped_small\": " << sums["dropped_small"]
     << ", \"too_large\": " << sums["too_large"] << ",\n  \"seconds\": " << seconds << ", \"core_seconds\": " << core_seconds
     << ",\n  \"stage_seconds\": {\"contours\": " << stage_seconds["contours"] << ", \"regularization\": " << stage_seconds["regularization"]
-    << ", \"heights\": " << stage_seconds["heights"] << ", \"writing\": " << stage_seconds["writing"] << "},\n  \"failed_buildings\": [";
+    << ", \"heights\": " << stage_seconds["heights"] << ", \"writing\": " << stage_seconds["writing"] << "},\n  \"blocks_decoded\": " << sums["blocks_decoded"] << ",\n  \"failed_buildings\": [";
   for (std::size_t i = 0; i < failed.size(); ++i) r << (i ? ",\n    " : "\n    ") << failed[i];
   r << "],\n  \"too_large_buildings\": [";
   for (std::size_t i = 0; i < too_large.size(); ++i) r << (i ? ", " : "") << too_large[i];

@@ -226,6 +226,16 @@ int run_job(int argc, char** argv) {
                      dsm_source, dtm_source, ortho_source, store, contour_options, core_options, heights_options,
                      transform_text, job_key, out_dir, &readers};
 
+  // At most `tokens` tiles in flight: one per thread and one more, so that a thread finds the next
+  // tile while the oldest waits to be recorded in order (each in flight holds its windows: more
+  // only adds memory, measured in docs/performance.md).
+  const std::size_t tokens = std::size_t(job.threads ? job.threads : std::thread::hardware_concurrency()) + 1;
+  // The blocks a tile shares with the tiles still to read (those in flight, and a band's row
+  // beyond them) stay cached; the others are freed as each tile finishes its reads.
+  std::vector<cv::Rect> read_areas;
+  for (int t : tiles) read_areas.push_back(tile_read_area(plan, t));
+  readers.plan_reads(tiles, read_areas, std::size_t(band_cols) + tokens);
+
   std::unique_ptr<tbb::global_control> limit;
   if (job.threads > 0) limit = std::make_unique<tbb::global_control>(tbb::global_control::max_allowed_parallelism, job.threads);
   Totals totals;
@@ -233,8 +243,7 @@ int run_job(int argc, char** argv) {
   std::size_t next = 0, tiles_done = 0;
   const auto start = Clock::now();
   // Serial source; parallel tiles, each writing its own files; serial in-order bookkeeping (the
-  // index and report are sorted into tile order when written). At most `tokens` tiles in flight.
-  const std::size_t tokens = std::max<std::size_t>(2, 2 * std::size_t(job.threads ? job.threads : std::thread::hardware_concurrency()));
+  // index and report are sorted into tile order when written).
   using Done = std::pair<std::shared_ptr<TileResult>, std::vector<std::string>>;  // the tile and its files
   tbb::parallel_pipeline(
       tokens,
@@ -255,6 +264,7 @@ int run_job(int argc, char** argv) {
             progress.update(++tiles_done, totals.buildings);
           }));
   progress.finish();
+  totals.blocks_decoded = readers.blocks_decoded();
   write_index_and_report(totals, plan, job_path, shard.index, shard.count, tiles.size(), seconds_since(start));
   return 0;
 }

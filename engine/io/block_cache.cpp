@@ -52,6 +52,7 @@ struct BlockCache::Impl {
     std::shared_future<std::shared_ptr<const Block>> block;
     std::size_t bytes = 0;  // 0 while being decoded (never evicted then)
     std::list<Key>::iterator recent;
+    cv::Rect rect;  // pixels of the raster it covers
   };
   std::size_t budget;
   std::size_t used = 0, decoded = 0;
@@ -87,6 +88,7 @@ struct BlockCache::Impl {
     Entry& entry = entries[key];
     entry.block = promise.get_future().share();
     entry.recent = recency.begin();
+    entry.rect = rect;
     lock.unlock();
 
     std::shared_ptr<Block> block;
@@ -144,6 +146,23 @@ void read_window(BlockCache* cache, GDALDataset& dataset, const std::string& pat
   GDALRasterBand* b = dataset.GetRasterBand(band);
   if (!b) throw InputError("'" + path + "': has no band " + std::to_string(band));
   read_direct(*b, path, band, static_cast<GDALDataType>(type), w, out);
+}
+
+void BlockCache::keep_only(const std::vector<cv::Rect>& needed) {
+  std::lock_guard lock(impl_->mutex);
+  for (auto e = impl_->entries.begin(); e != impl_->entries.end();) {
+    const bool keep = e->second.bytes == 0 ||
+                      std::any_of(needed.begin(), needed.end(), [&](const cv::Rect& r) { return (r & e->second.rect).area() > 0; });
+    if (keep) { ++e; continue; }
+    impl_->used -= e->second.bytes;
+    impl_->recency.erase(e->second.recent);
+    e = impl_->entries.erase(e);
+  }
+}
+
+std::size_t BlockCache::held_bytes() const {
+  std::lock_guard lock(impl_->mutex);
+  return impl_->used;
 }
 
 std::size_t BlockCache::decoded_blocks() const {

@@ -8,6 +8,7 @@
 #include <memory>
 #include <opencv2/core/types.hpp>
 #include <string>
+#include <vector>
 
 class GDALDataset;
 
@@ -25,8 +26,16 @@ class BlockCache {
   // w.height rows of w.width values, contiguous. Throws InputError naming path when GDAL cannot.
   void read(GDALDataset& dataset, const std::string& path, int band, int type, const cv::Rect& w, void* out);
 
-  // Blocks decoded so far (each decode counted once, whichever thread made it).
+  // Drops every decoded block that overlaps none of `needed` (pixel rectangles, one grid for all
+  // the rasters read through the cache): a run that knows which windows come next frees the
+  // blocks no later tile reads instead of holding them until the budget is full. A dropped
+  // block that is read again after all is decoded again; blocks being decoded stay.
+  void keep_only(const std::vector<cv::Rect>& needed);
+
+  // Blocks decoded so far (each decode counted once, whichever thread made it), and the bytes
+  // held now.
   std::size_t decoded_blocks() const;
+  std::size_t held_bytes() const;
 
  private:
   struct Impl;

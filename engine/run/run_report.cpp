@@ -124,7 +124,7 @@ void write_index_and_report(const Totals& totals, const RunPlan& plan, const std
          << ", \"ok\": " << totals.ok << ", \"fallback\": " << totals.fallback << ", \"lod1\": " << totals.lod1 << ", \"dropped_small\": " << totals.dropped_small
          << ", \"too_large\": " << totals.too_large.size() << ",\n  \"seconds\": " << elapsed << ", \"core_seconds\": " << totals.core_seconds << ",\n  \"stage_seconds\": {\"contours\": "
          << totals.contour_seconds << ", \"regularization\": " << totals.core_seconds << ", \"heights\": " << totals.heights_seconds
-         << ", \"writing\": " << totals.write_seconds << "},\n  \"failed_buildings\": [";
+         << ", \"writing\": " << totals.write_seconds << "},\n  \"blocks_decoded\": " << totals.blocks_decoded << ",\n  \"failed_buildings\": [";
   for (std::size_t i = 0; i < failed_json.size(); ++i) report << (i ? ",\n    " : "\n    ") << failed_json[i];
   report << "],\n  \"too_large_buildings\": [";
   for (std::size_t i = 0; i < too_large.size(); ++i) report << (i ? ", " : "") << '"' << json_escape(too_large[i]) << '"';

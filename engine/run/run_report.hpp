@@ -15,6 +15,7 @@ struct Totals {
   double core_seconds = 0;  // summed regularization time of the buildings computed (not resumed)
   // Summed one-core time of the other per-building stages (TileResult), reads excluded.
   double contour_seconds = 0, heights_seconds = 0, write_seconds = 0;
+  std::size_t blocks_decoded = 0;  // raster blocks decoded by the shared cache (a block freed and read again counts again)
   // Each entry with its tile: tiles are recorded in the order they are processed, the files list
   // them in tile order.
   std::vector<std::pair<int, std::string>> failed_json, too_large, tile_json, index_features;

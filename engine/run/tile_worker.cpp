@@ -1,6 +1,8 @@
 #include "run/tile_worker.hpp"
 
 #include <map>
+#include <mutex>
+#include <set>
 
 #include <tbb/enumerable_thread_specific.h>
 
@@ -139,6 +141,11 @@ struct ReaderPool::Impl {
   };
   tbb::enumerable_thread_specific<PerThread> threads;
   std::unique_ptr<BlockCache> cache;
+  std::mutex schedule_mutex;  // the read schedule (plan_reads):
+  std::size_t lookahead = 0;
+  std::vector<cv::Rect> areas;            // by position in the reading order
+  std::map<int, std::size_t> position;    // of each tile
+  std::set<std::size_t> unread;           // positions of the tiles still to read
 };
 
 ReaderPool::ReaderPool(std::size_t cache_bytes) : impl_(std::make_unique<Impl>()) {
@@ -146,6 +153,49 @@ ReaderPool::ReaderPool(std::size_t cache_bytes) : impl_(std::make_unique<Impl>()
 }
 
 ReaderPool::~ReaderPool() = default;
+
+void ReaderPool::plan_reads(const std::vector<int>& tiles, const std::vector<cv::Rect>& areas, std::size_t lookahead) {
+  std::lock_guard lock(impl_->schedule_mutex);
+  impl_->lookahead = lookahead;
+  impl_->areas = areas;
+  impl_->position.clear();
+  impl_->unread.clear();
+  for (std::size_t k = 0; k < tiles.size(); ++k) {
+    impl_->position[tiles[k]] = k;
+    impl_->unread.insert(k);
+  }
+}
+
+std::size_t ReaderPool::blocks_decoded() const { return impl_->cache ? impl_->cache->decoded_blocks() : 0; }
+
+void ReaderPool::finished_reading(int tile) {
+  if (!impl_->cache) return;
+  std::vector<cv::Rect> needed;
+  {
+    std::lock_guard lock(impl_->schedule_mutex);
+    const auto p = impl_->position.find(tile);
+    if (p == impl_->position.end() || !impl_->unread.erase(p->second)) return;
+    for (auto k = impl_->unread.begin(); k != impl_->unread.end() && needed.size() < impl_->lookahead; ++k)
+      needed.push_back(impl_->areas[*k]);
+  }
+  impl_->cache->keep_only(needed);
+}
+
+namespace {
+
+// Pixels around the footprints' window that the heights read (the ground ring, and corners that
+// may lie past the contour).
+int heights_margin_px(const RunPlan& plan) {
+  const auto& stages = plan.job.stages;
+  return int(std::ceil((stages.heights.ring_outer_m + stages.core.corners.max_corner_shift_m) / plan.pixel)) + 2;
+}
+
+}  // namespace
+
+cv::Rect tile_read_area(const RunPlan& plan, int tile) {
+  const int m = plan.halo_px + (plan.dsm_source.empty() ? 0 : heights_margin_px(plan));
+  return (plan.grid.rect(tile) + cv::Size(2 * m, 2 * m) - cv::Point(m, m)) & cv::Rect(cv::Point(0, 0), plan.size);
+}
 
 const MaskWindowReader& ReaderPool::mask(const std::string& path, const BuildingSelector& selector) {
   auto& slot = impl_->threads.local().masks[path];
@@ -173,19 +223,24 @@ std::shared_ptr<TileResult> process_tile(const RunPlan& plan, int tile) {
   if (auto summary = store.done_summary(r->name, done_key)) {
     r->skipped = true;
     r->summary = *summary;
+    plan.readers->finished_reading(tile);
     return r;
   }
-  const MaskWindowReader& reader = plan.readers->mask(job.inputs.segmentation.path, plan.selector);
-  const TileWindow window = find_tile_window(reader, grid, tile, plan.halo_px, plan.max_window_px, job.stages.contour.connectivity);
-  const std::uint64_t contour_key = fnv1a(plan.contour_options + plan.transform_text + std::to_string(grid.tile_px), window.hash);
-  std::optional<TileBuildings> contours = store.load_contours(r->name, contour_key);
-  r->contours_reused = contours.has_value();
-  if (!contours) {
-    const auto traced = Clock::now();
-    contours = trace_tile(window, grid, tile, plan.transform, job.stages.contour);
-    // The labeling, done in the window search, is the contour stage's first step.
-    r->contour_seconds = window.label_seconds + seconds_since(traced);
-    store.save_contours(r->name, contour_key, *contours);
+  std::uint64_t contour_key = 0;
+  std::optional<TileBuildings> contours;
+  {  // the window (mask and its labels) is freed once traced: tiles in flight hold only what they need
+    const MaskWindowReader& reader = plan.readers->mask(job.inputs.segmentation.path, plan.selector);
+    const TileWindow window = find_tile_window(reader, grid, tile, plan.halo_px, plan.max_window_px, job.stages.contour.connectivity);
+    contour_key = fnv1a(plan.contour_options + plan.transform_text + std::to_string(grid.tile_px), window.hash);
+    contours = store.load_contours(r->name, contour_key);
+    r->contours_reused = contours.has_value();
+    if (!contours) {
+      const auto traced = Clock::now();
+      contours = trace_tile(window, grid, tile, plan.transform, job.stages.contour);
+      // The labeling, done in the window search, is the contour stage's first step.
+      r->contour_seconds = window.label_seconds + seconds_since(traced);
+      store.save_contours(r->name, contour_key, *contours);
+    }
   }
   const std::uint64_t buildings_key = fnv1a(plan.core_options, contour_key);
   std::optional<std::vector<BuildingOutput>> buildings = store.load_buildings(r->name, buildings_key);
@@ -201,7 +256,7 @@ std::shared_ptr<TileResult> process_tile(const RunPlan& plan, int tile) {
     std::optional<std::vector<Heights>> heights;
     if (auto blob = store.load_blob("heights", r->name, heights_key)) heights = parse_heights(*blob, r->buildings.size());
     if (!heights) {
-      const int margin = int(std::ceil((job.stages.heights.ring_outer_m + job.stages.core.corners.max_corner_shift_m) / pixel)) + 2;
+      const int margin = heights_margin_px(plan);
       const cv::Rect area = (contours->window + cv::Size(2 * margin, 2 * margin) - cv::Point(margin, margin)) &
               cv::Rect(0, 0, plan.size.width, plan.size.height);
       // DSM and DTM read side by side: a thread with no tile left to take helps the last ones.
@@ -231,6 +286,7 @@ std::shared_ptr<TileResult> process_tile(const RunPlan& plan, int tile) {
     }
     r->heights = std::move(*heights);
   }
+  plan.readers->finished_reading(tile);  // (a quick look may read again: decoded again if freed)
   if (job.output.quicklook && !r->buildings.empty()) {
     const cv::Rect tile_rect = grid.rect(tile);
     if (!job.inputs.orthophoto.path.empty()) {

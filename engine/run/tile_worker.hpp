@@ -16,7 +16,6 @@
 
 namespace lodforge {
 
-// Everything a tile needs to know about the run, fixed before the first tile.
 class HeightWindowReader;
 
 // Raster readers kept open per worker thread for the whole run: GDAL's block cache belongs to
@@ -31,11 +30,20 @@ class ReaderPool {
   const MaskWindowReader& mask(const std::string& path, const BuildingSelector& selector);
   const HeightWindowReader& heights(const std::string& path);
 
+  // The tiles in the order they are read, with the pixels each reads (tile_read_area). As each
+  // tile says it has finished reading, the shared blocks that none of the next `lookahead` tiles
+  // still to read overlaps are freed (rather than held until the budget is full, so memory stays
+  // that of a few tiles' windows whatever the area). A freed block read again is decoded again.
+  void plan_reads(const std::vector<int>& tiles, const std::vector<cv::Rect>& areas, std::size_t lookahead);
+  void finished_reading(int tile);
+  std::size_t blocks_decoded() const;  // by the shared cache so far (0 without one)
+
  private:
   struct Impl;
   std::unique_ptr<Impl> impl_;
 };
 
+// Everything a tile needs to know about the run, fixed before the first tile.
 struct RunPlan {
   const Job& job;
   cv::Size size;  // of the segmentation raster
@@ -73,6 +81,10 @@ struct TileResult {
 };
 
 std::shared_ptr<TileResult> process_tile(const RunPlan& plan, int tile);
+
+// The pixels a tile reads as planned: its rectangle with the halo, and with the heights' margin
+// when there is a DSM (a window grown for a large building reads more).
+cv::Rect tile_read_area(const RunPlan& plan, int tile);
 
 // Writes the tile's files (every format and the quick look) and marks it complete; returns the
 // files it has, relative to out_dir.
