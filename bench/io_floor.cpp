@@ -5,6 +5,7 @@
 //   usage: io_floor RASTER [RASTER...]
 #include <gdal_priv.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cstdint>
 #include <cstdio>

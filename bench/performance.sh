@@ -54,7 +54,7 @@ for s in "${scale_list[@]}"; do
   # The floor: the whole process's wall time (start-up and loading GDAL, as in a run), median of
   # N, with the seconds of its reads alone.
   floors=$(for k in $(seq "$repeat"); do
-    reads=$("$root/bench/timed.py" "$work/floor.time" "$io_floor" "${rasters[@]}")
+    reads=$("$root/bench/timed.py" "$work/floor.time" "$io_floor" "${rasters[@]}") || exit 1
     echo "$(cut -d' ' -f1 "$work/floor.time") $reads"
   done | sort -g | sed -n "$(( (repeat + 1) / 2 ))p")
   read -r floor floor_reads <<< "$floors"

@@ -9,4 +9,4 @@ code = subprocess.call(command)
 wall = time.perf_counter() - start
 with open(out, "w") as f:
     f.write("%.4f %d\n" % (wall, resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss))
-sys.exit(code)
+sys.exit(code if code >= 0 else 128 - code)  # killed by signal N: 128 + N, as a shell says

@@ -16,6 +16,7 @@
 #include <sstream>
 #include <sys/stat.h>
 #include <tbb/global_control.h>
+#include <tbb/info.h>
 #include <tbb/parallel_for.h>
 #include <tbb/parallel_pipeline.h>
 #include <unistd.h>
@@ -189,7 +190,7 @@ int run_job(int argc, char** argv) {
   for (int t = 0; t < grid.count(); ++t) if (t % shard.count == shard.index) tiles.push_back(t);
   spdlog::info("{}: {} x {} pixels of {:.3g} m, {} tiles of {} m ({} in this shard {}/{}), {} threads",
                job.inputs.segmentation.path, seg.size.width, seg.size.height, pixel, grid.count(), job.tiling.tile_size_m,
-               tiles.size(), shard.index, shard.count, job.threads ? job.threads : int(std::thread::hardware_concurrency()));
+               tiles.size(), shard.index, shard.count, job.threads ? job.threads : tbb::info::default_concurrency());
 
   // Keys: everything an output depends on.
   Job key_job = job;
@@ -229,7 +230,7 @@ int run_job(int argc, char** argv) {
   // At most `tokens` tiles in flight: one per thread and one more, so that a thread finds the next
   // tile while the oldest waits to be recorded in order (each in flight holds its windows: more
   // only adds memory, measured in docs/performance.md).
-  const std::size_t tokens = std::size_t(job.threads ? job.threads : std::thread::hardware_concurrency()) + 1;
+  const std::size_t tokens = std::size_t(job.threads ? job.threads : tbb::info::default_concurrency()) + 1;
   // The blocks a tile shares with the tiles still to read (those in flight, and a band's row
   // beyond them) stay cached; the others are freed as each tile finishes its reads.
   std::vector<cv::Rect> read_areas;

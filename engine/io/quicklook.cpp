@@ -54,22 +54,28 @@ void write_quicklook(const std::string& path, cv::Mat image, const GeoTransform&
   }
   // Written by GDAL's PNG driver from an in-memory copy (bands in RGB order), with fast deflate:
   // a quick look is for the eye, and level 1 writes it several times faster.
+  // (GDAL's drivers are registered once by main, before any worker thread.)
   const std::string temp = path + ".partial-" + std::to_string(getpid()) + ".png";
-  GDALAllRegister();
-  GDALDataset* memory = GetGDALDriverManager()->GetDriverByName("MEM")->Create("", image.cols, image.rows, 3, GDT_Byte, nullptr);
+  GDALDriver* mem_driver = GetGDALDriverManager()->GetDriverByName("MEM");
+  GDALDriver* png_driver = GetGDALDriverManager()->GetDriverByName("PNG");
+  if (!mem_driver || !png_driver) throw InputError("'" + path + "': cannot write the quick-look image: GDAL has no MEM or PNG driver");
+  CPLErrorReset();
+  GDALDataset* memory = mem_driver->Create("", image.cols, image.rows, 3, GDT_Byte, nullptr);
   int bgr_to_rgb[3] = {3, 2, 1};
   bool ok = memory && memory->RasterIO(GF_Write, 0, 0, image.cols, image.rows, image.data, image.cols, image.rows, GDT_Byte, 3,
                                        bgr_to_rgb, 3, GSpacing(image.step), 1, nullptr) == CE_None;
   if (ok) {
     const char* options[] = {"ZLEVEL=1", nullptr};
-    GDALDataset* png = GetGDALDriverManager()->GetDriverByName("PNG")->CreateCopy(temp.c_str(), memory, FALSE, const_cast<char**>(options), nullptr, nullptr);
+    GDALDataset* png = png_driver->CreateCopy(temp.c_str(), memory, FALSE, const_cast<char**>(options), nullptr, nullptr);
     ok = png != nullptr;
     if (png) GDALClose(png);  // (the PNG driver writes the whole file in CreateCopy)
   }
   if (memory) GDALClose(memory);
   if (!ok) {
-    std::filesystem::remove(temp);
-    throw InputError("'" + path + "': cannot write the quick-look image: " + CPLGetLastErrorMsg());
+    const std::string error = CPLGetLastErrorMsg();
+    std::error_code ignored;
+    std::filesystem::remove(temp, ignored);
+    throw InputError("'" + path + "': cannot write the quick-look image: " + error);
   }
   std::filesystem::rename(temp, path);
 }

@@ -13,6 +13,7 @@
 #include <sstream>
 #include <tbb/parallel_for.h>
 #include <tbb/parallel_invoke.h>
+#include <tbb/task_arena.h>
 
 #include "io/block_cache.hpp"
 #include "io/errors.hpp"
@@ -29,12 +30,18 @@ namespace fs = std::filesystem;
 namespace {
 
 using Clock = std::chrono::steady_clock;
+
+// Runs a tile's nested parallel work (its buildings, its two height reads, its formats) so that a
+// thread waiting in it helps with it only, never starts another tile meanwhile: a stolen tile
+// would hold this one (and the in-order bookkeeping, and memory) until it is done.
+template <class F>
+void within_tile(F&& f) { tbb::this_task_arena::isolate(std::forward<F>(f)); }
 double seconds_since(Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); }
 
 
 std::vector<BuildingOutput> regularize_tile(const TileBuildings& tile, const Job& job, long raster_width, double pixel_size) {
   std::vector<BuildingOutput> out(tile.buildings.size());
-  tbb::parallel_for(std::size_t(0), tile.buildings.size(), [&](std::size_t i) {
+  within_tile([&] { tbb::parallel_for(std::size_t(0), tile.buildings.size(), [&](std::size_t i) {
     const BuildingContour& b = tile.buildings[i];
     BuildingOutput& o = out[i];
     o.id = std::int64_t(b.first_row) * raster_width + b.first_col;
@@ -46,7 +53,7 @@ std::vector<BuildingOutput> regularize_tile(const TileBuildings& tile, const Job
     o.stage = r.failed_stage;
     o.reason = r.reason;
     o.seconds = r.seconds;
-  });
+  }); });
   return out;
 }
 
@@ -170,14 +177,13 @@ std::size_t ReaderPool::blocks_decoded() const { return impl_->cache ? impl_->ca
 
 void ReaderPool::finished_reading(int tile) {
   if (!impl_->cache) return;
+  // Under the schedule's lock throughout, so that an older set never frees what a newer keeps.
+  std::lock_guard lock(impl_->schedule_mutex);
+  const auto p = impl_->position.find(tile);
+  if (p == impl_->position.end() || !impl_->unread.erase(p->second)) return;
   std::vector<cv::Rect> needed;
-  {
-    std::lock_guard lock(impl_->schedule_mutex);
-    const auto p = impl_->position.find(tile);
-    if (p == impl_->position.end() || !impl_->unread.erase(p->second)) return;
-    for (auto k = impl_->unread.begin(); k != impl_->unread.end() && needed.size() < impl_->lookahead; ++k)
-      needed.push_back(impl_->areas[*k]);
-  }
+  for (auto k = impl_->unread.begin(); k != impl_->unread.end() && needed.size() < impl_->lookahead; ++k)
+    needed.push_back(impl_->areas[*k]);
   impl_->cache->keep_only(needed);
 }
 
@@ -262,12 +268,14 @@ std::shared_ptr<TileResult> process_tile(const RunPlan& plan, int tile) {
       // DSM and DTM read side by side: a thread with no tile left to take helps the last ones.
       // (Each thread reads through its own dataset handles, ReaderPool's thread-local readers.)
       std::optional<HeightRaster> dtm;
-      tbb::parallel_invoke([&] { dsm_window = plan.readers->heights(plan.dsm_source).read(area, plan.transform); },
-                           [&] { if (!plan.dtm_source.empty()) dtm = plan.readers->heights(plan.dtm_source).read(area, plan.transform); });
+      within_tile([&] {
+        tbb::parallel_invoke([&] { dsm_window = plan.readers->heights(plan.dsm_source).read(area, plan.transform); },
+                             [&] { if (!plan.dtm_source.empty()) dtm = plan.readers->heights(plan.dtm_source).read(area, plan.transform); });
+      });
       const HeightRaster& dsm = *dsm_window;
       heights.emplace(r->buildings.size());
       std::vector<double> seconds(r->buildings.size());
-      tbb::parallel_for(std::size_t(0), r->buildings.size(), [&](std::size_t i) {
+      within_tile([&] { tbb::parallel_for(std::size_t(0), r->buildings.size(), [&](std::size_t i) {
         const auto started = Clock::now();
         Heights& h = (*heights)[i];
         h = building_heights(r->buildings[i].footprint, dsm, dtm ? &*dtm : nullptr, job.stages.heights);
@@ -280,7 +288,7 @@ std::shared_ptr<TileResult> process_tile(const RunPlan& plan, int tile) {
           }
         }
         seconds[i] = seconds_since(started);
-      });
+      }); });
       for (double s : seconds) r->heights_seconds += s;
       store.save_blob("heights", r->name, heights_key, serialize_heights(*heights));
     }
@@ -337,14 +345,14 @@ std::vector<std::string> write_tile_outputs(const RunPlan& plan, TileResult& res
       // The formats are written side by side (each its own file); a thread with no tile left to
       // take helps the last ones. An error in any is rethrown here, after all have stopped.
       std::vector<double> seconds(formats.size());
-      tbb::parallel_for(std::size_t(0), formats.size(), [&](std::size_t f) {
+      within_tile([&] { tbb::parallel_for(std::size_t(0), formats.size(), [&](std::size_t f) {
         const auto started = Clock::now();
         const auto writer = make_model_writer(formats[f], (out_dir / ("tiles/" + r->name + extension_of(formats[f]))).string(), context);
         for (std::size_t i = 0; i < r->buildings.size(); ++i)
           writer->add(model_of(r->buildings[i], r->heights.empty() ? nullptr : &r->heights[i], r->name, job));
         writer->finish();
         seconds[f] = seconds_since(started);
-      });
+      }); });
       for (double s : seconds) r->write_seconds += s;
     }
     for (const std::string& format : formats) {
