@@ -256,33 +256,34 @@ std::shared_ptr<TileResult> process_tile(const RunPlan& plan, int tile) {
     store.save_buildings(r->name, buildings_key, *buildings);
   }
   r->buildings = std::move(*buildings);
-  std::optional<HeightRaster> dsm_window;  // read for the heights, reused for the picture
   if (!plan.dsm_source.empty()) {
     const std::uint64_t heights_key = fnv1a(plan.heights_options, buildings_key);
     std::optional<std::vector<Heights>> heights;
     if (auto blob = store.load_blob("heights", r->name, heights_key)) heights = parse_heights(*blob, r->buildings.size());
     if (!heights) {
-      const int margin = heights_margin_px(plan);
-      const cv::Rect area = (contours->window + cv::Size(2 * margin, 2 * margin) - cv::Point(margin, margin)) &
-              cv::Rect(0, 0, plan.size.width, plan.size.height);
-      // DSM and DTM read side by side: a thread with no tile left to take helps the last ones.
-      // (Each thread reads through its own dataset handles, ReaderPool's thread-local readers.)
-      std::optional<HeightRaster> dtm;
-      within_tile([&] {
-        tbb::parallel_invoke([&] { dsm_window = plan.readers->heights(plan.dsm_source).read(area, plan.transform); },
-                             [&] { if (!plan.dtm_source.empty()) dtm = plan.readers->heights(plan.dtm_source).read(area, plan.transform); });
-      });
-      const HeightRaster& dsm = *dsm_window;
+      // Each building reads just the DSM and DTM pixels its heights need (heights_box), from the
+      // shared blocks: a tile holds no window of the whole tile, and blocks no building touches
+      // are never decoded. (Each thread reads through its own dataset handles.)
       heights.emplace(r->buildings.size());
       std::vector<double> seconds(r->buildings.size());
       within_tile([&] { tbb::parallel_for(std::size_t(0), r->buildings.size(), [&](std::size_t i) {
-        const auto started = Clock::now();
+        const PolygonWithHoles& footprint = r->buildings[i].footprint;
+        const cv::Rect box = heights_box(footprint, plan.transform, plan.size, job.stages.heights);
+        HeightRaster dsm;
+        std::optional<HeightRaster> dtm;
+        if (!box.empty()) {
+          dsm = plan.readers->heights(plan.dsm_source).read(box, plan.transform);
+          if (!plan.dtm_source.empty()) dtm = plan.readers->heights(plan.dtm_source).read(box, plan.transform);
+        } else {
+          dsm.transform = plan.transform;  // (nothing of the footprint on the raster: reported as such)
+        }
+        const auto started = Clock::now();  // (reads excluded, as for every stage)
         Heights& h = (*heights)[i];
-        h = building_heights(r->buildings[i].footprint, dsm, dtm ? &*dtm : nullptr, job.stages.heights);
+        h = building_heights(footprint, dsm, dtm ? &*dtm : nullptr, job.stages.heights);
         // The block must be a valid shell to count as LOD1; decided here so that the report,
         // the summary and every file agree.
         if (h.ok) {
-          if (const std::string problem = shell_problem(extrude(r->buildings[i].footprint, h.ground, h.roof)); !problem.empty()) {
+          if (const std::string problem = shell_problem(extrude(footprint, h.ground, h.roof)); !problem.empty()) {
             h.ok = false;
             h.reason = "lod1: invalid shell: " + problem;
           }
@@ -300,16 +301,8 @@ std::shared_ptr<TileResult> process_tile(const RunPlan& plan, int tile) {
     if (!job.inputs.orthophoto.path.empty()) {
       r->quicklook_background = read_orthophoto(plan.ortho_source, tile_rect);
     } else if (!plan.dsm_source.empty()) {
-      if (dsm_window && (dsm_window->values.size().area() > 0)) {
-        // The tile within the window read for the heights (which contains it).
-        const Vec2 corner = dsm_window->transform.to_pixel(plan.transform.to_map(tile_rect.x, tile_rect.y));
-        const cv::Rect inside(int(std::lround(corner.x())), int(std::lround(corner.y())), tile_rect.width, tile_rect.height);
-        // Cloned: filters must not see past the tile, exactly as with a fresh read of it.
-        r->quicklook_background = hillshade(dsm_window->values(inside).clone(), dsm_window->valid(inside).clone(), pixel);
-      } else {
-        const HeightRaster dsm = plan.readers->heights(plan.dsm_source).read(tile_rect, plan.transform);
-        r->quicklook_background = hillshade(dsm.values, dsm.valid, pixel);
-      }
+      const HeightRaster dsm = plan.readers->heights(plan.dsm_source).read(tile_rect, plan.transform);
+      r->quicklook_background = hillshade(dsm.values, dsm.valid, pixel);
     } else {
       cv::Mat grey = plan.readers->mask(job.inputs.segmentation.path, plan.selector).read(tile_rect) * 120 + 40;
       cv::cvtColor(grey, r->quicklook_background, cv::COLOR_GRAY2BGR);

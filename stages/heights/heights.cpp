@@ -47,12 +47,16 @@ std::vector<float> samples(const HeightRaster& r, const cv::Rect& box, const cv:
 
 }  // namespace
 
+cv::Rect heights_box(const PolygonWithHoles& footprint, const GeoTransform& transform, cv::Size size, const HeightOptions& o) {
+  const int margin = int(std::ceil(o.ring_outer_m / transform.pixel_size())) + 1;
+  return footprint_box(footprint, transform, size, margin);
+}
+
 Heights building_heights(const PolygonWithHoles& footprint, const HeightRaster& dsm, const HeightRaster* dtm,
                          const HeightOptions& o) {
   Heights h;
   const double pixel = dsm.transform.pixel_size();
-  const int margin = int(std::ceil(o.ring_outer_m / pixel)) + 1;
-  const cv::Rect box = footprint_box(footprint, dsm.transform, dsm.values.size(), margin);
+  const cv::Rect box = heights_box(footprint, dsm.transform, dsm.values.size(), o);
   if (box.empty()) { h.reason = "the footprint lies outside the DSM"; return h; }
   GeoTransform local = dsm.transform;
   local.c[0] = dsm.transform.c[0] + box.x * dsm.transform.c[1] + box.y * dsm.transform.c[2];

@@ -42,6 +42,11 @@ struct Heights {
   std::string reason;  // when !ok
 };
 
+// The pixels of a height raster on the grid `transform` (size pixels) that building_heights reads
+// for this footprint: its box grown by the ground ring, clipped to the raster. A window of just
+// these pixels gives the same heights as any larger one.
+cv::Rect heights_box(const PolygonWithHoles& footprint, const GeoTransform& transform, cv::Size size, const HeightOptions& options);
+
 // dtm may be null (ground from a DSM ring).
 Heights building_heights(const PolygonWithHoles& footprint, const HeightRaster& dsm, const HeightRaster* dtm,
                          const HeightOptions& options);
