@@ -107,7 +107,7 @@ void check_companion(const std::string& key, const std::string& path, const Rast
   if (path.empty()) return;
   const RasterInfo r = inspect_raster(path, key);
   OGRSpatialReference a, b;
-  const bool same_crs = seg.crs_wkt.empty() || r.crs_wkt.empty() ||
+  const bool same_crs = seg.crs_wkt.empty() || r.crs_wkt.empty() || r.crs_wkt == seg.crs_wkt ||  // (the usual case, no PROJ)
                         (a.importFromWkt(seg.crs_wkt.c_str()) == OGRERR_NONE && b.importFromWkt(r.crs_wkt.c_str()) == OGRERR_NONE &&
                          a.IsSame(&b));
   auto extent = [](const RasterInfo& i) {
