@@ -2,8 +2,9 @@
 # The performance benchmark (issue 7): per-stage micro-benchmarks, and end-to-end runs of
 # `lodforge run` on procedural cities of 1x, 4x and 16x area (0.5, 2 and 8 km^2 at 0.25 m) with
 # wall time, buildings per second, peak RSS, the I/O floor (a process that only reads the same
-# rasters with GDAL: build/bench/io_floor), 1 vs 2 threads, and the Douglas-Peucker regularizer. Regenerates the results section of
-# docs/performance.md (between its markers). Warm page cache: every raster is read once first.
+# rasters with GDAL: build/bench/io_floor), 1 vs 2 threads, and the Douglas-Peucker regularizer.
+# Regenerates the results section of docs/performance.md (between its markers). Warm page cache:
+# every raster is read once first.
 #
 #   bench/performance.sh [--work DIR] [--scales 1,4,16] [--repeat N] [--no-micro] [--no-docs]
 #
@@ -26,7 +27,7 @@ while [ $# -gt 0 ]; do
     --repeat) repeat="$2"; shift 2 ;;
     --no-micro) micro=0; shift ;;
     --no-docs) docs=0; shift ;;
-    -h|--help) sed -n '2,12p' "$0"; exit 0 ;;
+    -h|--help) sed -n '2,13p' "$0"; exit 0 ;;
     *) echo "bench/performance.sh: unknown argument '$1' (see --help)" >&2; exit 2 ;;
   esac
 done

@@ -3,6 +3,8 @@
 "WALL RSS"; the command's output passes through, its exit code is returned.
 usage: timed.py OUT_FILE COMMAND [ARG...]"""
 import resource, subprocess, sys, time
+if len(sys.argv) < 3:
+    sys.exit("usage: timed.py OUT_FILE COMMAND [ARG...]")
 out, command = sys.argv[1], sys.argv[2:]
 start = time.perf_counter()
 code = subprocess.call(command)
