@@ -27,7 +27,7 @@ while [ $# -gt 0 ]; do
     --repeat) repeat="$2"; shift 2 ;;
     --no-micro) micro=0; shift ;;
     --no-docs) docs=0; shift ;;
-    -h|--help) sed -n '2,13p' "$0"; exit 0 ;;
+    -h|--help) sed -n '2,12p' "$0"; exit 0 ;;
     *) echo "bench/performance.sh: unknown argument '$1' (see --help)" >&2; exit 2 ;;
   esac
 done
