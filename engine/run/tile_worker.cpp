@@ -31,7 +31,7 @@ namespace {
 
 using Clock = std::chrono::steady_clock;
 
-// Runs a tile's nested parallel work (its buildings, its two height reads, its formats) so that a
+// Runs a tile's nested parallel work (labeling, its buildings, their heights, its formats) so that a
 // thread waiting in it helps with it only, never starts another tile meanwhile: a stolen tile
 // would hold this one (and the in-order bookkeeping, and memory) until it is done.
 template <class F>
@@ -236,7 +236,8 @@ std::shared_ptr<TileResult> process_tile(const RunPlan& plan, int tile) {
   std::optional<TileBuildings> contours;
   {  // the window (mask and its labels) is freed once traced: tiles in flight hold only what they need
     const MaskWindowReader& reader = plan.readers->mask(job.inputs.segmentation.path, plan.selector);
-    const TileWindow window = find_tile_window(reader, grid, tile, plan.halo_px, plan.max_window_px, job.stages.contour.connectivity);
+    TileWindow window;  // (OpenCV labels the components with nested parallel work: isolated too)
+    within_tile([&] { window = find_tile_window(reader, grid, tile, plan.halo_px, plan.max_window_px, job.stages.contour.connectivity); });
     contour_key = fnv1a(plan.contour_options + plan.transform_text + std::to_string(grid.tile_px), window.hash);
     contours = store.load_contours(r->name, contour_key);
     r->contours_reused = contours.has_value();
