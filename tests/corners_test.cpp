@@ -16,6 +16,19 @@ void rectangle_contour(int w, int h, Ring& ring, std::vector<int>& labels) {
 
 const std::vector<Vec2> axis_normals = {{0, -1}, {1, 0}, {0, 1}, {-1, 0}};
 
+// The right side and top of a w x h box whose bottom wall the test builds (labels 1, 2, 3).
+void close_box(int w, int h, Ring& ring, std::vector<int>& labels) {
+  for (int y = 0; y < h; ++y) { ring.emplace_back(w, y); labels.push_back(1); }
+  for (int x = w; x > 0; --x) { ring.emplace_back(x, h); labels.push_back(2); }
+  for (int y = h; y > 0; --y) { ring.emplace_back(0, y); labels.push_back(3); }
+}
+
+// True when a vertex of r lies within 0.6 of p.
+bool near(const Ring& r, const Vec2& p) {
+  for (const Vec2& v : r) if ((v - p).norm() < 0.6) return true;
+  return false;
+}
+
 TEST(Corners, RectangleGivesItsFourCorners) {
   Ring ring;
   std::vector<int> labels;
@@ -67,10 +80,6 @@ TEST(Corners, ARunSteppingBetweenTwoParallelOffsetsIsSplit) {
   CornerOptions o;
   o.curve_px = 0;              // (a 3 px step is also a departure the curve test would keep as a contour)
   o.max_corner_shift_m = 5;    // (the one-line fit's corners lie 1.5 px from the contour's)
-  const auto near = [](const Ring& r, const Vec2& p) {
-    for (const Vec2& v : r) if ((v - p).norm() < 0.6) return true;
-    return false;
-  };
   std::string problem;
   const Ring split = extract_corners(ring, labels, axis_normals, 1.0, o, &problem);
   ASSERT_EQ(split.size(), 6u) << problem;
@@ -100,16 +109,10 @@ TEST(Corners, RowOfHousesSteppingBackAndForthGetsOneLinePerHouse) {
   wall(15, 30, 2);
   for (int y = 2; y > 0; --y) { ring.emplace_back(30, y); labels.push_back(0); }
   wall(30, 45, 0);
-  for (int y = 0; y < 20; ++y) { ring.emplace_back(45, y); labels.push_back(1); }
-  for (int x = 45; x > 0; --x) { ring.emplace_back(x, 20); labels.push_back(2); }
-  for (int y = 20; y > 0; --y) { ring.emplace_back(0, y); labels.push_back(3); }
+  close_box(45, 20, ring, labels);
   CornerOptions o;
   o.curve_px = 0;
   o.max_corner_shift_m = 5;
-  const auto near = [](const Ring& r, const Vec2& p) {
-    for (const Vec2& v : r) if ((v - p).norm() < 0.6) return true;
-    return false;
-  };
   std::string problem;
   const Ring steps = extract_corners(ring, labels, axis_normals, 1.0, o, &problem);
   ASSERT_EQ(steps.size(), 8u) << problem;
@@ -134,9 +137,7 @@ TEST(Corners, AWobblingWallIsNotSplit) {
     ring.emplace_back(x, y); labels.push_back(0);
   }
   while (y != 0) { ring.emplace_back(96, y); labels.push_back(0); y += y < 0 ? 1 : -1; }
-  for (int v = 0; v < 30; ++v) { ring.emplace_back(96, v); labels.push_back(1); }
-  for (int x = 96; x > 0; --x) { ring.emplace_back(x, 30); labels.push_back(2); }
-  for (int v = 30; v > 0; --v) { ring.emplace_back(0, v); labels.push_back(3); }
+  close_box(96, 30, ring, labels);
   CornerOptions o;
   o.curve_px = 0;
   o.max_corner_shift_m = 5;
