@@ -209,7 +209,8 @@ int run_job(int argc, char** argv) {
 
   CPLSetConfigOption("OGR_CURRENT_DATE", "2000-01-01T00:00:00.000Z");  // byte-identical GeoPackages
   // The block budget: three quarters for the decoded blocks the threads share, a quarter for
-  // GDAL's own cache (which holds a block while it is decoded, and strips read in parts).
+  // GDAL's own cache (strips read in parts, blocks over 4 MB read in squares; the blocks of a tiled
+  // raster are read whole, past GDAL's cache, and never take room there).
   const std::size_t cache_bytes = std::size_t(job.tiling.gdal_cache_mb) * 1024 * 1024, shared_bytes = cache_bytes - cache_bytes / 4;
   GDALSetCacheMax64(std::int64_t(cache_bytes - shared_bytes));
   ReaderPool readers(shared_bytes);  // declared before the plan that points to it; closed after the pipeline

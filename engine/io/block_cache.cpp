@@ -14,7 +14,12 @@ namespace lodforge {
 
 namespace {
 
-using Block = std::vector<unsigned char>;
+// A decoded block in the band's native type: rows of `stride` values (a whole native block read
+// with ReadBlock is stored at its full size, partial blocks at the raster's edge included).
+struct Block {
+  std::vector<unsigned char> bytes;
+  int stride = 0;
+};
 
 struct Key {
   std::string path;
@@ -75,7 +80,10 @@ struct BlockCache::Impl {
     }
   }
 
-  std::shared_ptr<const Block> get(GDALRasterBand& band, const std::string& path, const Key& key, const cv::Rect& rect) {
+  // native: rect is one of the band's own blocks (bx, by), read with ReadBlock: straight from the
+  // driver into the block, not through GDAL's block cache (which would hold a second copy).
+  std::shared_ptr<const Block> get(GDALRasterBand& band, const std::string& path, const Key& key, const cv::Rect& rect,
+                                   bool native) {
     std::unique_lock lock(mutex);
     if (auto found = entries.find(key); found != entries.end()) {
       recency.splice(recency.begin(), recency, found->second.recent);
@@ -94,8 +102,20 @@ struct BlockCache::Impl {
     std::shared_ptr<Block> block;
     try {
       const GDALDataType type = band.GetRasterDataType();
-      block = std::make_shared<Block>(std::size_t(rect.area()) * GDALGetDataTypeSizeBytes(type));
-      read_direct(band, path, key.band, type, rect, block->data());
+      const int value_bytes = GDALGetDataTypeSizeBytes(type);
+      block = std::make_shared<Block>();
+      if (native) {
+        int bw = 0, bh = 0;
+        band.GetBlockSize(&bw, &bh);
+        block->bytes.resize(std::size_t(bw) * bh * value_bytes);
+        block->stride = bw;
+        if (band.ReadBlock(key.bx, key.by, block->bytes.data()) != CE_None)
+          throw InputError("'" + path + "': cannot read band " + std::to_string(key.band) + ": " + CPLGetLastErrorMsg());
+      } else {
+        block->bytes.resize(std::size_t(rect.area()) * value_bytes);
+        block->stride = rect.width;
+        read_direct(band, path, key.band, type, rect, block->bytes.data());
+      }
     } catch (...) {  // no entry stays behind: the waiters get the error, a later read tries again
       lock.lock();
       recency.erase(entry.recent);
@@ -106,7 +126,7 @@ struct BlockCache::Impl {
     }
     promise.set_value(block);
     lock.lock();
-    entry.bytes = std::max<std::size_t>(block->size(), 1);
+    entry.bytes = std::max<std::size_t>(block->bytes.size(), 1);
     used += entry.bytes;
     ++decoded;
     evict();
@@ -124,15 +144,18 @@ void BlockCache::read(GDALDataset& dataset, const std::string& path, int band_in
   const auto out_type = static_cast<GDALDataType>(type);
   if ((w & bounds) != w || w.empty()) return read_direct(*band, path, band_index, out_type, w, out);  // GDAL's own answer, error included
   const cv::Size grid = block_grid(*band, bounds.size());
+  int native_w = 0, native_h = 0;
+  band->GetBlockSize(&native_w, &native_h);
+  const bool whole_blocks = grid == cv::Size(native_w, native_h);
   const GDALDataType native = band->GetRasterDataType();
   const int in_size = GDALGetDataTypeSizeBytes(native), out_size = GDALGetDataTypeSizeBytes(out_type);
   for (int by = w.y / grid.height; by <= (w.y + w.height - 1) / grid.height; ++by)
     for (int bx = w.x / grid.width; bx <= (w.x + w.width - 1) / grid.width; ++bx) {
       const cv::Rect rect = cv::Rect(bx * grid.width, by * grid.height, grid.width, grid.height) & bounds;
-      const std::shared_ptr<const Block> block = impl_->get(*band, path, Key{path, band_index, bx, by}, rect);
+      const std::shared_ptr<const Block> block = impl_->get(*band, path, Key{path, band_index, bx, by}, rect, whole_blocks);
       const cv::Rect part = rect & w;
       for (int y = part.y; y < part.y + part.height; ++y) {
-        const unsigned char* from = block->data() + (std::size_t(y - rect.y) * rect.width + (part.x - rect.x)) * in_size;
+        const unsigned char* from = block->bytes.data() + (std::size_t(y - rect.y) * block->stride + (part.x - rect.x)) * in_size;
         auto* to = static_cast<unsigned char*>(out) + (std::size_t(y - w.y) * w.width + (part.x - w.x)) * out_size;
         // The conversion RasterIO itself applies, so the values are the same as a direct read.
         GDALCopyWords64(from, native, in_size, to, out_type, out_size, part.width);
