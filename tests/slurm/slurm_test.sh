@@ -29,8 +29,8 @@ src="$(realpath "${2:-$(dirname "$0")/../..}")"
 submit="$src/scripts/slurm/submit.sh"
 [ -x "$lodforge" ] || { echo "slurm_test: '$lodforge' is not executable" >&2; exit 1; }
 [ -x "$submit" ] || { echo "slurm_test: '$submit' is not executable" >&2; exit 1; }
-for tool in sbatch squeue scontrol scancel sinfo; do
-  command -v "$tool" >/dev/null 2>&1 || { echo "slurm_test: $tool not found (slurm-client)" >&2; exit 1; }
+for tool in sbatch squeue scontrol scancel sinfo ss; do
+  command -v "$tool" >/dev/null 2>&1 || { echo "slurm_test: $tool not found (slurm-client, iproute2)" >&2; exit 1; }
 done
 
 start=$SECONDS
@@ -87,7 +87,8 @@ fail() {
 
 # ---- a single-node Slurm on loopback --------------------------------------------------------
 # Two free ports next to each other, chosen from the process id so parallel runs differ.
-port_free() { ! (exec 3<>"/dev/tcp/127.0.0.1/$1") 2>/dev/null; }
+# (Listening TCP sockets from iproute2's ss: no port in use is listed.)
+port_free() { [ -z "$(ss -Htln "( sport = :$1 )")" ]; }
 port=""
 for attempt in $(seq 0 49); do
   p=$((20000 + ($$ * 7 + attempt * 211) % 12000))  # below the ephemeral range (32768-)
