@@ -23,6 +23,16 @@ void close_box(int w, int h, Ring& ring, std::vector<int>& labels) {
   for (int y = h; y > 0; --y) { ring.emplace_back(0, y); labels.push_back(3); }
 }
 
+// Options for the split tests: no curve test (a step of a few pixels is also a departure it
+// would keep as a contour), and corners of a one-line fit (which lie a pixel or two from the
+// contour's) not turned into steps.
+CornerOptions split_options() {
+  CornerOptions o;
+  o.curve_px = 0;
+  o.max_corner_shift_m = 5;
+  return o;
+}
+
 // True when a vertex of r lies within 0.6 of p.
 bool near(const Ring& r, const Vec2& p) {
   for (const Vec2& v : r) if ((v - p).norm() < 0.6) return true;
@@ -77,9 +87,7 @@ TEST(Corners, ARunSteppingBetweenTwoParallelOffsetsIsSplit) {
   for (int y = 3; y < 20; ++y) { ring.emplace_back(40, y); labels.push_back(1); }
   for (int x = 40; x > 0; --x) { ring.emplace_back(x, 20); labels.push_back(2); }
   for (int y = 20; y > 0; --y) { ring.emplace_back(0, y); labels.push_back(3); }
-  CornerOptions o;
-  o.curve_px = 0;              // (a 3 px step is also a departure the curve test would keep as a contour)
-  o.max_corner_shift_m = 5;    // (the one-line fit's corners lie 1.5 px from the contour's)
+  CornerOptions o = split_options();
   std::string problem;
   const Ring split = extract_corners(ring, labels, axis_normals, 1.0, o, &problem);
   ASSERT_EQ(split.size(), 6u) << problem;
@@ -110,9 +118,7 @@ TEST(Corners, RowOfHousesSteppingBackAndForthGetsOneLinePerHouse) {
   for (int y = 2; y > 0; --y) { ring.emplace_back(30, y); labels.push_back(0); }
   wall(30, 45, 0);
   close_box(45, 20, ring, labels);
-  CornerOptions o;
-  o.curve_px = 0;
-  o.max_corner_shift_m = 5;
+  CornerOptions o = split_options();
   std::string problem;
   const Ring steps = extract_corners(ring, labels, axis_normals, 1.0, o, &problem);
   ASSERT_EQ(steps.size(), 8u) << problem;
@@ -138,9 +144,7 @@ TEST(Corners, AWobblingWallIsNotSplit) {
   }
   while (y != 0) { ring.emplace_back(96, y); labels.push_back(0); y += y < 0 ? 1 : -1; }
   close_box(96, 30, ring, labels);
-  CornerOptions o;
-  o.curve_px = 0;
-  o.max_corner_shift_m = 5;
+  CornerOptions o = split_options();
   std::string problem;
   EXPECT_EQ(extract_corners(ring, labels, axis_normals, 1.0, o, &problem).size(), 4u) << problem;
 }

@@ -2,7 +2,6 @@
 
 #include <map>
 #include <mutex>
-#include <set>
 
 #include <tbb/enumerable_thread_specific.h>
 
@@ -12,7 +11,6 @@
 #include <optional>
 #include <sstream>
 #include <tbb/parallel_for.h>
-#include <tbb/parallel_invoke.h>
 #include <tbb/task_arena.h>
 
 #include "io/block_cache.hpp"
@@ -30,13 +28,13 @@ namespace fs = std::filesystem;
 namespace {
 
 using Clock = std::chrono::steady_clock;
+double seconds_since(Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); }
 
 // Runs a tile's nested parallel work (labeling, its buildings, their heights, its formats) so that a
 // thread waiting in it helps with it only, never starts another tile meanwhile: a stolen tile
 // would hold this one (and the in-order bookkeeping, and memory) until it is done.
 template <class F>
 void within_tile(F&& f) { tbb::this_task_arena::isolate(std::forward<F>(f)); }
-double seconds_since(Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); }
 
 
 std::vector<BuildingOutput> regularize_tile(const TileBuildings& tile, const Job& job, long raster_width, double pixel_size) {
@@ -150,9 +148,8 @@ struct ReaderPool::Impl {
   std::unique_ptr<BlockCache> cache;
   std::mutex schedule_mutex;  // the read schedule (plan_reads):
   std::size_t lookahead = 0;
-  std::vector<cv::Rect> areas;            // by position in the reading order
-  std::map<int, std::size_t> position;    // of each tile
-  std::set<std::size_t> unread;           // positions of the tiles still to read
+  std::map<int, std::size_t> position;       // of each tile in the reading order
+  std::map<std::size_t, cv::Rect> unread;    // the tiles still to read, by position: their areas
 };
 
 ReaderPool::ReaderPool(std::size_t cache_bytes) : impl_(std::make_unique<Impl>()) {
@@ -164,12 +161,11 @@ ReaderPool::~ReaderPool() = default;
 void ReaderPool::plan_reads(const std::vector<int>& tiles, const std::vector<cv::Rect>& areas, std::size_t lookahead) {
   std::lock_guard lock(impl_->schedule_mutex);
   impl_->lookahead = lookahead;
-  impl_->areas = areas;
   impl_->position.clear();
   impl_->unread.clear();
   for (std::size_t k = 0; k < tiles.size(); ++k) {
     impl_->position[tiles[k]] = k;
-    impl_->unread.insert(k);
+    impl_->unread[k] = areas[k];
   }
 }
 
@@ -183,7 +179,7 @@ void ReaderPool::finished_reading(int tile) {
   if (p == impl_->position.end() || !impl_->unread.erase(p->second)) return;
   std::vector<cv::Rect> needed;
   for (auto k = impl_->unread.begin(); k != impl_->unread.end() && needed.size() < impl_->lookahead; ++k)
-    needed.push_back(impl_->areas[*k]);
+    needed.push_back(k->second);
   impl_->cache->keep_only(needed);
 }
 

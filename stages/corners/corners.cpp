@@ -82,7 +82,7 @@ void split_parallel(const Ring& ring, int first, int count, const Vec2& normal, 
     return W > 0 ? q[b] - q[a] - S * S / W : 0.0;
   };
   auto offset = [&](int a, int b) { return (s[b] - s[a]) / (w[b] - w[a]); };
-  const double whole = sse(0, count);
+  const double whole = sse(0, count), max_rms = o.split_max_rms_px * pixel_size;
   std::vector<int> cuts = {0, count};  // piece p is [cuts[p], cuts[p + 1])
   double total = whole;
   while (int(cuts.size()) - 1 < max_pieces) {
@@ -100,7 +100,6 @@ void split_parallel(const Ring& ring, int first, int count, const Vec2& normal, 
     if (best_cut < 0) break;
     cuts.insert(std::upper_bound(cuts.begin(), cuts.end(), best_cut), best_cut);
     total -= best_gain;
-    const double max_rms = o.split_max_rms_px * pixel_size;
     if (total > o.split_max_residual * whole || total > max_rms * max_rms * w[count]) continue;
     bool apart = true;
     for (std::size_t p = 1; p + 1 < cuts.size(); ++p)
