@@ -31,8 +31,52 @@ double smooth_weight(const LabelingInput& in, std::size_t r, std::size_t i, cons
   return o.kappa1 * length * std::exp(-diff / (2.0 * o.sigma * o.sigma));
 }
 
-double distance(const LabelingInput& in, int a, int b) {
-  return (in.directions[a] - in.directions[b]).norm();
+// Every term of the energy that does not depend on the labeling, computed once per building
+// (an expansion cycle visits each label, and each candidate's energy is evaluated): the same
+// values as computed on the spot, so the labeling is unchanged.
+struct Terms {
+  int labels = 0;
+  std::vector<int> offset;            // first edge of each ring in the flat numbering
+  std::vector<double> data;           // per flat edge, per label
+  std::vector<double> smooth;         // per flat edge: weight to its ring successor
+  std::vector<double> distance;       // per pair of labels
+  std::vector<double> label_cost;     // per label
+
+  Terms(const LabelingInput& in, const MrfOptions& o) : labels(int(in.directions.size())), offset(in.normals.size() + 1, 0) {
+    for (std::size_t r = 0; r < in.normals.size(); ++r) offset[r + 1] = offset[r] + int(in.normals[r].size());
+    data.resize(std::size_t(offset.back()) * labels);
+    smooth.resize(std::size_t(offset.back()), 0.0);
+    for (std::size_t r = 0; r < in.normals.size(); ++r) {
+      const std::size_t m = in.normals[r].size();
+      for (std::size_t i = 0; i < m; ++i) {
+        const std::size_t p = std::size_t(offset[r]) + i;
+        for (int l = 0; l < labels; ++l) data[p * labels + l] = data_term(in, r, i, l, o);
+        if (m >= 2) smooth[p] = smooth_weight(in, r, i, o);
+      }
+    }
+    distance.resize(std::size_t(labels) * labels);
+    for (int a = 0; a < labels; ++a)
+      for (int b = 0; b < labels; ++b) distance[std::size_t(a) * labels + b] = (in.directions[a] - in.directions[b]).norm();
+    for (int l = 0; l < labels; ++l) label_cost.push_back(lodforge::label_cost(in, std::size_t(l), o));
+  }
+  double d(int p, int l) const { return data[std::size_t(p) * labels + l]; }
+  double dist(int a, int b) const { return distance[std::size_t(a) * labels + b]; }
+};
+
+double energy(const Terms& t, const EdgeLabels& labels) {
+  double e = 0;
+  std::vector<char> used(std::size_t(t.labels), 0);
+  for (std::size_t r = 0; r < labels.size(); ++r) {
+    const std::size_t m = labels[r].size();
+    for (std::size_t i = 0; i < m; ++i) {
+      const int p = t.offset[r] + int(i);
+      e += t.d(p, labels[r][i]);
+      used[labels[r][i]] = 1;
+      if (m >= 2) e += t.smooth[p] * t.dist(labels[r][i], labels[r][(i + 1) % m]);
+    }
+  }
+  for (std::size_t l = 0; l < used.size(); ++l) if (used[l]) e += t.label_cost[l];
+  return e;
 }
 
 // Adds E(x) with x = 0 (source side, keep) and x = 1 (sink side, switch to alpha).
@@ -47,33 +91,29 @@ void add_pairwise(Graph& g, int p, int q, double e00, double e01, double e10, do
   // the constant e00 does not change the minimizer
 }
 
-EdgeLabels expand(const LabelingInput& in, const EdgeLabels& labels, int alpha, const MrfOptions& o) {
-  std::vector<int> offset(in.normals.size() + 1, 0);
-  for (std::size_t r = 0; r < in.normals.size(); ++r) offset[r + 1] = offset[r] + int(in.normals[r].size());
-  const int n = offset.back();
-  const int labels_count = int(in.directions.size());
-  Graph g(n + labels_count + 1, 3 * n);
+EdgeLabels expand(const Terms& t, const EdgeLabels& labels, int alpha) {
+  const int n = t.offset.back();
+  Graph g(n + t.labels + 1, 3 * n);
   g.add_node(n);
-  for (std::size_t r = 0; r < in.normals.size(); ++r) {
-    const std::size_t m = in.normals[r].size();
+  for (std::size_t r = 0; r < labels.size(); ++r) {
+    const std::size_t m = labels[r].size();
     for (std::size_t i = 0; i < m; ++i) {
-      const int p = offset[r] + int(i);
-      add_unary(g, p, data_term(in, r, i, labels[r][i], o), data_term(in, r, i, alpha, o));
+      const int p = t.offset[r] + int(i);
+      add_unary(g, p, t.d(p, labels[r][i]), t.d(p, alpha));
       if (m < 2) continue;
       const std::size_t j = (i + 1) % m;
-      const int q = offset[r] + int(j);
-      const double w = smooth_weight(in, r, i, o);
+      const int q = t.offset[r] + int(j);
+      const double w = t.smooth[p];
       const int a = labels[r][i], b = labels[r][j];
-      add_pairwise(g, p, q, w * distance(in, a, b), w * distance(in, a, alpha),
-                   w * distance(in, alpha, b), 0.0);
+      add_pairwise(g, p, q, w * t.dist(a, b), w * t.dist(a, alpha), w * t.dist(alpha, b), 0.0);
     }
   }
   // Label costs (Delong et al. 2012, §3): one auxiliary node per label that may vanish or appear.
-  std::vector<std::vector<int>> members(labels_count);
+  std::vector<std::vector<int>> members(t.labels);
   for (std::size_t r = 0; r < labels.size(); ++r)
-    for (std::size_t i = 0; i < labels[r].size(); ++i) members[labels[r][i]].push_back(offset[r] + int(i));
-  for (int l = 0; l < labels_count; ++l) {
-    const double h = label_cost(in, l, o);
+    for (std::size_t i = 0; i < labels[r].size(); ++i) members[labels[r][i]].push_back(t.offset[r] + int(i));
+  for (int l = 0; l < t.labels; ++l) {
+    const double h = t.label_cost[l];
     if (h <= 0) continue;
     if (l != alpha && !members[l].empty()) {
       // h * [some member keeps l] = h - h * prod(x_p): aux y = 1 only if all switch.
@@ -91,25 +131,14 @@ EdgeLabels expand(const LabelingInput& in, const EdgeLabels& labels, int alpha, 
   EdgeLabels result = labels;
   for (std::size_t r = 0; r < labels.size(); ++r)
     for (std::size_t i = 0; i < labels[r].size(); ++i)
-      if (g.what_segment(offset[r] + int(i)) == Graph::SINK) result[r][i] = alpha;
+      if (g.what_segment(t.offset[r] + int(i)) == Graph::SINK) result[r][i] = alpha;
   return result;
 }
 
 }  // namespace
 
 double labeling_energy(const LabelingInput& in, const EdgeLabels& labels, const MrfOptions& o) {
-  double e = 0;
-  std::vector<char> used(in.directions.size(), 0);
-  for (std::size_t r = 0; r < labels.size(); ++r) {
-    const std::size_t m = labels[r].size();
-    for (std::size_t i = 0; i < m; ++i) {
-      e += data_term(in, r, i, labels[r][i], o);
-      used[labels[r][i]] = 1;
-      if (m >= 2) e += smooth_weight(in, r, i, o) * distance(in, labels[r][i], labels[r][(i + 1) % m]);
-    }
-  }
-  for (std::size_t l = 0; l < used.size(); ++l) if (used[l]) e += label_cost(in, l, o);
-  return e;
+  return energy(Terms(in, o), labels);
 }
 
 EdgeLabels label_edges(const LabelingInput& in, const MrfOptions& o) {
@@ -124,14 +153,15 @@ EdgeLabels label_edges(const LabelingInput& in, const MrfOptions& o) {
     }
   }
   if (in.directions.size() < 2) return labels;
-  double energy = labeling_energy(in, labels, o);
+  const Terms terms(in, o);
+  double e0 = energy(terms, labels);
   for (int cycle = 0; cycle < o.max_cycles; ++cycle) {
     bool improved = false;
-    for (int alpha = 0; alpha < int(in.directions.size()); ++alpha) {
-      EdgeLabels candidate = expand(in, labels, alpha, o);
-      const double e = labeling_energy(in, candidate, o);
-      if (e < energy - 1e-9 * std::max(1.0, std::abs(energy))) {
-        energy = e;
+    for (int alpha = 0; alpha < terms.labels; ++alpha) {
+      EdgeLabels candidate = expand(terms, labels, alpha);
+      const double e = energy(terms, candidate);
+      if (e < e0 - 1e-9 * std::max(1.0, std::abs(e0))) {
+        e0 = e;
         labels.swap(candidate);
         improved = true;
       }
