@@ -22,6 +22,40 @@ double median(std::vector<double> v) {
   return v[v.size() / 2];
 }
 
+// Eq. 2 edge by edge, each weight computed where it is used: the reference the smoothing's
+// shared pair weights must reproduce.
+std::vector<Vec2> smooth_reference(const Ring& ring, double pixel_size, const SmoothingOptions& o) {
+  const std::size_t n = ring.size();
+  std::vector<Vec2> normals = edge_normals(ring);
+  std::vector<double> mid(n);
+  double total = 0;
+  for (std::size_t i = 0; i < n; ++i) {
+    const double len = edge_vector(ring, i).norm();
+    mid[i] = total + 0.5 * len;
+    total += len;
+  }
+  const double scale = std::max(1.0, o.min_neighbourhood_px * pixel_size / o.neighbourhood_m);
+  const double threshold = o.neighbourhood_m * scale, sigma_d2 = std::pow(o.sigma_d_m * scale, 2);
+  for (int pass = 0; pass < o.passes; ++pass) {
+    std::vector<Vec2> next(n);
+    for (std::size_t i = 0; i < n; ++i) {
+      Vec2 sum = normals[i];
+      auto add = [&](std::size_t k) {
+        const double d = std::min(std::abs(mid[i] - mid[k]), total - std::abs(mid[i] - mid[k]));
+        if (d >= threshold) return false;
+        const double angle = std::acos(std::clamp(normals[i].dot(normals[k]), -1.0, 1.0)) * 180.0 / M_PI;
+        sum += std::exp(-d / sigma_d2 - angle / (o.sigma_a_deg * o.sigma_a_deg)) * normals[k];
+        return true;
+      };
+      for (std::size_t k = (i + 1) % n, steps = 0; steps < n / 2 && add(k); k = (k + 1) % n) ++steps;
+      for (std::size_t k = (i + n - 1) % n, steps = 0; steps < (n - 1) / 2 && add(k); k = (k + n - 1) % n) ++steps;
+      next[i] = sum.normalized();
+    }
+    normals = next;
+  }
+  return normals;
+}
+
 TEST(Smoothing, StaircaseNormalsRecoverTheWallDirection) {
   const PolygonWithHoles rect = test::rotated({{{0, 0}, {20, 0}, {20, 12}, {0, 12}}, {}}, 30.0);
   const auto shape = test::rasterize_shape(rect, 0.1, 0, 0, 1);
@@ -44,6 +78,23 @@ TEST(Smoothing, OnePassLeavesTwoClustersThreePassesMergeThem) {
   for (const Vec2& n : smooth_normals(ring, 0.1, one)) a1.push_back(angle_to_nearest_deg(n, 30.0));
   for (const Vec2& n : smooth_normals(ring, 0.1, SmoothingOptions{})) a3.push_back(angle_to_nearest_deg(n, 30.0));
   EXPECT_GT(median(a1), median(a3));
+}
+
+TEST(Smoothing, SharedPairWeightsGiveEquationTwo) {
+  // A staircase, a ring of a few uneven edges (the neighbourhood wraps around it, and a long edge
+  // makes the arc to later edges shrink again), and a wide neighbourhood over the staircase.
+  const PolygonWithHoles rect = test::rotated({{{0, 0}, {20, 0}, {20, 12}, {0, 12}}, {}}, 30.0);
+  const Ring stairs = test::rasterize_shape(rect, 0.1, 0, 0, 1).buildings[0].rings[0];
+  const Ring few = {{0, 0}, {3, 0}, {3, 0.2}, {2.9, 0.5}, {0.2, 0.4}, {0, 0.3}};
+  SmoothingOptions wide, whole;
+  wide.neighbourhood_m = 3.0;
+  wide.sigma_d_m = 1.5;
+  whole.neighbourhood_m = 10.0;  // more than half the small ring: every edge is a neighbour
+  for (const auto& [ring, options] : {std::pair{stairs, SmoothingOptions{}}, std::pair{stairs, wide}, std::pair{few, wide}, std::pair{few, whole}}) {
+    const std::vector<Vec2> got = smooth_normals(ring, 0.1, options), want = smooth_reference(ring, 0.1, options);
+    ASSERT_EQ(got.size(), want.size());
+    for (std::size_t i = 0; i < got.size(); ++i) EXPECT_LT((got[i] - want[i]).norm(), 1e-12) << "edge " << i << " of " << got.size();
+  }
 }
 
 }  // namespace

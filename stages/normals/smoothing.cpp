@@ -41,22 +41,44 @@ std::vector<Vec2> smooth_normals(const Ring& ring, double pixel_size, const Smoo
     const double d = std::abs(mid[i] - mid[k]);
     return std::min(d, total - d);
   };
+  auto weight = [&](std::size_t i, std::size_t k, double d) {
+    return std::exp(-d / sigma_d2 - angle_deg(normals[i], normals[k]) / sigma_a2);
+  };
+  // The weight of a pair is symmetric (the same arc, the same angle: bit for bit), so each pass
+  // computes the weights of every edge to its successors once, and an edge's predecessors take
+  // theirs from there; the sums are made in the same order as computing each weight on the spot.
+  std::vector<double> ahead;              // per edge, the weights to its successors in the neighbourhood
+  std::vector<std::size_t> first(n + 1);  // edge i's weights: ahead[first[i] .. first[i + 1])
   std::vector<Vec2> next(n);
   for (int pass = 0; pass < o.passes; ++pass) {
+    ahead.clear();
+    for (std::size_t i = 0; i < n; ++i) {
+      first[i] = ahead.size();
+      // Walk forward until the neighbourhood ends (or half the ring is walked).
+      std::size_t steps = 0;
+      for (std::size_t k = (i + 1) % n; k != i && steps < n / 2; k = (k + 1) % n, ++steps) {
+        const double d = arc(i, k);
+        if (d >= threshold) break;
+        ahead.push_back(weight(i, k, d));
+      }
+    }
+    first[n] = ahead.size();
     for (std::size_t i = 0; i < n; ++i) {
       Vec2 sum = normals[i];  // w(i, i) = 1
-      auto add = [&](std::size_t k) {
-        const double d = arc(i, k);
-        if (d >= threshold) return false;
-        const double w = std::exp(-d / sigma_d2 - angle_deg(normals[i], normals[k]) / sigma_a2);
+      for (std::size_t s = 0; first[i] + s < first[i + 1]; ++s) sum += ahead[first[i] + s] * normals[(i + 1 + s) % n];
+      // Walk backward: edge i is the s-th successor of edge k = i - s.
+      for (std::size_t s = 1; s <= (n - 1) / 2; ++s) {
+        const std::size_t k = (i + n - s) % n;
+        double w;
+        if (first[k] + s <= first[k + 1]) {
+          w = ahead[first[k] + s - 1];
+        } else {
+          const double d = arc(i, k);
+          if (d >= threshold) break;
+          w = weight(i, k, d);
+        }
         sum += w * normals[k];
-        return true;
-      };
-      // Walk both ways along the ring until the neighbourhood ends (or the ring is exhausted).
-      std::size_t steps = 0;
-      for (std::size_t k = (i + 1) % n; k != i && steps < n / 2 && add(k); k = (k + 1) % n) ++steps;
-      steps = 0;
-      for (std::size_t k = (i + n - 1) % n; k != i && steps < (n - 1) / 2 && add(k); k = (k + n - 1) % n) ++steps;
+      }
       const double len = sum.norm();
       next[i] = len > 1e-12 ? Vec2(sum / len) : normals[i];
     }
