@@ -1,5 +1,6 @@
 // lodforge: one binary, subcommands registered in one explicit list.
 #include <cstring>
+#include <malloc.h>
 #include <iostream>
 #include <gdal_priv.h>
 #include <spdlog/spdlog.h>
@@ -34,6 +35,13 @@ void usage(std::ostream& out) {
 }  // namespace
 
 int main(int argc, char** argv) {
+  // The allocator keeps what the tiles free: buffers up to 32 MB (tile windows, labels, decoded
+  // blocks) come from the heap instead of fresh mappings, and up to 64 MB of free heap is kept
+  // instead of handed back. glibc's defaults return both to the kernel, and the next tile's first
+  // touch of every page faults again: with two threads a third of a run's kernel time
+  // (docs/performance.md, item 19). Set before any thread starts.
+  mallopt(M_MMAP_THRESHOLD, 32 * 1024 * 1024);
+  mallopt(M_TRIM_THRESHOLD, 64 * 1024 * 1024);
   spdlog::set_pattern("[%H:%M:%S] [%^%l%$] %v");
   GDALAllRegister();  // once, before any worker thread opens a dataset
   if (argc < 2 || !std::strcmp(argv[1], "--help") || !std::strcmp(argv[1], "help")) {
