@@ -390,6 +390,25 @@ std::vector<std::array<long long, 3>> obj_vertices(const fs::path& file) {
   return out;
 }
 
+TEST_F(ModelFiles, DsmOnTheSameGridInAnotherCrsIsRefusedBeforeAnyOutput) {
+  // The rasters' CRS are compared while the first tile is processed (reading a CRS starts PROJ);
+  // a DSM with the very grid numbers but another CRS must still stop the run before any file.
+  const std::string data = test::shared_data();
+  const Output relabel = shell("gdal_translate -q -a_srs EPSG:32631 " + data + "/delft-ahn3-bgt/derived/dsm_50cm.tif " + (dir / "dsm_utm.tif").string());
+  ASSERT_EQ(relabel.code, 0) << relabel.output;
+  std::ofstream(dir / "crs.yaml") << "inputs:\n  segmentation: {path: " << data << "/delft-ahn3-bgt/derived/top_class_50cm.tif}\n"
+                                  << "  dsm: {path: " << (dir / "dsm_utm.tif").string() << "}\n  on_grid_mismatch: error\n"
+                                  << "tiling: {tile_size_m: 1000}\noutput: {dir: crs_out}\nwork_dir: crs_work\n";
+  const Output refused = shell(std::string(LODFORGE_BINARY) + " run " + (dir / "crs.yaml").string() + " --threads 2");
+  EXPECT_EQ(refused.code, 1) << refused.output;
+  EXPECT_NE(refused.output.find("inputs.dsm.path: '" + (dir / "dsm_utm.tif").string() + "': is on another grid and CRS"), std::string::npos)
+      << refused.output;
+  std::vector<std::string> written;
+  for (const auto& entry : fs::recursive_directory_iterator(dir / "crs_out"))
+    if (entry.is_regular_file()) written.push_back(entry.path().string());
+  EXPECT_TRUE(written.empty()) << written.front();
+}
+
 TEST_F(ModelFiles, MergedTilesEqualOneTileAndValidate) {
   const std::string data = test::shared_data();
   auto job = [&](const std::string& name, double tile) {

@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "heights/heights.hpp"
+#include "io/input_crs.hpp"
 #include "io/raster.hpp"
 #include "job/job.hpp"
 #include "run/checkpoint.hpp"
@@ -48,7 +49,7 @@ struct RunPlan {
   const Job& job;
   cv::Size size;  // of the segmentation raster
   GeoTransform transform;
-  std::string crs_wkt;
+  const InputCrs& crs;  // read on first use: the writers wait for it
   double pixel;
   TileGrid grid;
   int halo_px, max_window_px;
