@@ -53,7 +53,7 @@ struct TilingOptions {
   template <class V>
   void visit(V& v) {
     v("tile_size_m", tile_size_m, "side of a square tile (m)", Check::above(0));
-    v("halo_m", halo_m, "margin read around a tile (m); grown as needed so that every building it owns is whole", Check::at_least(0));
+    v("halo_m", halo_m, "margin around a tile (m): its first window reaches two, and grows to a building's box plus one until every building it owns is whole", Check::at_least(0));
     v("max_window_m", max_window_m, "largest window read for one tile (m); a building that does not fit is reported as failed", Check::above(0));
     v("gdal_cache_mb", gdal_cache_mb, "raster block cache (MB): decoded blocks shared by the threads (3/4) and GDAL's own cache (1/4); memory is this plus the windows of the tiles in flight", Check::at_least(1));
   }
