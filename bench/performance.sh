@@ -8,8 +8,10 @@
 #
 #   bench/performance.sh [--work DIR] [--scales 1,4,16] [--repeat N] [--no-micro] [--no-docs]
 #
-# Each run is repeated N times (default 3), from scratch; the table keeps the run of median wall
-# time, and the I/O floor is the median of N reads. Wall times and peak RSS by bench/timed.py.
+# N rounds (default 5) run every configuration once each, from scratch; the table keeps each
+# configuration's run of median wall time and its highest peak RSS, and the two-thread speedup
+# is the median over the rounds of one thread's wall over two threads' in the same round. The
+# I/O floor is the median of N reads. Wall times and peak RSS by bench/timed.py.
 set -euo pipefail
 root="$(cd "$(dirname "$0")/.." && pwd)"
 lodforge="${LODFORGE:-$root/build/lodforge}"
@@ -17,7 +19,7 @@ stages_bench="${STAGES_BENCH:-$root/build/bench/stages_bench}"
 io_floor="${IO_FLOOR:-$root/build/bench/io_floor}"
 work="$root/build/bench-performance"
 scales="1,4,16"
-repeat=3
+repeat=5
 micro=1
 docs=1
 while [ $# -gt 0 ]; do
@@ -59,10 +61,10 @@ for s in "${scale_list[@]}"; do
     echo "$(cut -d' ' -f1 "$work/floor.time") $reads"
   done | sort -g | sed -n "$(( (repeat + 1) / 2 ))p")
   read -r floor floor_reads <<< "$floors"
-  for config in "deformation 1" "deformation 2" "douglas_peucker 2"; do
+  configs=("deformation 1" "deformation 2" "douglas_peucker 2")
+  for config in "${configs[@]}"; do
     set -- $config
-    regularizer=$1 threads=$2
-    run="$work/run-x$s-$regularizer-t$threads"
+    run="$work/run-x$s-$1-t$2"
     rm -rf "$run"
     mkdir -p "$run"
     cat > "$run/job.yaml" <<YAML
@@ -72,23 +74,36 @@ inputs:
   dtm: {path: $data/dtm.tif}
 output: {dir: out, formats: [citygml, cityjson, obj, gpkg]}
 work_dir: work
-threads: $threads
-regularizer: $regularizer
+threads: $2
+regularizer: $1
 YAML
-    echo "bench/performance.sh: x$s $regularizer, $threads thread(s), $repeat run(s)" >&2
-    for k in $(seq "$repeat"); do
+    : > "$run/times"
+  done
+  # Rounds of one run per configuration, so that the machine's drift over minutes falls on all
+  # of them alike (the two-thread speedup is also taken round by round).
+  echo "bench/performance.sh: x$s, $repeat round(s) of ${#configs[@]} runs" >&2
+  for k in $(seq "$repeat"); do
+    for config in "${configs[@]}"; do
+      set -- $config
+      run="$work/run-x$s-$1-t$2"
       rm -rf "$run/out" "$run/work"
       "$root/bench/timed.py" "$run/time" "$lodforge" run "$run/job.yaml" > "$run/log" 2>&1
       read -r wall rss_kib < "$run/time"
       cp "$run/out/report.json" "$run/report-$k.json"
-      echo "$wall $rss_kib $k"
-    done > "$run/times"
+      echo "$wall $rss_kib $k" >> "$run/times"
+    done
+  done
+  for config in "${configs[@]}"; do
+    set -- $config
+    regularizer=$1 threads=$2
+    run="$work/run-x$s-$regularizer-t$threads"
     read -r wall rss_kib k < <(sort -g "$run/times" | sed -n "$(( (repeat + 1) / 2 ))p")
+    rss_kib=$(sort -g -k2 "$run/times" | tail -1 | cut -d' ' -f2)  # the highest of the runs
     /usr/bin/python3 - "$run" "$s" "$side" "$regularizer" "$threads" "$wall" "$rss_kib" "$floor" "$floor_reads" "$k" >> "$results" <<'PY'
 import json, sys
 run, s, side, reg, threads, wall, rss, floor, floor_reads, k = sys.argv[1:]
 rep = json.load(open(f"{run}/report-{k}.json"))
-walls = [float(l.split()[0]) for l in open(run + "/times")]
+walls = [float(l.split()[0]) for l in open(run + "/times")]  # in round order
 print(json.dumps({"scale": int(s), "side_m": int(side), "regularizer": reg, "threads": int(threads), "wall_s": float(wall),
                   "wall_runs_s": walls, "peak_rss_mb": int(rss) / 1024, "io_floor_s": float(floor), "io_reads_s": float(floor_reads), "buildings": rep["buildings"],
                   "core_seconds": rep["core_seconds"], "stage_seconds": rep["stage_seconds"], "tiles": rep["tiles"]}))

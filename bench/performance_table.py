@@ -59,7 +59,7 @@ def engine_ratio(r):
 if rows:
     out.append("### End to end: `lodforge run` on procedural cities\n")
     out.append("Seg (class), DSM and DTM at 0.25 m, 250 m tiles, CityGML + CityJSON + OBJ + GeoPackage per tile; "
-               "each run repeated from scratch, the run of median wall time shown. "
+               "rounds of one run of each configuration, from scratch, the run of median wall time shown (peak RSS: the highest of the runs). "
                "*I/O floor*: the wall time of a process that only reads every pixel of the three rasters with GDAL, block row by "
                "block row (`build/bench/io_floor`, median), start-up and loading GDAL included as in a run's wall time; *reads*: "
                "its reads alone. "
@@ -98,7 +98,12 @@ if rows:
         d = find(s, "douglas_peucker", 2)
         if d: checks.append((f"Douglas–Peucker at {s}×: wall ≤ 2 × I/O floor", f"{d['wall_s'] / d['io_floor_s']:.1f}×", d["wall_s"] <= 2 * d["io_floor_s"]))
         t1, t2 = find(s, "deformation", 1), find(s, "deformation", 2)
-        if t1 and t2: checks.append((f"2 threads ≥ 1.8× faster than 1 at {s}×", f"{t1['wall_s'] / t2['wall_s']:.2f}×", t1["wall_s"] / t2["wall_s"] >= 1.8))
+        if t1 and t2:
+            # Round by round (the runs of a round are minutes apart at most), the median of the rounds.
+            pairs = sorted(a / b for a, b in zip(t1["wall_runs_s"], t2["wall_runs_s"]))
+            speedup = pairs[(len(pairs) - 1) // 2] if len(pairs) % 2 else 0.5 * (pairs[len(pairs) // 2 - 1] + pairs[len(pairs) // 2])
+            checks.append((f"2 threads ≥ 1.8× faster than 1 at {s}× (median of the rounds; their range)",
+                           f"{speedup:.2f}× ({pairs[0]:.2f}–{pairs[-1]:.2f})", speedup >= 1.8))
     if lo != hi:
         a1, a16 = find(lo, "deformation", 2), find(hi, "deformation", 2)
         if a1 and a16:
