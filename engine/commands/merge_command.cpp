@@ -170,6 +170,8 @@ void merge_cityjson(const std::vector<fs::path>& files, const fs::path& target) 
 void merge_ogr(const std::vector<fs::path>& files, const fs::path& target, const std::string& driver_name) {
   GDALAllRegister();
   CPLSetConfigOption("OGR_CURRENT_DATE", "2000-01-01T00:00:00.000Z");
+  // No SpatiaLite set-up for each GeoPackage opened (~1 ms a file; no SQL is run here).
+  CPLSetConfigOption("SPATIALITE_LOAD", "NO");
   const fs::path temp = target.parent_path() / (target.stem().string() + ".partial" + target.extension().string());
   fs::remove(temp);
   GDALDataset* out = GetGDALDriverManager()->GetDriverByName(driver_name.c_str())->Create(temp.c_str(), 0, 0, 0, GDT_Unknown, nullptr);

@@ -73,12 +73,16 @@ FootprintFileWriter::FootprintFileWriter(const std::string& path, const Footprin
   fs::remove(impl_->temp);
   // A GeoPackage is an SQLite database written to a temporary name and renamed when complete, so
   // SQLite's rollback journal and its syncs protect nothing here (an interrupted file is never
-  // renamed); without them a tile's file is written about twice as fast. This thread only.
+  // renamed); without them a tile's file is written about twice as fast. Nor does it need
+  // SpatiaLite's SQL functions, which GDAL sets up for every connection (with a PROJ context of
+  // their own): a third of a small file's time. The same bytes. This thread only.
   CPLSetThreadLocalConfigOption("OGR_SQLITE_JOURNAL", "MEMORY");
   CPLSetThreadLocalConfigOption("OGR_SQLITE_SYNCHRONOUS", "OFF");
+  CPLSetThreadLocalConfigOption("SPATIALITE_LOAD", "NO");
   impl_->dataset = driver ? driver->Create(impl_->temp.c_str(), 0, 0, 0, GDT_Unknown, nullptr) : nullptr;
   CPLSetThreadLocalConfigOption("OGR_SQLITE_JOURNAL", nullptr);
   CPLSetThreadLocalConfigOption("OGR_SQLITE_SYNCHRONOUS", nullptr);
+  CPLSetThreadLocalConfigOption("SPATIALITE_LOAD", nullptr);
   if (!impl_->dataset) {
     const std::string message = "'" + path + "': cannot create: " + CPLGetLastErrorMsg();
     delete impl_;
