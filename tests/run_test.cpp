@@ -133,6 +133,42 @@ TEST_F(SynthRun, OutputsAreByteIdenticalForOneAndTwoThreads) {
   EXPECT_EQ(without_timings(slurp(dir / "small_cache_out" / "report.json")), without_timings(slurp(dir / "h1_out" / "report.json")));
 }
 
+TEST_F(SynthRun, AFailedTileStopsTheRunAndEveryTileMarkedDoneIsComplete) {
+  Result r = lodforge("run " + job("ref", seg, 60).string() + " --threads 2");
+  ASSERT_EQ(r.code, 0) << r.output;
+  const auto ref = output_bytes(dir / "ref_out");
+  // A tile in the middle of the run cannot write its CityGML file: a directory is in the way.
+  std::vector<std::string> gml;
+  for (const auto& [name, bytes] : ref)
+    if (name.size() > 4 && name.compare(name.size() - 4, 4, ".gml") == 0) gml.push_back(name);
+  ASSERT_GT(gml.size(), 6u);
+  const std::string blocked = gml[gml.size() / 2];
+  fs::create_directories(dir / "fail_out" / blocked);
+  std::ofstream(dir / "fail_out" / blocked / "keep") << "x";
+  r = lodforge("run " + job("fail", seg, 60).string() + " --threads 2");
+  EXPECT_NE(r.code, 0) << r.output;
+  EXPECT_FALSE(fs::exists(dir / "fail_out" / "report.json"));
+  // The tiles in flight when it failed either finished whole or were not marked done: a tile
+  // marked done has every file of the clean run, byte for byte.
+  int done = 0;
+  for (const auto& e : fs::directory_iterator(dir / "fail_work")) {
+    if (e.path().extension() != ".done") continue;
+    ++done;
+    const std::string tile = e.path().stem().string();
+    for (const auto& [name, bytes] : ref)
+      if (name.rfind("tiles/" + tile + ".", 0) == 0) {
+        ASSERT_TRUE(fs::is_regular_file(dir / "fail_out" / name)) << tile << " is marked done without " << name;
+        EXPECT_EQ(slurp(dir / "fail_out" / name), bytes) << name;
+      }
+  }
+  EXPECT_GT(done, 0);
+  // Without the obstacle, a rerun completes to the clean run's bytes.
+  fs::remove_all(dir / "fail_out" / blocked);
+  r = lodforge("run " + job("fail", seg, 60).string() + " --threads 2");
+  ASSERT_EQ(r.code, 0) << r.output;
+  EXPECT_TRUE(output_bytes(dir / "fail_out") == ref);
+}
+
 TEST_F(Run, KilledRunResumesToTheSameBytes) {
   // A city large enough that one thread takes a few seconds, so the run can be killed mid-way.
   Result r = lodforge("synth --out " + (dir / "big").string() + " --size-m 900 --seed 8");

@@ -2,7 +2,9 @@
 
 #include <gdal_priv.h>
 #include <ogr_spatialref.h>
-#include <tbb/collaborative_call_once.h>
+#include <atomic>
+#include <exception>
+#include <mutex>
 
 #include "io/errors.hpp"
 
@@ -34,7 +36,11 @@ struct InputCrs::Impl {
   std::string segmentation_path, segmentation_key;
   std::vector<Companion> companions;
   bool strict = false;
-  tbb::collaborative_once_flag once;
+  // Read once, by the first caller, outside TBB (no task of the run may cancel or skip it);
+  // a caller arriving meanwhile waits. A failure is kept and thrown to every caller.
+  std::mutex mutex;
+  std::atomic<bool> done{false};
+  std::exception_ptr error;
   std::string wkt;
 
   void read() {
@@ -48,7 +54,7 @@ struct InputCrs::Impl {
 
 InputCrs::InputCrs(std::string wkt) : impl_(new Impl) {
   impl_->wkt = std::move(wkt);
-  tbb::collaborative_call_once(impl_->once, [] {});
+  impl_->done = true;
 }
 
 InputCrs::InputCrs(std::string segmentation_path, std::string segmentation_key, std::vector<Companion> companions, bool strict)
@@ -62,7 +68,18 @@ InputCrs::InputCrs(std::string segmentation_path, std::string segmentation_key, 
 InputCrs::~InputCrs() = default;
 
 const std::string& InputCrs::wkt() const {
-  tbb::collaborative_call_once(impl_->once, [this] { impl_->read(); });
+  if (!impl_->done.load(std::memory_order_acquire)) {
+    std::lock_guard<std::mutex> lock(impl_->mutex);
+    if (!impl_->done.load(std::memory_order_relaxed)) {
+      try {
+        impl_->read();
+      } catch (...) {
+        impl_->error = std::current_exception();
+      }
+      impl_->done.store(true, std::memory_order_release);
+    }
+  }
+  if (impl_->error) std::rethrow_exception(impl_->error);
   return impl_->wkt;
 }
 

@@ -11,6 +11,7 @@
 #include <optional>
 #include <sstream>
 #include <tbb/parallel_for.h>
+#include <tbb/task_group.h>
 #include <tbb/task_arena.h>
 
 #include "io/block_cache.hpp"
@@ -32,9 +33,17 @@ double seconds_since(Clock::time_point t) { return std::chrono::duration<double>
 
 // Runs a tile's nested parallel work (labeling, its buildings, their heights, its formats) so that a
 // thread waiting in it helps with it only, never starts another tile meanwhile: a stolen tile
-// would hold this one (and the in-order bookkeeping, and memory) until it is done.
+// would hold this one (and the in-order bookkeeping, and memory) until it is done. In a context
+// of its own: when another tile fails and the run is cancelled, the nested loops of a tile in
+// flight would otherwise stop short and return as if done, and the tile would save checkpoints
+// of part of its buildings and be marked done without its files. So a tile in flight finishes
+// whole (or fails), and the run stops after it.
 template <class F>
-void within_tile(F&& f) { tbb::this_task_arena::isolate(std::forward<F>(f)); }
+void within_tile(F&& f) {
+  tbb::task_group_context whole(tbb::task_group_context::isolated);
+  tbb::task_group group(whole);
+  group.run_and_wait([&] { tbb::this_task_arena::isolate(f); });
+}
 
 
 std::vector<BuildingOutput> regularize_tile(const TileBuildings& tile, const Job& job, long raster_width, double pixel_size) {
@@ -195,7 +204,9 @@ int heights_margin_px(const RunPlan& plan) {
 }  // namespace
 
 cv::Rect tile_read_area(const RunPlan& plan, int tile) {
-  const int m = plan.halo_px + (plan.dsm_source.empty() ? 0 : heights_margin_px(plan));
+  // The mask window first read, or the heights' margin around the tile's buildings if wider.
+  const int m = std::max(first_window_margin(plan.halo_px, plan.grid.tile_px, plan.max_window_px),
+                         plan.halo_px + (plan.dsm_source.empty() ? 0 : heights_margin_px(plan)));
   return (plan.grid.rect(tile) + cv::Size(2 * m, 2 * m) - cv::Point(m, m)) & cv::Rect(cv::Point(0, 0), plan.size);
 }
 

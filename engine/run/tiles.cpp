@@ -105,15 +105,16 @@ bool touches_inner_border(const cv::Rect& bbox, const cv::Rect& window, cv::Size
 
 }  // namespace
 
+int first_window_margin(int halo_px, int tile_px, int max_window_px) {
+  return std::max(halo_px, std::min(2 * halo_px, (max_window_px - tile_px) / 2));
+}
+
 TileWindow find_tile_window(const MaskWindowReader& reader, const TileGrid& grid, int tile, int halo_px,
                             int max_window_px, int connectivity) {
   const cv::Rect bounds(0, 0, grid.raster.width, grid.raster.height);
   const cv::Rect tile_rect = grid.rect(tile);
   TileWindow out;
-  // The first window reaches two halos around the tile: a building crossing a one-halo window
-  // and the tile needs a window of its box plus a halo, and reading and labeling that window again
-  // cost more than labeling the wider one once (most tiles of a city had one such building).
-  const int first_margin = 2 * halo_px;
+  const int first_margin = first_window_margin(halo_px, grid.tile_px, max_window_px);
   out.window = (tile_rect + cv::Size(2 * first_margin, 2 * first_margin) - cv::Point(first_margin, first_margin)) & bounds;
   while (true) {
     out.mask = reader.read(out.window);

@@ -57,6 +57,11 @@ struct TileWindow {
   Components components;               // of the mask, for the tracing
   double label_seconds = 0;            // spent labeling them (the contour stage's first step)
 };
+// The margin of a tile's first window: two halos (a building crossing a one-halo window and the
+// tile needs its box plus a halo, and reading and labeling a window again cost more than labeling
+// a wider one once), within max_window_px, and at least one halo.
+int first_window_margin(int halo_px, int tile_px, int max_window_px);
+
 TileWindow find_tile_window(const MaskWindowReader& reader, const TileGrid& grid, int tile, int halo_px,
                             int max_window_px, int connectivity);
 
