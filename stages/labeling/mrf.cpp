@@ -1,5 +1,6 @@
 #include "labeling/mrf.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <maxflow.h>
 #include <numeric>
@@ -155,15 +156,22 @@ EdgeLabels label_edges(const LabelingInput& in, const MrfOptions& o) {
   if (in.directions.size() < 2) return labels;
   const Terms terms(in, o);
   double e0 = energy(terms, labels);
+  // An expansion is a function of the labeling: one already tried and refused on the current
+  // labeling would be refused again, so it is skipped until the labeling changes.
+  std::vector<char> refused(std::size_t(terms.labels), 0);
   for (int cycle = 0; cycle < o.max_cycles; ++cycle) {
     bool improved = false;
     for (int alpha = 0; alpha < terms.labels; ++alpha) {
+      if (refused[alpha]) continue;
       EdgeLabels candidate = expand(terms, labels, alpha);
       const double e = energy(terms, candidate);
       if (e < e0 - 1e-9 * std::max(1.0, std::abs(e0))) {
         e0 = e;
         labels.swap(candidate);
         improved = true;
+        std::fill(refused.begin(), refused.end(), 0);
+      } else {
+        refused[alpha] = 1;
       }
     }
     if (!improved) break;
