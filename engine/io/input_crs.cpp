@@ -26,6 +26,15 @@ std::string raster_crs_wkt(const std::string& path, const std::string& key) {
   return result;
 }
 
+std::string epsg_of(const std::string& wkt) {
+  OGRSpatialReference srs;
+  if (wkt.empty() || srs.importFromWkt(wkt.c_str()) != OGRERR_NONE) return {};
+  srs.AutoIdentifyEPSG();
+  const char* name = srs.GetAuthorityName(nullptr);
+  const char* code = srs.GetAuthorityCode(nullptr);
+  return name && code && std::string(name) == "EPSG" ? std::string("EPSG:") + code : std::string();
+}
+
 bool same_crs(const std::string& a, const std::string& b) {
   if (a.empty() || b.empty() || a == b) return true;  // the usual case, without PROJ
   OGRSpatialReference sa, sb;
@@ -41,18 +50,20 @@ struct InputCrs::Impl {
   std::mutex mutex;
   std::atomic<bool> done{false};
   std::exception_ptr error;
-  std::string wkt;
+  std::string wkt, epsg;
 
   void read() {
     std::string seg = raster_crs_wkt(segmentation_path, segmentation_key);
     for (const Companion& c : companions)
       if (strict && !same_crs(seg, raster_crs_wkt(c.path, c.key)))
         throw InputError(c.key + ": '" + c.path + "': is on another grid and CRS than the segmentation (inputs.on_grid_mismatch: error)");
+    epsg = epsg_of(seg);
     wkt = std::move(seg);
   }
 };
 
 InputCrs::InputCrs(std::string wkt) : impl_(new Impl) {
+  impl_->epsg = epsg_of(wkt);
   impl_->wkt = std::move(wkt);
   impl_->done = true;
 }
@@ -81,6 +92,11 @@ const std::string& InputCrs::wkt() const {
   }
   if (impl_->error) std::rethrow_exception(impl_->error);
   return impl_->wkt;
+}
+
+const std::string& InputCrs::epsg() const {
+  wkt();  // read (or its failure thrown) first
+  return impl_->epsg;
 }
 
 }  // namespace lodforge

@@ -10,6 +10,9 @@ namespace lodforge {
 // (its database and context: ~12 ms); the next take well under a millisecond.
 std::string raster_crs_wkt(const std::string& path, const std::string& key);
 
+// "EPSG:28992" for a CRS with an EPSG code, else empty.
+std::string epsg_of(const std::string& wkt);
+
 // Whether two CRS are the same; an empty one (unknown) matches any.
 bool same_crs(const std::string& wkt_a, const std::string& wkt_b);
 
@@ -29,6 +32,7 @@ class InputCrs {
   InputCrs(std::string segmentation_path, std::string segmentation_key, std::vector<Companion> companions, bool strict);
   ~InputCrs();
   const std::string& wkt() const;
+  const std::string& epsg() const;  // epsg_of(wkt()), worked out once
 
  private:
   struct Impl;

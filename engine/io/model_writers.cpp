@@ -9,7 +9,6 @@
 #include <filesystem>
 #include <fstream>
 #include <map>
-#include <ogr_spatialref.h>
 #include <sstream>
 
 #include "geometry/polygon.hpp"
@@ -20,15 +19,6 @@
 namespace lodforge {
 
 namespace fs = std::filesystem;
-
-std::string epsg_of(const std::string& wkt) {
-  OGRSpatialReference srs;
-  if (wkt.empty() || srs.importFromWkt(wkt.c_str()) != OGRERR_NONE) return {};
-  srs.AutoIdentifyEPSG();
-  const char* name = srs.GetAuthorityName(nullptr);
-  const char* code = srs.GetAuthorityCode(nullptr);
-  return name && code && std::string(name) == "EPSG" ? std::string("EPSG:") + code : std::string();
-}
 
 std::string extension_of(const std::string& format) {
   if (format == "citygml") return ".gml";
@@ -92,8 +82,7 @@ class CityGmlWriter : public ModelWriter {
  public:
   CityGmlWriter(const std::string& path, const WriterContext& c) : file_(path) {
     three_decimals(file_.out());
-    const std::string epsg = epsg_of(c.crs_wkt);
-    srs_ = epsg.empty() ? "" : " srsName=\"" + epsg + "\"";
+    srs_ = c.epsg.empty() ? "" : " srsName=\"" + c.epsg + "\"";
     auto& o = file_.out();
     o << "<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n"
       << "<core:CityModel xmlns:core=\"http://www.opengis.net/citygml/2.0\" xmlns:bldg=\"http://www.opengis.net/citygml/building/2.0\""
@@ -161,11 +150,10 @@ class CityJsonWriter : public ModelWriter {
  public:
   CityJsonWriter(const std::string& path, const WriterContext& c) : file_(path), origin_(c.origin) {
     three_decimals(file_.out());
-    const std::string epsg = epsg_of(c.crs_wkt);
     auto& o = file_.out();
     o << "{\"type\": \"CityJSON\", \"version\": \"2.0\",\n \"transform\": {\"scale\": [0.001, 0.001, 0.001], \"translate\": ["
       << origin_.x() << ", " << origin_.y() << ", 0.0]},\n \"metadata\": {\"title\": \"lodforge tile " << c.tile << "\"";
-    if (!epsg.empty()) o << ", \"referenceSystem\": \"https://www.opengis.net/def/crs/EPSG/0/" << epsg.substr(5) << "\"";
+    if (!c.epsg.empty()) o << ", \"referenceSystem\": \"https://www.opengis.net/def/crs/EPSG/0/" << c.epsg.substr(5) << "\"";
     o << "},\n \"CityObjects\": {";
   }
   void add(const BuildingModel& m) override {
@@ -243,7 +231,7 @@ class ObjWriter : public ModelWriter {
  public:
   ObjWriter(const std::string& path, const WriterContext& c) : file_(path), origin_(c.origin) {
     three_decimals(file_.out());
-    file_.out() << "# lodforge OBJ, tile " << c.tile << ", CRS " << (epsg_of(c.crs_wkt).empty() ? "unknown" : epsg_of(c.crs_wkt)) << "\n"
+    file_.out() << "# lodforge OBJ, tile " << c.tile << ", CRS " << (c.epsg.empty() ? "unknown" : c.epsg) << "\n"
                 << "# origin " << origin_.x() << " " << origin_.y() << " 0.000 (add to every vertex)\n";
   }
   void add(const BuildingModel& m) override {

@@ -23,6 +23,7 @@ struct BuildingModel {
 
 struct WriterContext {
   std::string crs_wkt;
+  std::string epsg;  // "EPSG:28992" when crs_wkt has an EPSG code (epsg_of), else empty
   std::string tile;
   Vec2 origin = Vec2::Zero();  // the tile's lower-left corner: OBJ and CityJSON are relative to it
 };
@@ -37,8 +38,5 @@ class ModelWriter {
 // format: citygml, cityjson, obj, gpkg, geojson. The file extension follows the format.
 std::unique_ptr<ModelWriter> make_model_writer(const std::string& format, const std::string& path, const WriterContext& context);
 std::string extension_of(const std::string& format);  // ".gml", ".city.json", ".obj", ".gpkg", ".geojson"
-
-// "EPSG:28992" for a CRS with an EPSG code, else empty.
-std::string epsg_of(const std::string& wkt);
 
 }  // namespace lodforge

@@ -111,7 +111,7 @@ void write_index_and_report(const Totals& totals, const RunPlan& plan, const std
   const std::string suffix = shard.count > 1 ? ".shard-" + std::to_string(shard.index) + "-of-" + std::to_string(shard.count) : "";
   std::ostringstream index;
   index << "{\"type\": \"FeatureCollection\", \"name\": \"tile_index\"";
-  if (const std::string crs = epsg_of(plan.crs.wkt()); !crs.empty())
+  if (const std::string crs = plan.crs.epsg(); !crs.empty())
     index << ", \"crs\": {\"type\": \"name\", \"properties\": {\"name\": \"urn:ogc:def:crs:" << crs.substr(0, crs.find(':')) << "::" << crs.substr(crs.find(':') + 1) << "\"}}";
   index << ", \"features\": [\n";
   for (std::size_t i = 0; i < index_features.size(); ++i) index << index_features[i] << (i + 1 < index_features.size() ? ",\n" : "\n");

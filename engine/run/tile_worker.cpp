@@ -341,7 +341,7 @@ std::vector<std::string> write_tile_outputs(const RunPlan& plan, TileResult& res
     for (const auto& entry : fs::directory_iterator(out_dir / "tiles", ec))
       if (entry.path().filename().string().rfind(r->name + ".", 0) == 0) fs::remove(entry.path(), ec);
   }
-  WriterContext context{crs_wkt, r->name, plan.transform.to_map(tile_rect.x, tile_rect.y + tile_rect.height)};
+  WriterContext context{crs_wkt, plan.crs.epsg(), r->name, plan.transform.to_map(tile_rect.x, tile_rect.y + tile_rect.height)};
   if (!r->buildings.empty() || r->skipped) {
     const std::vector<std::string>& formats = job.output.formats;
     if (!r->skipped) {
