@@ -347,12 +347,18 @@ std::vector<std::string> write_tile_outputs(const RunPlan& plan, TileResult& res
     if (!r->skipped) {
       // The formats are written side by side (each its own file); a thread with no tile left to
       // take helps the last ones. An error in any is rethrown here, after all have stopped.
+      // The models (LOD1 solids included) are made once for all the formats.
+      const auto modeling = Clock::now();
+      std::vector<BuildingModel> models;
+      models.reserve(r->buildings.size());
+      for (std::size_t i = 0; i < r->buildings.size(); ++i)
+        models.push_back(model_of(r->buildings[i], r->heights.empty() ? nullptr : &r->heights[i], r->name, job));
+      r->write_seconds += seconds_since(modeling);
       std::vector<double> seconds(formats.size());
       within_tile([&] { tbb::parallel_for(std::size_t(0), formats.size(), [&](std::size_t f) {
         const auto started = Clock::now();
         const auto writer = make_model_writer(formats[f], (out_dir / ("tiles/" + r->name + extension_of(formats[f]))).string(), context);
-        for (std::size_t i = 0; i < r->buildings.size(); ++i)
-          writer->add(model_of(r->buildings[i], r->heights.empty() ? nullptr : &r->heights[i], r->name, job));
+        for (const BuildingModel& m : models) writer->add(m);
         writer->finish();
         seconds[f] = seconds_since(started);
       }); });
