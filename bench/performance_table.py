@@ -1,6 +1,6 @@
 #!/usr/bin/python3
 """Builds the results section of docs/performance.md from bench/performance.sh's work directory."""
-import argparse, json, os, platform, re
+import argparse, json, os, platform, re, statistics
 
 ap = argparse.ArgumentParser()
 ap.add_argument("work"); ap.add_argument("--cores"); ap.add_argument("--command"); ap.add_argument("--stages")
@@ -101,7 +101,7 @@ if rows:
         if t1 and t2:
             # Round by round (the runs of a round are minutes apart at most), the median of the rounds.
             pairs = sorted(a / b for a, b in zip(t1["wall_runs_s"], t2["wall_runs_s"]))
-            speedup = pairs[(len(pairs) - 1) // 2] if len(pairs) % 2 else 0.5 * (pairs[len(pairs) // 2 - 1] + pairs[len(pairs) // 2])
+            speedup = statistics.median(pairs)
             checks.append((f"2 threads ≥ 1.8× faster than 1 at {s}× (median of the rounds; their range)",
                            f"{speedup:.2f}× ({pairs[0]:.2f}–{pairs[-1]:.2f})", speedup >= 1.8))
     if lo != hi:
