@@ -83,15 +83,10 @@ struct RasterInfo {
 };
 
 RasterInfo inspect_raster(const std::string& path, const std::string& key) {
-  GDALAllRegister();
-  CPLPushErrorHandler(CPLQuietErrorHandler);
-  GDALDataset* d = static_cast<GDALDataset*>(GDALOpenEx(path.c_str(), GDAL_OF_RASTER | GDAL_OF_READONLY, nullptr, nullptr, nullptr));
-  CPLPopErrorHandler();
-  if (!d) throw InputError(key + ": '" + path + "': not a raster GDAL can read");
+  const Dataset d = open_raster(path, key);
   RasterInfo info;
   info.size = {d->GetRasterXSize(), d->GetRasterYSize()};
   const bool georeferenced = d->GetGeoTransform(info.transform.c.data()) == CE_None;
-  GDALClose(d);
   if (!georeferenced) throw InputError(key + ": '" + path + "': has no georeference (no geotransform)");
   return info;
 }

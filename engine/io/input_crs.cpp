@@ -7,14 +7,12 @@
 #include <mutex>
 
 #include "io/errors.hpp"
+#include "io/raster.hpp"
 
 namespace lodforge {
 
 std::string raster_crs_wkt(const std::string& path, const std::string& key) {
-  CPLPushErrorHandler(CPLQuietErrorHandler);
-  GDALDataset* d = static_cast<GDALDataset*>(GDALOpenEx(path.c_str(), GDAL_OF_RASTER | GDAL_OF_READONLY, nullptr, nullptr, nullptr));
-  CPLPopErrorHandler();
-  if (!d) throw InputError(key + ": '" + path + "': not a raster GDAL can read");
+  const Dataset d = open_raster(path, key);
   std::string result;
   if (const OGRSpatialReference* srs = d->GetSpatialRef()) {
     char* wkt = nullptr;
@@ -22,7 +20,6 @@ std::string raster_crs_wkt(const std::string& path, const std::string& key) {
     result = wkt ? wkt : "";
     CPLFree(wkt);
   }
-  GDALClose(d);
   return result;
 }
 

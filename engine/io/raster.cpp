@@ -16,22 +16,21 @@ std::string BuildingSelector::describe() const {
   return "value " + s;
 }
 
-namespace {
+void DatasetCloser::operator()(GDALDataset* d) const { GDALClose(d); }
 
-struct DatasetCloser {
-  void operator()(GDALDataset* d) const { GDALClose(d); }
-};
-using Dataset = std::unique_ptr<GDALDataset, DatasetCloser>;
-
-Dataset open_raster(const std::string& path) {
-  if (!std::filesystem::exists(path)) throw InputError("'" + path + "': file not found");
+Dataset open_raster(const std::string& path, const std::string& key) {
+  const std::string name = (key.empty() ? "" : key + ": ") + "'" + path + "'";
+  if (!std::filesystem::exists(path)) throw InputError(name + ": file not found");
+  GDALAllRegister();
   CPLPushErrorHandler(CPLQuietErrorHandler);
   Dataset d(static_cast<GDALDataset*>(GDALOpenEx(path.c_str(), GDAL_OF_RASTER | GDAL_OF_READONLY, nullptr, nullptr, nullptr)));
   CPLPopErrorHandler();
-  if (!d) throw InputError("'" + path + "': not a raster GDAL can read");
-  if (d->GetRasterCount() < 1) throw InputError("'" + path + "': has no raster band");
+  if (!d) throw InputError(name + ": not a raster GDAL can read");
+  if (d->GetRasterCount() < 1) throw InputError(name + ": has no raster band");
   return d;
 }
+
+namespace {
 
 cv::Mat read_band(GDALDataset& d, int band, const std::string& path) {
   cv::Mat m(d.GetRasterYSize(), d.GetRasterXSize(), CV_32S);

@@ -1,6 +1,7 @@
 // Reading rasters through GDAL into the core's types.
 #pragma once
 #include <array>
+#include <memory>
 #include <optional>
 #include <opencv2/core/mat.hpp>
 #include <string>
@@ -8,7 +9,18 @@
 
 #include "contour/contour.hpp"
 
+class GDALDataset;
+
 namespace lodforge {
+
+struct DatasetCloser {
+  void operator()(GDALDataset* d) const;
+};
+using Dataset = std::unique_ptr<GDALDataset, DatasetCloser>;
+
+// Opens a raster read-only, or throws InputError "KEY: 'path': file not found" (not a raster GDAL
+// can read, has no raster band); "KEY: " only when a key is given.
+Dataset open_raster(const std::string& path, const std::string& key = "");
 
 // Which pixels are buildings: class values of a one-band raster, or an RGB colour.
 struct BuildingSelector {
