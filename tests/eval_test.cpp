@@ -67,6 +67,24 @@ TEST(Eval, CornersWithinFiveDegreesOfTheTruthsDirections) {
   EXPECT_NEAR(evaluate({skewed}, {square(0, 0)}).corner_share_5deg, 0.25, 1e-12);
 }
 
+TEST(Eval, RightAngledCorners) {
+  EXPECT_EQ(right_angle_corners(square(0, 0)), std::make_pair(std::size_t(4), std::size_t(4)));
+  // A 45° cut: two corners that turn by 45° each, neither right-angled, and three right angles.
+  const PolygonWithHoles cut{{{0, 0}, {10, 0}, {10, 6}, {6, 10}, {0, 10}}, {}};
+  EXPECT_EQ(right_angle_corners(cut), std::make_pair(std::size_t(3), std::size_t(5)));
+  // A collinear vertex (turn 0°) is no corner; a corner of 86° turn is right-angled at 5°, not at 3°.
+  PolygonWithHoles five = square(0, 0);
+  five.outer.insert(five.outer.begin() + 1, Vec2(5, 0));
+  EXPECT_EQ(right_angle_corners(five), std::make_pair(std::size_t(4), std::size_t(4)));
+  const PolygonWithHoles skew{{{0, 0}, {10, 0}, {10 + 10 * std::tan(4 * M_PI / 180), 10}, {0, 10}}, {}};
+  EXPECT_EQ(right_angle_corners(skew).first, 4u);
+  EXPECT_EQ(right_angle_corners(skew, 3.0).first, 2u);
+  // Both shares are reported: the cut predicted against the square truth.
+  const EvalResult r = evaluate({cut}, {square(0, 0)});
+  EXPECT_NEAR(r.right_angle_share, 3.0 / 5.0, 1e-12);
+  EXPECT_NEAR(r.truth_right_angle_share, 1.0, 1e-12);
+}
+
 TEST(Eval, MatchingNeedsIoUOfOneHalfAndBlobsCompareWithTheUnion) {
   EvalResult r = evaluate({square(6, 0)}, {square(0, 0)});  // IoU 40/160
   EXPECT_EQ(r.matched, 0u);

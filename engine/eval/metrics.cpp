@@ -182,6 +182,25 @@ std::pair<std::size_t, std::size_t> regular_corners(const PolygonWithHoles& pred
   return {regular, total};
 }
 
+std::pair<std::size_t, std::size_t> right_angle_corners(const PolygonWithHoles& polygon, double tolerance_deg,
+                                                        double min_turn_deg) {
+  std::size_t right = 0, total = 0;
+  auto scan = [&](const Ring& r) {
+    const std::size_t n = r.size();
+    for (std::size_t i = 0; i < n; ++i) {
+      const Vec2 before = r[i] - r[(i + n - 1) % n], after = r[(i + 1) % n] - r[i];
+      if (before.norm() == 0 || after.norm() == 0) continue;
+      const double turn = std::abs(std::atan2(cross(before, after), before.dot(after))) * 180.0 / M_PI;
+      if (turn <= min_turn_deg) continue;
+      ++total;
+      right += std::abs(turn - 90.0) <= tolerance_deg || turn >= 180.0 - tolerance_deg;
+    }
+  };
+  scan(polygon.outer);
+  for (const Ring& h : polygon.holes) scan(h);
+  return {right, total};
+}
+
 EvalResult evaluate(const std::vector<PolygonWithHoles>& predicted_in, const std::vector<PolygonWithHoles>& truth_in,
                     const std::optional<PolygonWithHoles>& aoi) {
   EvalResult r;
@@ -202,6 +221,17 @@ EvalResult evaluate(const std::vector<PolygonWithHoles>& predicted_in, const std
   }
   r.predicted = predicted.size();
   r.truth = truth.size();
+  auto right_angle_share = [](const std::vector<PolygonWithHoles>& polygons) {
+    std::size_t right = 0, total = 0;
+    for (const PolygonWithHoles& p : polygons) {
+      const auto [good, all] = right_angle_corners(p);
+      right += good;
+      total += all;
+    }
+    return total ? double(right) / double(total) : 0.0;
+  };
+  r.right_angle_share = right_angle_share(predicted);
+  r.truth_right_angle_share = right_angle_share(truth);
   // Overall IoU inside the AOI.
   Geometry pu = union_of(pred_geom), tu = union_of(truth_geom);
   if (area) {
@@ -267,7 +297,8 @@ std::string eval_json(const EvalResult& r) {
     << ", \"overall_iou\": " << r.overall_iou << ", \"precision\": " << r.precision << ", \"recall\": " << r.recall
     << ", \"f1\": " << r.f1 << ", \"mean_iou\": " << r.mean_iou << ", \"c_iou\": " << r.c_iou << ", \"n_ratio\": " << r.n_ratio
     << ", \"polis_m\": " << r.polis << ", \"hausdorff_mean_m\": " << r.hausdorff_mean << ", \"hausdorff_p95_m\": " << r.hausdorff_p95
-    << ", \"max_tangent_angle_deg\": " << r.max_tangent_angle_deg << ", \"corner_share_5deg\": " << r.corner_share_5deg << ", \"blob_iou\": " << r.blob_iou << "}";
+    << ", \"max_tangent_angle_deg\": " << r.max_tangent_angle_deg << ", \"corner_share_5deg\": " << r.corner_share_5deg << ", \"blob_iou\": " << r.blob_iou
+    << ", \"right_angle_share\": " << r.right_angle_share << ", \"truth_right_angle_share\": " << r.truth_right_angle_share << "}";
   return s.str();
 }
 
@@ -285,7 +316,8 @@ std::string eval_table(const EvalResult& r) {
     << "Hausdorff mean / p95 (m) " << r.hausdorff_mean << " / " << r.hausdorff_p95 << '\n'
     << "max tangent angle (deg)  " << r.max_tangent_angle_deg << '\n'
     << "corners within 5 deg     " << r.corner_share_5deg << '\n'
-    << "blob IoU                 " << r.blob_iou << '\n';
+    << "blob IoU                 " << r.blob_iou << '\n'
+    << "right angles (pred/true) " << r.right_angle_share << " / " << r.truth_right_angle_share << '\n';
   return s.str();
 }
 

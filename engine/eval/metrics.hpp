@@ -24,6 +24,10 @@ struct EvalResult {
   double corner_share_5deg = 0;      // share of predicted corners whose two edges are within 5° of the
                                      // truth building's edge orientations (over matched pairs)
   double blob_iou = 0;             // mean over predictions of IoU with the union of the truth they cover
+  // Right angles: the share of corners (turn over 5°) whose turn is within 5° of 90° or 180°,
+  // over every prediction and, for comparison, every truth footprint (inside the AOI). A pixel
+  // staircase scores 1: read it with the N-ratio.
+  double right_angle_share = 0, truth_right_angle_share = 0;
 };
 
 // aoi (optional): only what lies inside counts; truth outside it is dropped, predictions clipped.
@@ -45,6 +49,11 @@ double max_tangent_angle_deg(const PolygonWithHoles& predicted, const PolygonWit
 // of one of truth's edges at least 1 m long: (regular corners, corners).
 std::pair<std::size_t, std::size_t> regular_corners(const PolygonWithHoles& predicted, const PolygonWithHoles& truth,
                                                     double tolerance_deg = 5.0);
+
+// Corners of a polygon (vertices where the boundary turns by more than min_turn_deg) whose turn
+// is within tolerance_deg of 90° or 180°: (right-angled corners, corners).
+std::pair<std::size_t, std::size_t> right_angle_corners(const PolygonWithHoles& polygon, double tolerance_deg = 5.0,
+                                                        double min_turn_deg = 5.0);
 
 std::string eval_json(const EvalResult& r);
 std::string eval_table(const EvalResult& r);

@@ -124,10 +124,19 @@ static GeoTransform shifted(const GeoTransform& t, const cv::Rect& box) {
 // The segmentation of a true 0/1 mask: rounded corners, a smooth boundary wobble, speckles.
 static cv::Mat segmentation_of(const cv::Mat& truth, const SynthOptions& o, Rng& rng) {
   const int rows = truth.rows, cols = truth.cols;
-  cv::Mat mask = degrade_mask(truth, o.boundary_noise_px, o.corner_radius_px, o.seed * 7919 + 2);
+  const double px = o.pixel_size_m;
+  const double noise_px = o.boundary_noise_m >= 0 ? o.boundary_noise_m / std::sqrt(2.0) / px : o.boundary_noise_px;  // RMS of a wave of that amplitude
+  const double radius_px = o.corner_radius_m >= 0 ? o.corner_radius_m / px : o.corner_radius_px;
+  // A Gaussian-blurred white noise of blur s has the correlation exp(-d^2 / 4s^2): its level
+  // crosses zero every pi * sqrt(2) * s on average (Rice), a wavelength of 2 pi sqrt(2) s.
+  const double correlation_px = o.noise_wavelength_m > 0 ? o.noise_wavelength_m / (2 * M_PI * std::sqrt(2.0)) / px : 3.0;
+  cv::Mat mask = degrade_mask(truth, noise_px, radius_px, o.seed * 7919 + 2, correlation_px,
+                              o.boundary_noise_m >= 0 || o.corner_radius_m >= 0);
   const int speckles = int(o.speckle_per_km2 * o.width_m * o.height_m / 1e6);
+  const int speckle_px = o.speckle_size_m >= 0 ? std::max(1, int(std::lround(o.speckle_size_m / px))) : 0;
   for (int k = 0; k < speckles; ++k) {
-    const int c = int(rng() % cols), r = int(rng() % rows), size = 1 + int(rng() % 2);
+    const int c = int(rng() % cols), r = int(rng() % rows), random_size = 1 + int(rng() % 2);
+    const int size = speckle_px > 0 ? speckle_px : random_size;
     const cv::Rect box = cv::Rect(c, r, size, size) & cv::Rect(0, 0, cols, rows);
     mask(box).setTo(mask.at<uint8_t>(r, c) ? 0 : 1);
   }
@@ -217,11 +226,50 @@ SynthCity segment_footprints(const std::vector<PolygonWithHoles>& footprints, co
   return city;
 }
 
-cv::Mat degrade_mask(const cv::Mat& truth, double noise_px, double corner_radius_px, std::uint64_t seed) {
+namespace {
+
+// Opening of a 0/1 mask by a disc of any real radius (pixels), from Euclidean distances between
+// pixel centres: exact whatever the radius, and as fast for a radius of 20 pixels as of 1.
+cv::Mat euclidean_open(const cv::Mat& mask, double radius) {
+  cv::Mat distance, eroded, grown;
+  cv::distanceTransform(mask, distance, cv::DIST_L2, cv::DIST_MASK_PRECISE);  // to the nearest 0
+  eroded = distance > radius;                                                 // 0 / 255
+  cv::Mat outside = 255 - eroded;
+  cv::distanceTransform(outside, grown, cv::DIST_L2, cv::DIST_MASK_PRECISE);  // to the eroded set
+  cv::Mat opened = grown <= radius;
+  return opened / 255;
+}
+
+// The noise field made constant across the boundary: each pixel takes the value of the nearest
+// pixel on the other side (OpenCV labels the zero pixels 1, 2, ... in scan order), so the level
+// set is the boundary displaced along its normal, a wobble along it, not a fringe of islands.
+cv::Mat noise_of_nearest_boundary(const cv::Mat& mask, const cv::Mat& noise) {
+  cv::Mat out(mask.size(), CV_32F), distance, labels_in, labels_out;
+  cv::distanceTransform(mask, distance, labels_in, cv::DIST_L2, cv::DIST_MASK_5, cv::DIST_LABEL_PIXEL);
+  const cv::Mat inverse = 1 - mask;
+  cv::distanceTransform(inverse, distance, labels_out, cv::DIST_L2, cv::DIST_MASK_5, cv::DIST_LABEL_PIXEL);
+  std::vector<float> at_outside{0.0f}, at_inside{0.0f};  // by label
+  for (int r = 0; r < mask.rows; ++r)
+    for (int c = 0; c < mask.cols; ++c) (mask.at<uint8_t>(r, c) ? at_inside : at_outside).push_back(noise.at<float>(r, c));
+  for (int r = 0; r < mask.rows; ++r)
+    for (int c = 0; c < mask.cols; ++c)
+      out.at<float>(r, c) = mask.at<uint8_t>(r, c) ? at_outside[labels_in.at<int>(r, c)] : at_inside[labels_out.at<int>(r, c)];
+  return out;
+}
+
+}  // namespace
+
+cv::Mat degrade_mask(const cv::Mat& truth, double noise_px, double corner_radius_px, std::uint64_t seed,
+                     double correlation_px, bool physical) {
   const int rows = truth.rows, cols = truth.cols;
   cv::Mat mask = truth.clone();
   const int radius = int(std::lround(corner_radius_px));
-  if (radius > 0) {
+  if (physical) {
+    if (corner_radius_px > 0) {
+      mask = euclidean_open(mask, corner_radius_px);
+      mask = 1 - euclidean_open(1 - mask, corner_radius_px);  // a closing
+    }
+  } else if (radius > 0) {
     const cv::Mat kernel = cv::getStructuringElement(cv::MORPH_ELLIPSE, {2 * radius + 1, 2 * radius + 1});
     cv::morphologyEx(mask, mask, cv::MORPH_OPEN, kernel);
     cv::morphologyEx(mask, mask, cv::MORPH_CLOSE, kernel);
@@ -238,10 +286,11 @@ cv::Mat degrade_mask(const cv::Mat& truth, double noise_px, double corner_radius
                                                                   : 0.5f - outside.at<float>(r, c);
     cv::Mat noise(rows, cols, CV_32F);
     cv_rng.fill(noise, cv::RNG::NORMAL, 0, 1);
-    cv::GaussianBlur(noise, noise, {0, 0}, 3.0);
+    if (correlation_px >= 0.2) cv::GaussianBlur(noise, noise, {0, 0}, correlation_px);
     cv::Scalar mean, stddev;
     cv::meanStdDev(noise, mean, stddev);
     noise = noise * (noise_px / std::max(stddev[0], 1e-9));
+    if (physical) noise = noise_of_nearest_boundary(mask, noise);
     mask = (signed_distance + noise) > 0;
     mask /= 255;
   }

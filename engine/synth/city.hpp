@@ -22,6 +22,13 @@ struct SynthOptions {
   double boundary_noise_px = 0.8;  // amplitude of the smooth boundary wobble
   double corner_radius_px = 2.0;   // corners rounded like a network's output
   double speckle_per_km2 = 400;    // small false holes and blobs
+  // The same degradation in metres, so that it stays the same physical noise whatever the pixel
+  // size (each, when >= 0, replaces its pixel counterpart).
+  double boundary_noise_m = -1;    // amplitude of the boundary's wobble (m): its RMS displacement times sqrt 2, as a wave's
+  double noise_wavelength_m = -1;  // mean wavelength of the wobble along the boundary (m);
+                                   // unset: a Gaussian correlation of 3 px (about 27 px)
+  double corner_radius_m = -1;     // corner rounding radius (m)
+  double speckle_size_m = -1;      // side of a speckle (m, at least a pixel); unset: 1 or 2 px
 
   template <class V>
   void visit(V& v) {
@@ -35,6 +42,10 @@ struct SynthOptions {
     v("boundary_noise_px", boundary_noise_px, "boundary noise amplitude (pixels)", Check::at_least(0));
     v("corner_radius_px", corner_radius_px, "corner rounding radius (pixels)", Check::at_least(0));
     v("speckle_per_km2", speckle_per_km2, "false holes and blobs per km^2", Check::at_least(0));
+    v("boundary_noise_m", boundary_noise_m, "boundary wobble amplitude in metres, that of a wave of the same RMS displacement (replaces boundary_noise_px when >= 0; the wobble then moves the boundary along its normal)", Check::at_least(-1));
+    v("noise_wavelength_m", noise_wavelength_m, "mean wavelength of the boundary wobble along the boundary in metres (-1: a correlation of 3 pixels)", Check::at_least(-1));
+    v("corner_radius_m", corner_radius_m, "corner rounding radius in metres (replaces corner_radius_px when >= 0)", Check::at_least(-1));
+    v("speckle_size_m", speckle_size_m, "side of a speckle in metres, at least one pixel (-1: 1 or 2 pixels)", Check::at_least(-1));
   }
 };
 
@@ -60,7 +71,13 @@ SynthCity generate_city(const SynthOptions& options);
 SynthCity segment_footprints(const std::vector<PolygonWithHoles>& footprints, const SynthOptions& options);
 
 // Degrades a clean 0/1 mask like a segmentation network's output: rounded corners, a smooth
-// boundary wobble of about noise_px pixels. Seeded.
-cv::Mat degrade_mask(const cv::Mat& mask, double noise_px, double corner_radius_px, std::uint64_t seed);
+// boundary wobble of RMS noise_px pixels, correlated along the boundary by a Gaussian of
+// correlation_px pixels (the field's blur; its mean wavelength is about 8.9 times that). Corners
+// are rounded by an opening and a closing with a disc of the radius rounded to whole pixels.
+// physical: the disc is exact for any real radius, and the wobble displaces the boundary along
+// its normal (the noise is taken at the nearest boundary pixel), so that an amplitude near the
+// wobble's wavelength still gives one boundary, not a fringe of islands. Seeded.
+cv::Mat degrade_mask(const cv::Mat& mask, double noise_px, double corner_radius_px, std::uint64_t seed,
+                     double correlation_px = 3.0, bool physical = false);
 
 }  // namespace lodforge

@@ -34,13 +34,18 @@ Line fit_line(const Ring& ring, int first, int count, const Vec2& normal) {
   return {normal, total > 0 ? weighted / total : normal.dot(ring[first])};
 }
 
-// True when the run's contour departs from its line by more than curve_px on average over some
-// window of curve_window_px (a boundary wobble averages out over a window, a curved wall does not).
-bool is_curved(const Ring& ring, int first, int count, const Line& line, const CornerOptions& o, double pixel_size) {
+// True when the run's contour departs from its line by more than curve_px, and curve_noise_factor
+// times the building's boundary noise, on average over two consecutive windows of curve_window_px
+// and curve_window_m, both to the same side: a boundary wobble averages out over a window or
+// turns to the other side in the next, a curved wall does neither.
+bool is_curved(const Ring& ring, int first, int count, const Line& line, const CornerOptions& o, double pixel_size,
+               double noise) {
   if (o.curve_px <= 0) return false;
-  const double window = o.curve_window_px * pixel_size, total = run_length(ring, first, count);
+  const double window = std::max(o.curve_window_px * pixel_size, o.curve_window_m), total = run_length(ring, first, count);
+  const double threshold = std::max(o.curve_px * pixel_size, o.curve_noise_factor * noise);
   // The run's ends (a window each) are left out: corners are rounded there, by the raster.
   double position = 0, window_length = 0, window_sum = 0;
+  int side = 0;  // the side the previous window departed to beyond the threshold (0: none)
   for (int k = 0; k < count; ++k) {
     const std::size_t i = (first + k) % ring.size();
     const Vec2 e = edge_vector(ring, i);
@@ -50,7 +55,10 @@ bool is_curved(const Ring& ring, int first, int count, const Line& line, const C
     window_sum += len * (line.normal.dot(ring[i] + 0.5 * e) - line.offset);
     window_length += len;
     if (window_length >= window) {
-      if (std::abs(window_sum / window_length) > o.curve_px * pixel_size) return true;
+      const double mean = window_sum / window_length;
+      const int now = std::abs(mean) > threshold ? (mean > 0 ? 1 : -1) : 0;
+      if (now != 0 && now == side) return true;
+      side = now;
       window_length = window_sum = 0;
     }
   }
@@ -66,9 +74,9 @@ bool is_curved(const Ring& ring, int first, int count, const Line& line, const C
 // offsets at least `split` apart. A wobble or an arc is not explained that well by a few
 // offsets that far apart.
 void split_parallel(const Ring& ring, int first, int count, const Vec2& normal, const CornerOptions& o,
-                    double pixel_size, std::vector<std::pair<int, int>>& out) {
+                    double pixel_size, double noise, std::vector<std::pair<int, int>>& out) {
   constexpr int max_pieces = 8;
-  const double split = std::max(o.split_px * pixel_size, o.split_m);
+  const double split = std::max({o.split_px * pixel_size, o.split_m, o.split_noise * noise});
   if (o.split_px <= 0 || count < 4) { out.push_back({first, count}); return; }
   std::vector<double> w(count + 1, 0.0), s(count + 1, 0.0), q(count + 1, 0.0);  // prefix sums
   for (int k = 0; k < count; ++k) {
@@ -112,6 +120,89 @@ void split_parallel(const Ring& ring, int first, int count, const Vec2& normal, 
   out.push_back({first, count});
 }
 
+// The unit normal among the lattice's four (lattice turned by quarter turns) nearest to n.
+Vec2 nearest_on_lattice(const Vec2& n, const Vec2& lattice) {
+  const Vec2 quarter(-lattice.y(), lattice.x());
+  const double a = n.dot(lattice), b = n.dot(quarter);
+  if (std::abs(a) >= std::abs(b)) return a >= 0 ? lattice : Vec2(-lattice);
+  return b >= 0 ? quarter : Vec2(-quarter);
+}
+
+// Turns each straight wall onto the building's lattice (its main direction and quarter turns)
+// when it lies within snap_max_deg of it and the turn moves the wall's ends by no more than
+// snap_shift_m or snap_noise times the noise: then the turn is within what the contour can tell.
+// The wall's offset is fitted again with its new direction.
+void snap_to_lattice(const Ring& ring, const std::vector<std::pair<int, int>>& runs, std::vector<Line>& lines,
+                     const Vec2& lattice, const CornerOptions& o, double pixel_size, double noise) {
+  if (o.snap_max_deg <= 0) return;
+  const double max_shift = std::max({o.snap_shift_m, o.snap_noise * noise, 0.5 * pixel_size});
+  const double min_cos = std::cos(o.snap_max_deg * M_PI / 180.0);
+  for (std::size_t r = 0; r < runs.size(); ++r) {
+    const Vec2 target = nearest_on_lattice(lines[r].normal, lattice);
+    const double cos_turn = std::clamp(target.dot(lines[r].normal), -1.0, 1.0);
+    if (cos_turn < min_cos || cos_turn > 1 - 1e-15) continue;
+    const Vec2 chord = ring[(runs[r].first + runs[r].second) % ring.size()] - ring[runs[r].first];
+    const double shift = std::sqrt(1 - cos_turn * cos_turn) * 0.5 * chord.norm();
+    if (shift <= max_shift) lines[r] = fit_line(ring, runs[r].first, runs[r].second, target);
+  }
+}
+
+// Walls with one direction whose offsets differ by less than `tolerance` become one wall (its
+// line fitted to them): consecutive ones (collinear walls made one), and two joined by a riser no
+// longer than twice the tolerance (a step smaller than the noise is the noise's).
+void merge_parallel(const Ring& ring, std::vector<std::pair<int, int>>& runs, std::vector<Line>& lines, double tolerance,
+                    double pixel_size) {
+  auto same = [&](std::size_t a, std::size_t b) {
+    return lines[a].normal.dot(lines[b].normal) > 1 - 1e-12 && std::abs(lines[a].offset - lines[b].offset) < tolerance;
+  };
+  bool merged = true;
+  while (merged && runs.size() > 4) {
+    merged = false;
+    for (std::size_t r = 0; r < runs.size() && runs.size() > 4; ++r) {
+      const std::size_t next = (r + 1) % runs.size(), after = (r + 2) % runs.size();
+      int absorbed = 0;  // runs after r that join it
+      if (same(r, next)) absorbed = 1;
+      else if (same(r, after) && run_length(ring, runs[next].first, runs[next].second) <= 2 * tolerance + 2 * pixel_size) absorbed = 2;
+      if (absorbed == 0) continue;
+      for (int k = 1; k <= absorbed; ++k) runs[r].second += runs[(r + k) % runs.size()].second;
+      lines[r] = fit_line(ring, runs[r].first, runs[r].second, lines[r].normal);
+      for (int k = 0; k < absorbed; ++k) {  // erase the absorbed runs, the later index first
+        const std::size_t i = (r + 1) % runs.size();
+        runs.erase(runs.begin() + long(i));
+        lines.erase(lines.begin() + long(i));
+        if (i < r) --r;
+      }
+      merged = true;
+    }
+  }
+}
+
+// True when the line lies exactly on the lattice (turned onto it, or fitted with it).
+bool on_lattice(const Line& line, const Vec2& lattice) {
+  return nearest_on_lattice(line.normal, lattice).dot(line.normal) > 1 - 1e-12;
+}
+
+// An oblique run shorter than max_cut between two square walls of the lattice is a corner that
+// the segmentation rounded: it is dropped, its edges shared by its neighbours (their lines as
+// they were fitted, without the rounding), which then meet at their intersection.
+void drop_corner_cuts(const Ring& ring, std::vector<std::pair<int, int>>& runs, std::vector<Line>& lines,
+                      const Vec2& lattice, double max_cut) {
+  if (max_cut <= 0) return;
+  for (std::size_t r = 0; r < runs.size() && runs.size() > 4;) {
+    const std::size_t prev = (r + runs.size() - 1) % runs.size(), next = (r + 1) % runs.size();
+    const bool cut = !on_lattice(lines[r], lattice) && on_lattice(lines[prev], lattice) && on_lattice(lines[next], lattice) &&
+                     std::abs(lines[prev].normal.dot(lines[next].normal)) < 1e-9 &&
+                     run_length(ring, runs[r].first, runs[r].second) < max_cut;
+    if (!cut) { ++r; continue; }
+    const int half = runs[r].second / 2, n = int(ring.size());
+    runs[prev].second += half;
+    runs[next].first = (runs[r].first + half) % n;
+    runs[next].second += runs[r].second - half;
+    runs.erase(runs.begin() + long(r));
+    lines.erase(lines.begin() + long(r));
+  }
+}
+
 }  // namespace
 
 void absorb_short_runs(const Ring& ring, std::vector<int>& labels, double min_length) {
@@ -135,29 +226,37 @@ void absorb_short_runs(const Ring& ring, std::vector<int>& labels, double min_le
 }
 
 Ring extract_corners(const Ring& ring, const std::vector<int>& labels, const std::vector<Vec2>& directions,
-                     double pixel_size, const CornerOptions& o, std::string* problem) {
+                     double pixel_size, const CornerOptions& o, std::string* problem, const CornerContext& context) {
+  const double noise = context.noise;
   std::vector<int> own = labels;
   absorb_short_runs(ring, own, o.min_run_px * pixel_size);
   std::vector<std::pair<int, int>> runs;
   for (auto [first, count] : label_runs(own))
-    split_parallel(ring, first, count, directions[own[first]], o, pixel_size, runs);
-  const int n = int(runs.size());
+    split_parallel(ring, first, count, directions[own[first]], o, pixel_size, noise, runs);
   std::vector<Line> lines;
   for (auto [first, count] : runs) lines.push_back(fit_line(ring, first, count, directions[own[first]]));
+  if (context.lattice.squaredNorm() > 0) {
+    snap_to_lattice(ring, runs, lines, context.lattice, o, pixel_size, noise);
+    merge_parallel(ring, runs, lines, std::max(o.merge_offset_m, o.merge_noise * noise), pixel_size);
+    drop_corner_cuts(ring, runs, lines, context.lattice, o.max_cut_m);
+  }
+  const int n = int(runs.size());
   std::vector<bool> curved(n);
   bool any_curved = false;
-  for (int r = 0; r < n; ++r) any_curved |= curved[r] = is_curved(ring, runs[r].first, runs[r].second, lines[r], o, pixel_size);
+  for (int r = 0; r < n; ++r) any_curved |= curved[r] = is_curved(ring, runs[r].first, runs[r].second, lines[r], o, pixel_size, noise);
   if (n < 3 && !(n == 2 && any_curved)) {  // two runs make a polygon only when one is a curve
     *problem = "only " + std::to_string(runs.size()) + " straight runs, a polygon needs 3";
     return {};
   }
   const double parallel_sin = std::sin(o.parallel_angle_deg * M_PI / 180.0);
+  const double square_sin = std::cos(o.parallel_angle_deg * M_PI / 180.0);  // within that of 90 degrees
+  const double curve_tolerance = std::max(pixel_size, o.curve_tolerance_noise * noise);
   Ring out;
   for (int r = 0; r < n; ++r) {
     if (curved[r]) {  // the run's own contour, simplified, between its ends
       std::vector<Vec2> points;
       for (int k = 0; k <= runs[r].second; ++k) points.push_back(ring[(runs[r].first + k) % ring.size()]);
-      const std::vector<char> keep = douglas_peucker_open(points, pixel_size);
+      const std::vector<char> keep = douglas_peucker_open(points, curve_tolerance);
       for (std::size_t k = 1; k + 1 < points.size(); ++k) if (keep[k]) out.push_back(points[k]);
     }
     const Line& a = lines[r];
@@ -175,7 +274,9 @@ Ring extract_corners(const Ring& ring, const std::vector<int>& labels, const std
       // Solve a.normal . x = a.offset, b.normal . x = b.offset.
       const Vec2 corner((a.offset * b.normal.y() - b.offset * a.normal.y()) / det,
                         (a.normal.x() * b.offset - b.normal.x() * a.offset) / det);
-      if ((corner - junction).norm() <= o.max_corner_shift_m) out.push_back(corner);
+      // Square corners are well posed: their intersection may lie farther (a rounded corner).
+      const double max_shift = std::abs(det) >= square_sin ? o.square_corner_shift_m : o.max_corner_shift_m;
+      if ((corner - junction).norm() <= max_shift) out.push_back(corner);
       else use_step = true;
     }
     if (use_step) {

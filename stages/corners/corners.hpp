@@ -14,14 +14,26 @@ namespace lodforge {
 struct CornerOptions {
   std::string route = "original";  // fit the lines to the original contour, or the deformed one
   double min_run_px = 2.0;         // runs shorter than this (in pixel edges) join a neighbour
+  double min_run_noise = 3.0;      // ... and runs shorter than this many times the boundary noise
   double parallel_angle_deg = 10.0;  // consecutive lines closer than this in angle get a step
   double max_corner_shift_m = 1.25;  // an intersection farther than this from the run junction is
                                      // replaced by a step between the two lines
+  double square_corner_shift_m = 3.0;  // ... or this, when the lines are within parallel_angle_deg of square
   int repair_attempts = 4;           // an invalid polygon is retried with min_run doubled this often
   double curve_px = 2.5;             // a run whose contour bows this far from its line is a curved wall (0 = off)
+  double curve_noise_factor = 2.5;   // ... and this many times the building's boundary noise
   double curve_window_px = 16.0;     // ... measured as the mean offset over windows of this length
+  double curve_window_m = 4.0;       // ... and at least this (m)
+  double curve_tolerance_noise = 0.5;  // a curve's contour is simplified to a pixel and this many times the noise
+  double snap_max_deg = 15.0;        // a straight wall within this of the building's lattice ...
+  double snap_shift_m = 0.25;        // ... is turned onto it when its ends move by at most this (m) ...
+  double snap_noise = 2.0;           // ... or this many times the boundary noise
+  double merge_offset_m = 0.1;       // consecutive parallel walls offset by less than this (m) ...
+  double merge_noise = 1.0;          // ... or this many times the boundary noise are one wall
+  double max_cut_m = 3.0;            // an oblique wall shorter than this between square walls is a rounded corner
   double split_px = 1.0;             // a run whose parts lie this far apart (parallel) becomes lines and steps (0 = off)
   double split_m = 0.5;              // ... and at least this far in metres
+  double split_noise = 5.0;          // ... and at least this many times the boundary noise
   double split_max_residual = 0.15;  // ... when the parts leave at most this share of the spread about one line
   double split_max_rms_px = 0.5;     // ... and at most this RMS distance to their own lines
 
@@ -29,13 +41,25 @@ struct CornerOptions {
   void visit(V& v) {
     v("route", route, "fit the corner lines to the 'original' contour with the MRF directions, or to the 'deformed' contour (the paper)", Check::one_of({"original", "deformed"}));
     v("min_run_px", min_run_px, "runs of one direction shorter than this (pixel lengths) join their neighbours", Check::at_least(0));
+    v("min_run_noise", min_run_noise, "runs shorter than this many times the building's boundary noise join their neighbours (0 = off)", Check::at_least(0));
     v("parallel_angle_deg", parallel_angle_deg, "consecutive lines closer than this in angle are joined by a perpendicular step (degrees)", Check::between(0, 89));
     v("max_corner_shift_m", max_corner_shift_m, "an intersection farther than this from where the runs meet is replaced by a step (m)", Check::above(0));
+    v("square_corner_shift_m", square_corner_shift_m, "the same for two lines within parallel_angle_deg of perpendicular, whose intersection is well posed (a rounded corner puts it farther from the runs' junction) (m)", Check::above(0));
     v("repair_attempts", repair_attempts, "retries of an invalid polygon with min_run_px doubled each time (when all fail, they are made again with runs unsplit)", Check::between(0, 20));
     v("curve_px", curve_px, "a run whose contour departs from its fitted line by more than this on average over a window (pixels) is kept as a curve: its contour, simplified, replaces the line (0 = off)", Check::at_least(0));
+    v("curve_noise_factor", curve_noise_factor, "... and by more than this many times the building's boundary noise (a wobble's window means stay below, an arc's do not)", Check::at_least(0));
     v("curve_window_px", curve_window_px, "length of the windows over which a run's departure from its line is averaged (pixels)", Check::above(0));
+    v("curve_window_m", curve_window_m, "... and their least length (m)", Check::at_least(0));
+    v("curve_tolerance_noise", curve_tolerance_noise, "a curved wall's contour is simplified by Douglas-Peucker to a pixel or this many times the boundary noise, the larger", Check::at_least(0));
+    v("snap_max_deg", snap_max_deg, "a straight wall within this angle of the building's lattice (its main direction and quarter turns of it) is turned onto the lattice when that moves its ends little (degrees, 0 = off)", Check::between(0, 45));
+    v("snap_shift_m", snap_shift_m, "... by at most this (m) ...", Check::at_least(0));
+    v("snap_noise", snap_noise, "... or by at most this many times the building's boundary noise", Check::at_least(0));
+    v("merge_offset_m", merge_offset_m, "parallel walls offset by less than this (m), consecutive or joined by a riser at most twice that long, become one wall", Check::at_least(0));
+    v("merge_noise", merge_noise, "... or by less than this many times the building's boundary noise", Check::at_least(0));
+    v("max_cut_m", max_cut_m, "an oblique wall shorter than this (m) between two square walls of the lattice is a corner the segmentation rounded: the two walls meet at their intersection (0 = off)", Check::at_least(0));
     v("split_px", split_px, "a straight run whose contour is explained by parallel lines this far apart or more (pixels, and split_m; each part at least 4 times as long) becomes those lines joined by steps (0 = off)", Check::at_least(0));
     v("split_m", split_m, "the least offset between parallel parts of a run that splits it, in metres (the larger of this and split_px applies)", Check::at_least(0));
+    v("split_noise", split_noise, "... and at least this many times the building's boundary noise (a step smaller than that is the noise's)", Check::at_least(0));
     v("split_max_residual", split_max_residual, "parts split a run only when they leave at most this share of its contour's spread about one line", Check::between(0, 1));
     v("split_max_rms_px", split_max_rms_px, "... and at most this RMS distance of the contour to the parts' lines (pixels)", Check::above(0));
   }
@@ -44,10 +68,19 @@ struct CornerOptions {
 // Absorbs runs shorter than min_run_px pixel lengths into their longer neighbour, in place.
 void absorb_short_runs(const Ring& ring, std::vector<int>& labels, double min_length);
 
-// The corner ring of one contour ring. A curved run (see curve_px) keeps its contour, simplified
-// by Douglas–Peucker to one pixel, between the lines of its neighbours. labels: per edge; directions: unit outward normals.
+// What the corner extraction knows of the whole building.
+struct CornerContext {
+  double noise = 0;                // its boundary noise (see boundary_noise)
+  Vec2 lattice = Vec2::Zero();     // its main wall direction (unit normal); zero: no lattice snap
+};
+
+// The corner ring of one contour ring (in metres; pixel_size converts the _px options). A curved
+// run (see curve_px) keeps its contour, simplified, between the lines of its neighbours; straight
+// walls near the building's lattice are turned onto it and parallel neighbours within the noise
+// merged (snap_*, merge_*). labels: per edge; directions: unit outward normals.
 // Returns an empty ring and sets *problem when no polygon can be formed.
 Ring extract_corners(const Ring& ring, const std::vector<int>& labels, const std::vector<Vec2>& directions,
-                     double pixel_size, const CornerOptions& options, std::string* problem);
+                     double pixel_size, const CornerOptions& options, std::string* problem,
+                     const CornerContext& context = {});
 
 }  // namespace lodforge

@@ -17,12 +17,24 @@ struct RefineOptions {
   double merge_angle_deg = 5.0;  // directions closer than this are merged into one
   double snap_deg = 5.0;         // near-parallel / near-perpendicular directions are snapped (0 = off)
   double release_px = 1.0;       // a run whose own direction would move its ends more than this keeps it (0 = off)
+  double release_noise = 3.0;    // ... and more than this many times the building's boundary noise
+  double min_wall_m = 2.5;       // a direction off the building's lattice needs a run this long (0 = off) ...
+  double min_wall_noise = 5.0;   // ... reaching across the lattice by this many times the boundary noise
+  double lattice_deg = 15.0;     // ... the lattice: the main direction and its quarter turns, within this
+  double min_lattice_share = 0.5;  // a building with less of its contour along its lattice ...
+  double min_turning = 1.5;        // ... whose outline turns less than this many full turns has no lattice
 
   template <class V>
   void visit(V& v) {
     v("trim_px", trim_px, "edges this close to a run's end (pixels) are left out of the direction fit", Check::at_least(0));
     v("merge_angle_deg", merge_angle_deg, "re-estimated directions closer than this are merged (degrees)", Check::between(0, 45));
     v("snap_deg", snap_deg, "directions within this of parallel or perpendicular are fitted jointly and snapped exactly (degrees, 0 = off)", Check::between(0, 20));
+    v("release_noise", release_noise, "... and by more than this many times the building's boundary noise (a noisy wall's own direction is that uncertain)", Check::at_least(0));
+    v("min_wall_m", min_wall_m, "a dominant direction that is not within lattice_deg of the building's main direction or a quarter turn of it is dropped unless one of its runs is at least this long (m): a network's wobble makes short walls in every direction (0 = off)", Check::at_least(0));
+    v("min_wall_noise", min_wall_noise, "... whose extent across the lattice (its length times the sine of its angle to the nearest lattice direction) is at least this many times the building's boundary noise", Check::at_least(0));
+    v("lattice_deg", lattice_deg, "directions within this of the main direction or a quarter turn of it are on the building's lattice (degrees)", Check::between(0, 45));
+    v("min_lattice_share", min_lattice_share, "a building with less than this share of its contour (by smoothed normal) within lattice_deg of its lattice ...", Check::between(0, 1));
+    v("min_turning", min_turning, "... whose smoothed outline turns by less than this many full turns in all (a convex shape turns once, a wobble back and forth) is round or oblique: its directions are not held to a lattice", Check::at_least(0));
     v("release_px", release_px, "a long run whose own least-squares direction differs from its label's so much that its ends move by more than this (pixels, and twice its noise) gets its own direction (0 = off)", Check::at_least(0));
   }
 };
@@ -34,13 +46,23 @@ using EdgeLabels = std::vector<std::vector<int>>;
 void refine_directions(const std::vector<Ring>& rings, EdgeLabels& labels, std::vector<Vec2>& directions,
                        double pixel_size, const RefineOptions& options);
 
+// Drops the directions that are off the building's lattice (the direction with the most labeled
+// length and its quarter turns, within lattice_deg) and have no run long enough: a real
+// oblique wall is a long straight run, a wobble's are short: a run at least min_wall_m long that
+// reaches across the lattice by min_wall_noise times the boundary noise. The lattice's four
+// directions are added where missing.
+// Returns whether any was dropped (the labels then refer to the old numbering: label again).
+bool drop_insignificant_directions(const std::vector<Ring>& rings, const EdgeLabels& labels, std::vector<Vec2>& directions,
+                                   double noise, const RefineOptions& options);
+
 // Releases long runs from their shared direction: a run whose own least-squares direction
 // differs from its label's enough to move the run's ends by more than release_px pixels (and
-// more than twice the run's own residual noise) gets a direction of its own, appended to
+// more than twice the run's own residual noise, and than release_noise times the building's
+// boundary noise, building_noise, in map units) gets a direction of its own, appended to
 // `directions`. Shared directions keep short walls regular; a long wall is placed where its
 // pixels are (a 100 m wall 1° off its shared direction is 0.9 m off at its ends).
 // Returns the number of runs released.
 int release_runs(const std::vector<Ring>& rings, EdgeLabels& labels, std::vector<Vec2>& directions, double pixel_size,
-                 const RefineOptions& options);
+                 double building_noise, const RefineOptions& options);
 
 }  // namespace lodforge

@@ -10,6 +10,8 @@
 #include "directions/refine.hpp"
 #include "geometry/polygon.hpp"
 #include "labeling/mrf.hpp"
+#include "models/noise.hpp"
+#include "models/rectangle.hpp"
 #include "normals/smoothing.hpp"
 #include "peers/cgal_contours.hpp"
 #include "triangulation/triangulate.hpp"
@@ -114,19 +116,75 @@ std::vector<Ring> deform_rings(const std::vector<Ring>& rings_px, const EdgeLabe
   return out;
 }
 
-PolygonWithHoles corner_polygon(const std::vector<Ring>& rings_px, const EdgeLabels& labels,
+// rings: in a local frame (metres, less origin). Lengths of the options are in metres or pixels.
+PolygonWithHoles corner_polygon(const std::vector<Ring>& rings, const EdgeLabels& labels,
                                 const std::vector<Vec2>& directions, const CornerOptions& options, const Vec2& origin,
-                                double pixel_size) {
+                                double pixel_size, const CornerContext& context) {
   PolygonWithHoles footprint;
-  for (std::size_t r = 0; r < rings_px.size(); ++r) {
+  for (std::size_t r = 0; r < rings.size(); ++r) {
     std::string problem;
-    Ring ring = extract_corners(rings_px[r], labels[r], directions, 1.0, options, &problem);
+    Ring ring = extract_corners(rings[r], labels[r], directions, pixel_size, options, &problem, context);
     if (ring.empty()) throw StageError("corners", (r == 0 ? "outer ring: " : "hole " + std::to_string(r - 1) + ": ") + problem);
-    for (Vec2& p : ring) p = origin + p * pixel_size;
+    for (Vec2& p : ring) p += origin;
     if (r == 0) footprint.outer = std::move(ring);
     else footprint.holes.push_back(std::move(ring));
   }
   return footprint;
+}
+
+// The share of the contour's length whose smoothed normal lies within max_deg of the lattice's
+// four directions.
+double lattice_share(const std::vector<std::vector<Vec2>>& normals, const std::vector<std::vector<double>>& lengths,
+                     const Vec2& lattice, double max_deg) {
+  const double min_cos = std::cos(max_deg * M_PI / 180.0);
+  double on = 0, total = 0;
+  for (std::size_t r = 0; r < normals.size(); ++r)
+    for (std::size_t i = 0; i < normals[r].size(); ++i) {
+      const double c = std::max(std::abs(normals[r][i].dot(lattice)), std::abs(cross(normals[r][i], lattice)));
+      total += lengths[r][i];
+      if (c >= min_cos) on += lengths[r][i];
+    }
+  return total > 0 ? on / total : 0.0;
+}
+
+// How many full turns the normals make along a ring, each turn counted whichever way it goes.
+double total_turning(const std::vector<Vec2>& normals) {
+  double turning = 0;
+  for (std::size_t i = 0; i < normals.size(); ++i) {
+    const Vec2& a = normals[i];
+    const Vec2& b = normals[(i + 1) % normals.size()];
+    turning += std::abs(std::atan2(cross(a, b), a.dot(b)));
+  }
+  return turning / (2 * M_PI);
+}
+
+// The building's lattice: the direction with the most labeled contour length.
+Vec2 main_direction(const EdgeLabels& labels, const std::vector<std::vector<double>>& lengths, const std::vector<Vec2>& directions) {
+  std::vector<double> support(directions.size(), 0.0);
+  for (std::size_t r = 0; r < labels.size(); ++r)
+    for (std::size_t i = 0; i < labels[r].size(); ++i) support[labels[r][i]] += lengths[r][i];
+  return directions[std::max_element(support.begin(), support.end()) - support.begin()];
+}
+
+// The boundary noise the model choice allows for (m): as measured, and at least a staircase's.
+double model_noise(const BuildingResult& result, double pixel_size, const ModelOptions& o) {
+  return std::max(result.noise_m, o.min_noise_px * pixel_size);
+}
+
+// Replaces the chain's outline by the building's moment rectangle when that explains the contour
+// (mean distance of the contour to the outline) no worse than the outline plus the allowed noise:
+// the simplest outline that explains the contour within its noise.
+void choose_rectangle(const std::vector<Ring>& rings, double pixel_size, const ModelOptions& o, BuildingResult& result) {
+  if (o.rectangle_tolerance <= 0 || rings.size() != 1 || result.footprint.outer.size() <= 4) return;
+  double rectangle_fit = 0;
+  Ring rectangle = best_rectangle(rings[0], result.directions, &rectangle_fit);
+  if (rectangle.empty()) return;
+  const double outline_fit = mean_distance_to_boundary(rings[0], result.footprint);
+  if (rectangle_fit > outline_fit + o.rectangle_tolerance * model_noise(result, pixel_size, o)) return;
+  PolygonWithHoles candidate{std::move(rectangle), {}};
+  if (!polygon_problem(candidate).empty()) return;
+  result.footprint = std::move(candidate);
+  result.model = "rectangle";
 }
 
 void run_chain(const std::vector<Ring>& rings, double pixel_size, const CoreOptions& o, BuildingResult& result,
@@ -157,36 +215,62 @@ void run_chain(const std::vector<Ring>& rings, double pixel_size, const CoreOpti
   // Label, re-estimate the directions from the labeled runs, label again with them.
   EdgeLabels labels = label_edges(input, o.labeling);
   refine_directions(rings, labels, input.directions, pixel_size, o.refinement);
+  // How noisy the contour is, about lines along the building's lattice. Directions off the lattice
+  // without a wall of their own, long against that noise, are a wobble's: label without them.
+  const Vec2 lattice = main_direction(labels, input.lengths, input.directions);
+  const double noise = lattice_noise(rings, input.normals, lattice, pixel_size, o.noise);
+  // A round or oblique shape (little of it along the lattice, its outline turning about once, as
+  // a convex one does, not back and forth as a wobble does) has no lattice to hold its walls to.
+  const bool on_lattice = lattice_share(input.normals, input.lengths, lattice, o.refinement.lattice_deg) >= o.refinement.min_lattice_share ||
+                          total_turning(input.normals[0]) >= o.refinement.min_turning;
+  result.noise_m = noise;
   input.support.assign(input.directions.size(), 0.0);
   for (std::size_t r = 0; r < labels.size(); ++r)
     for (std::size_t i = 0; i < labels[r].size(); ++i) input.support[labels[r][i]] += input.lengths[r][i];
+  if (on_lattice && drop_insignificant_directions(rings, labels, input.directions, noise, o.refinement)) {
+    input.support.assign(input.directions.size(), 1.0);
+    labels = label_edges(input, o.labeling);
+    input.support.assign(input.directions.size(), 0.0);
+    for (std::size_t r = 0; r < labels.size(); ++r)
+      for (std::size_t i = 0; i < labels[r].size(); ++i) input.support[labels[r][i]] += input.lengths[r][i];
+  }
   labels = label_edges(input, o.labeling);
   refine_directions(rings, labels, input.directions, pixel_size, o.refinement);
-  release_runs(rings, labels, input.directions, pixel_size, o.refinement);
+  if (on_lattice && drop_insignificant_directions(rings, labels, input.directions, noise, o.refinement)) {  // once more, on the new runs
+    input.support.assign(input.directions.size(), 1.0);
+    labels = label_edges(input, o.labeling);
+    refine_directions(rings, labels, input.directions, pixel_size, o.refinement);
+  }
+  release_runs(rings, labels, input.directions, pixel_size, noise, o.refinement);
   if (over_budget()) throw StageError("labeling", "time budget exceeded");
   result.directions = input.directions;
   result.labels = labels;
 
-  // Corner lines are fitted in a local frame (pixels) for numerical range.
+  // Corner lines are fitted in a local frame (metres from the first vertex) for numerical range.
   const Vec2 origin = rings[0][0];
-  const std::vector<Ring> rings_px = translate(rings, origin, pixel_size);
-  std::vector<Ring> fit_rings = rings_px;
-  if (o.corners.route == "deformed" && edges <= std::size_t(o.budget.max_deformation_edges))
-    fit_rings = deform_rings(rings_px, labels, input.directions, o, over_budget, result);
-  // Corners (lengths in metres converted to the frame), validated; an invalid polygon is retried
-  // with coarser run absorption (short runs are where crossings come from) before the building
-  // is given up to the fallback.
+  std::vector<Ring> fit_rings = translate(rings, origin, 1.0);
+  if (o.corners.route == "deformed" && edges <= std::size_t(o.budget.max_deformation_edges)) {
+    fit_rings = deform_rings(translate(rings, origin, pixel_size), labels, input.directions, o, over_budget, result);
+    for (Ring& ring : fit_rings) for (Vec2& p : ring) p *= pixel_size;
+  }
+  // Runs shorter than min_run_noise times the noise are absorbed: a wall shorter than the noise
+  // is not told from it.
   CornerOptions corner_options = o.corners;
-  corner_options.max_corner_shift_m = o.corners.max_corner_shift_m / pixel_size;
-  corner_options.split_m = o.corners.split_m / pixel_size;
+  corner_options.min_run_px = std::max(o.corners.min_run_px, o.corners.min_run_noise * noise / pixel_size);
+  const double noise_min_run = corner_options.min_run_px;
+  CornerContext context;
+  if (on_lattice) context.lattice = main_direction(labels, input.lengths, input.directions);
+  context.noise = noise;
+  // Corners, validated; an invalid polygon is retried with coarser run absorption (short runs are
+  // where crossings come from) before the building is given up to the fallback.
   std::string problem;
   PolygonWithHoles footprint;
   // When every attempt fails, they are made again with runs left unsplit (steps are short too).
   for (const double split_px : {o.corners.split_px, 0.0}) {
     corner_options.split_px = split_px;
-    corner_options.min_run_px = o.corners.min_run_px;
+    corner_options.min_run_px = noise_min_run;
     for (int attempt = 0; attempt <= o.corners.repair_attempts; ++attempt) {
-      footprint = corner_polygon(fit_rings, labels, input.directions, corner_options, origin, pixel_size);
+      footprint = corner_polygon(fit_rings, labels, input.directions, corner_options, origin, pixel_size, context);
       problem = polygon_problem(footprint);
       if (problem.empty()) break;
       corner_options.min_run_px = std::max(2.0, 2 * corner_options.min_run_px);
@@ -195,6 +279,8 @@ void run_chain(const std::vector<Ring>& rings, double pixel_size, const CoreOpti
   }
   if (!problem.empty()) throw StageError("validation", problem);
   result.footprint = std::move(footprint);
+  result.model = "lines";
+  choose_rectangle(rings, pixel_size, o.models, result);
 }
 
 }  // namespace
@@ -228,7 +314,22 @@ BuildingResult regularize_building(const std::vector<Ring>& rings, double pixel_
     result.failed_stage = "internal";
     result.reason = e.what();
   }
-  if (!result.ok) result.footprint = fallback_footprint(rings, o.fallback.tolerance_m);
+  if (!result.ok) {
+    // A failed chain on a rectangle-like contour (a building of a few pixels, say): its moment
+    // rectangle when the contour lies within a pixel fraction and its noise of it.
+    double fit = 0;
+    Ring rectangle = rings.size() == 1 ? best_rectangle(rings[0], result.directions, &fit) : Ring{};
+    if (!rectangle.empty() && fit <= o.models.fallback_fit_px * pixel_size + o.models.fallback_fit_noise * model_noise(result, pixel_size, o.models) &&
+        polygon_problem({rectangle, {}}).empty()) {
+      result.footprint = {std::move(rectangle), {}};
+      result.ok = true;
+      result.model = "rectangle";
+      result.failed_stage.clear();
+      result.reason.clear();
+    } else {
+      result.footprint = fallback_footprint(rings, o.fallback.tolerance_m);
+    }
+  }
   result.seconds = std::chrono::duration<double>(Clock::now() - start).count();
   return result;
 }

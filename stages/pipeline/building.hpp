@@ -20,6 +20,8 @@ struct BuildingResult {
   EdgeLabels labels;             // per ring, per contour edge
   double alignment_rms_deg = -1, alignment_max_deg = -1;  // after deformation, if run
   int deformation_iterations = 0;
+  double noise_m = -1;          // the boundary noise measured on the contour (m), when labeled
+  std::string model;            // "lines" (the chain's outline), "rectangle", or empty for the fallback
   double seconds = 0;
 
   std::string status() const { return ok ? "ok" : "fallback"; }

@@ -7,6 +7,8 @@
 #include "directions/ransac.hpp"
 #include "directions/refine.hpp"
 #include "labeling/mrf.hpp"
+#include "models/noise.hpp"
+#include "models/rectangle.hpp"
 #include "normals/smoothing.hpp"
 #include "peers/cgal_contours.hpp"
 #include "triangulation/triangulate.hpp"
@@ -42,10 +44,12 @@ struct CoreOptions {
   SmoothingOptions smoothing;
   RansacOptions directions;
   MrfOptions labeling;
+  NoiseOptions noise;
   RefineOptions refinement;
   TriangulationOptions triangulation;
   DeformationOptions deformation;
   CornerOptions corners;
+  ModelOptions models;
   FallbackOptions fallback;
   BudgetOptions budget;
   CgalContourOptions cgal;  // the 'cgal' peer regularizer
@@ -55,10 +59,12 @@ struct CoreOptions {
     v.section("smoothing", smoothing);
     v.section("directions", directions);
     v.section("labeling", labeling);
+    v.section("noise", noise);
     v.section("refinement", refinement);
     v.section("triangulation", triangulation);
     v.section("deformation", deformation);
     v.section("corners", corners);
+    v.section("models", models);
     v.section("fallback", fallback);
     v.section("budget", budget);
     v.section("cgal", cgal);

@@ -1,0 +1,99 @@
+#!/usr/bin/env bash
+# The resolution x noise sweep of the quality benchmark (issue 14): the synthetic city and the TU
+# Delft campus footprints, their segmentation simulated at several pixel sizes with the same
+# physical degradation (a boundary wobble given in metres, corners rounded in metres, speckles of
+# half a metre), every regularizer on each, scored by `lodforge eval`. Regenerates the sweep
+# section of docs/quality.md (between its sweep markers).
+#
+#   bench/sweep.sh [--work DIR] [--sets synth,campus] [--pixels 0.1,0.25,0.5,1,2]
+#                  [--wobbles 0,0.25,0.5,1] [--methods lodforge,cgal,douglas_peucker,none] [--no-docs]
+#
+# A row (pixel size P, wobble W metres): `lodforge synth --pixel-size P --set boundary_noise_m=W
+# --set noise_wavelength_m=8 --set corner_radius_m=2W --set speckle_per_km2=400 --set
+# speckle_size_m=0.5` (W = 0: the exact rasterization, no rounding, no speckles). The synthetic
+# city is 500 m x 500 m (seed 11); the campus is its 1,529 BAG footprints (seed 1).
+set -euo pipefail
+root="$(cd "$(dirname "$0")/.." && pwd)"
+lodforge="${LODFORGE:-$root/build/lodforge}"
+shared="${LODFORGE_SHARED_DATA:-$root/../shared/data}"
+work="$root/build/bench-sweep"
+sets="synth,campus"
+pixels="0.1,0.25,0.5,1,2"
+wobbles="0,0.25,0.5,1"
+methods="lodforge,cgal,douglas_peucker,none"
+docs=1
+while [ $# -gt 0 ]; do
+  case "$1" in
+    --work) work="$2"; shift 2 ;;
+    --sets) sets="$2"; shift 2 ;;
+    --pixels) pixels="$2"; shift 2 ;;
+    --wobbles) wobbles="$2"; shift 2 ;;
+    --methods) methods="$2"; shift 2 ;;
+    --no-docs) docs=0; shift ;;
+    -h|--help) sed -n '2,15p' "$0"; exit 0 ;;
+    *) echo "bench/sweep.sh: unknown argument '$1' (see --help)" >&2; exit 2 ;;
+  esac
+done
+[ -x "$lodforge" ] || { echo "bench/sweep.sh: no lodforge binary at $lodforge; run scripts/build.sh first" >&2; exit 1; }
+campus_gt="$shared/tudelft-campus-bag/tudcampus_bag_footprints.geojson"
+IFS=, read -ra set_list <<< "$sets"
+IFS=, read -ra pixel_list <<< "$pixels"
+IFS=, read -ra wobble_list <<< "$wobbles"
+IFS=, read -ra method_list <<< "$methods"
+for s in "${set_list[@]}"; do
+  case "$s" in
+    synth) ;;
+    campus) [ -f "$campus_gt" ] || { echo "bench/sweep.sh: no campus footprints at $campus_gt (set LODFORGE_SHARED_DATA)" >&2; exit 1; } ;;
+    *) echo "bench/sweep.sh: unknown set '$s'" >&2; exit 2 ;;
+  esac
+done
+for m in "${method_list[@]}"; do
+  case "$m" in lodforge|paper|cgal|douglas_peucker|none) ;; *) echo "bench/sweep.sh: unknown method '$m'" >&2; exit 2 ;; esac
+done
+
+method_args() {
+  case "$1" in
+    lodforge) echo "" ;;
+    paper) echo "--regularizer deformation --route deformed" ;;
+    *) echo "--regularizer $1" ;;
+  esac
+}
+
+mkdir -p "$work"
+for s in "${set_list[@]}"; do
+  for p in "${pixel_list[@]}"; do
+    for w in "${wobble_list[@]}"; do
+      row="$s.p$p.w$w"
+      data="$work/data/$row"
+      if [ ! -f "$data/seg_class.tif" ]; then
+        degrade=(--set boundary_noise_m=0 --set corner_radius_m=0 --set speckle_per_km2=0)
+        if [ "$w" != 0 ]; then
+          radius=$(/usr/bin/python3 -c "print(2 * $w)")
+          degrade=(--set "boundary_noise_m=$w" --set noise_wavelength_m=8 --set "corner_radius_m=$radius"
+                   --set speckle_per_km2=400 --set speckle_size_m=0.5)
+        fi
+        if [ "$s" = synth ]; then
+          "$lodforge" synth --size-m 500x500 --pixel-size "$p" --seed 11 "${degrade[@]}" --out "$data" >/dev/null 2>&1
+        else
+          "$lodforge" synth --from "$campus_gt" --pixel-size "$p" --seed 1 "${degrade[@]}" --out "$data" >/dev/null 2>&1
+        fi
+      fi
+      gt="$data/footprints.gpkg"
+      [ "$s" = campus ] && gt="$campus_gt"
+      for m in "${method_list[@]}"; do
+        out="$work/$row.$m"
+        echo "bench/sweep.sh: $row / $m" >&2
+        "$lodforge" regularize --mask "$data/seg_class.tif" $(method_args "$m") --threads "$(nproc)" --out "$out.gpkg" \
+          --stats "$out.stats.json" >"$out.log" 2>&1
+        "$lodforge" eval --pred "$out.gpkg" --gt "$gt" --json "$out.metrics.json" >>"$out.log" 2>&1
+      done
+    done
+  done
+done
+table_args=("$work" --sets "$sets" --pixels "$pixels" --wobbles "$wobbles" --methods "$methods")
+if [ "$docs" = 1 ]; then
+  /usr/bin/python3 "$root/bench/sweep_table.py" "${table_args[@]}" --doc "$root/docs/quality.md"
+  echo "bench/sweep.sh: results written to docs/quality.md" >&2
+else
+  /usr/bin/python3 "$root/bench/sweep_table.py" "${table_args[@]}"
+fi

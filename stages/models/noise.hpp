@@ -1,0 +1,38 @@
+// How noisy a building's contour is. The contour is cut into runs along the building's lattice
+// (each edge takes the nearest of its main direction and quarter turns, by its smoothed normal;
+// runs shorter than a wall are absorbed), each run is fitted by a line of its own direction held
+// near its lattice direction, and the noise is the spread of the contour about those lines. A wall traced exactly by pixels
+// leaves its staircase (~0.3 px); a segmentation network's wobble its own amplitude, since a line
+// held near the lattice cannot tilt to follow it; oblique walls, arcs and corners, which a lattice
+// line does not fit, are left out by taking a low quantile of the distances.
+#pragma once
+#include <vector>
+
+#include "common/option.hpp"
+#include "geometry/types.hpp"
+
+namespace lodforge {
+
+struct NoiseOptions {
+  double min_run_m = 2.0;  // lattice runs shorter than this join their neighbours (m)
+  double trim_m = 1.0;     // edges this close to a run's end are left out (rounded corners) (m)
+  double quantile = 0.3;   // the distances' quantile (by length) read as that of a Gaussian's
+  double max_tilt_deg = 5; // a run's line turns at most this far from its lattice direction
+
+  template <class V>
+  void visit(V& v) {
+    v("min_run_m", min_run_m, "when the boundary noise is measured: runs along the building's lattice shorter than this join their neighbours (m)", Check::at_least(0));
+    v("trim_m", trim_m, "... and edges this close to a run's end are left out, where corners are rounded (m)", Check::at_least(0));
+    v("max_tilt_deg", max_tilt_deg, "... each run fitted by a line of its own direction, turned at most this far from its lattice direction (degrees)", Check::between(0, 45));
+    v("quantile", quantile, "the noise is the distances' quantile of this share (by length), read as that of a Gaussian noise: low, so that oblique walls and arcs, off the lattice lines, do not count", Check::between(0.05, 0.95));
+  }
+};
+
+// The boundary noise of a building (map units): the standard deviation of the Gaussian noise
+// whose |x| has, at `quantile`, the length-weighted quantile of the distances of the contour's
+// edge midpoints to their lattice run's line. normals: per ring, per edge, the smoothed outward normals;
+// lattice: the building's main wall direction (unit normal).
+double lattice_noise(const std::vector<Ring>& rings, const std::vector<std::vector<Vec2>>& normals, const Vec2& lattice,
+                     double pixel_size, const NoiseOptions& options);
+
+}  // namespace lodforge

@@ -1,0 +1,101 @@
+#include "models/rectangle.hpp"
+
+#include <Eigen/Eigenvalues>
+#include <cmath>
+#include <limits>
+
+namespace lodforge {
+
+namespace {
+
+struct Moments {
+  double area = 0;
+  Vec2 centroid = Vec2::Zero();
+  Eigen::Matrix2d central = Eigen::Matrix2d::Zero();  // integral of (p - c)(p - c)^T over the area
+};
+
+// Area, centroid and central second moments of a simple ring (Green's theorem), computed about
+// its first vertex for numerical range.
+Moments moments_of(const Ring& ring) {
+  Moments m;
+  const Vec2 o = ring.front();
+  double a2 = 0, cx = 0, cy = 0, ixx = 0, iyy = 0, ixy = 0;  // about o
+  for (std::size_t i = 0; i < ring.size(); ++i) {
+    const Vec2 p = ring[i] - o, q = ring[(i + 1) % ring.size()] - o;
+    const double c = p.x() * q.y() - q.x() * p.y();
+    a2 += c;
+    cx += (p.x() + q.x()) * c;
+    cy += (p.y() + q.y()) * c;
+    ixx += (p.x() * p.x() + p.x() * q.x() + q.x() * q.x()) * c;
+    iyy += (p.y() * p.y() + p.y() * q.y() + q.y() * q.y()) * c;
+    ixy += (p.x() * q.y() + 2 * p.x() * p.y() + 2 * q.x() * q.y() + q.x() * p.y()) * c;
+  }
+  m.area = a2 / 2;
+  if (m.area <= 0) return m;
+  const Vec2 c(cx / (3 * a2), cy / (3 * a2));
+  m.centroid = o + c;
+  m.central << ixx / 12 - m.area * c.x() * c.x(), ixy / 24 - m.area * c.x() * c.y(),
+               ixy / 24 - m.area * c.x() * c.y(), iyy / 12 - m.area * c.y() * c.y();
+  return m;
+}
+
+Ring rectangle_of(const Moments& m, const Vec2& normal) {
+  const Vec2 n = normal.normalized(), t(-n.y(), n.x());
+  const double along = t.dot(m.central * t), across = n.dot(m.central * n);
+  if (m.area <= 0 || along <= 0 || across <= 0) return {};
+  // A w x h rectangle: area w h, moments h w^3 / 12 and w h^3 / 12.
+  const double w = std::sqrt(12 * along / m.area), h = std::sqrt(12 * across / m.area);
+  const Vec2 c = m.centroid, u = 0.5 * w * t, v = 0.5 * h * n;
+  return {c - u - v, c + u - v, c + u + v, c - u + v};  // counter-clockwise: t then n = t turned left
+}
+
+double distance_to_segment(const Vec2& p, const Vec2& a, const Vec2& b) {
+  const Vec2 ab = b - a;
+  const double len2 = ab.squaredNorm();
+  const double s = len2 > 0 ? std::clamp((p - a).dot(ab) / len2, 0.0, 1.0) : 0.0;
+  return (p - a - s * ab).norm();
+}
+
+}  // namespace
+
+Ring moment_rectangle(const Ring& ring, const Vec2& normal) {
+  if (ring.size() < 3) return {};
+  return rectangle_of(moments_of(ring), normal);
+}
+
+double mean_distance_to_boundary(const Ring& ring, const PolygonWithHoles& polygon) {
+  double sum = 0, weight = 0;
+  for (std::size_t i = 0; i < ring.size(); ++i) {
+    const Vec2 e = edge_vector(ring, i), mid = ring[i] + 0.5 * e;
+    double best = std::numeric_limits<double>::infinity();
+    auto scan = [&](const Ring& r) {
+      for (std::size_t k = 0; k < r.size(); ++k) best = std::min(best, distance_to_segment(mid, r[k], r[(k + 1) % r.size()]));
+    };
+    scan(polygon.outer);
+    for (const Ring& h : polygon.holes) scan(h);
+    sum += e.norm() * best;
+    weight += e.norm();
+  }
+  return weight > 0 ? sum / weight : 0.0;
+}
+
+Ring best_rectangle(const Ring& ring, const std::vector<Vec2>& normals, double* fit) {
+  *fit = std::numeric_limits<double>::infinity();
+  if (ring.size() < 3) return {};
+  const Moments m = moments_of(ring);
+  if (m.area <= 0) return {};
+  std::vector<Vec2> candidates = normals;
+  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> eig(m.central);
+  candidates.push_back(eig.eigenvectors().col(0));
+  for (int k = 0; k < 30; ++k) candidates.emplace_back(std::cos(k * M_PI / 60), std::sin(k * M_PI / 60));
+  Ring best;
+  for (const Vec2& n : candidates) {
+    Ring r = rectangle_of(m, n);
+    if (r.empty()) continue;
+    const double d = mean_distance_to_boundary(ring, {r, {}});
+    if (d < *fit) { *fit = d; best = std::move(r); }
+  }
+  return best;
+}
+
+}  // namespace lodforge

@@ -1,0 +1,39 @@
+// The simplest outline a building can have, as a model to choose against the chain's: an
+// oriented rectangle with the contour's area, centroid and second moments along its axes (a
+// rasterized rectangle's pixels have nearly the true rectangle's moments, whatever the noise on
+// its boundary, so the fit needs no corner and no run: it holds on buildings of a dozen pixels).
+#pragma once
+#include <vector>
+
+#include "common/option.hpp"
+#include "geometry/types.hpp"
+
+namespace lodforge {
+
+struct ModelOptions {
+  double rectangle_tolerance = 0.5;  // in boundary-noise units: how much worse a rectangle may explain the contour
+  double min_noise_px = 0.3;         // the noise assumed at least (a staircase's quantization)
+  double fallback_fit_px = 0.5;      // a rectangle replaces a failed building's fallback when it fits within this ...
+  double fallback_fit_noise = 1.5;   // ... plus this many times the noise
+
+  template <class V>
+  void visit(V& v) {
+    v("rectangle_tolerance", rectangle_tolerance, "a building becomes the oriented rectangle of its contour's moments when that explains the contour no worse than the regularized outline plus this many times the boundary noise (mean distance of the contour to each; 0 = off)", Check::at_least(0));
+    v("min_noise_px", min_noise_px, "the boundary noise is taken as at least this (pixels; a staircase's own)", Check::at_least(0));
+    v("fallback_fit_px", fallback_fit_px, "when the chain fails, the rectangle replaces the Douglas-Peucker fallback if the contour lies within this (pixels) ...", Check::at_least(0));
+    v("fallback_fit_noise", fallback_fit_noise, "... plus this many times the boundary noise of it, on average", Check::at_least(0));
+  }
+};
+
+// The rectangle with edges along `normal` and its quarter turn whose area, centroid and second
+// moments about its axes are those of the ring (counter-clockwise). Empty for a degenerate ring.
+Ring moment_rectangle(const Ring& ring, const Vec2& normal);
+
+// The length-weighted mean distance from the ring's edge midpoints to the polygon's boundary.
+double mean_distance_to_boundary(const Ring& ring, const PolygonWithHoles& polygon);
+
+// The best moment rectangle of the ring over the candidate normals, its principal axes and
+// every 3 degrees: the one whose boundary lies closest to the ring. *fit: its mean distance.
+Ring best_rectangle(const Ring& ring, const std::vector<Vec2>& normals, double* fit);
+
+}  // namespace lodforge
