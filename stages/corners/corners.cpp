@@ -130,20 +130,23 @@ Vec2 nearest_on_lattice(const Vec2& n, const Vec2& lattice) {
 
 // Turns each straight wall onto the building's lattice (its main direction and quarter turns)
 // when it lies within snap_max_deg of it and the turn moves the wall's ends by no more than
-// snap_shift_m or snap_noise times the noise: then the turn is within what the contour can tell.
-// The wall's offset is fitted again with its new direction.
+// snap_shift_m, or snap_noise times the uncertainty of its fitted direction at its ends, which a
+// noise of standard deviation `noise` correlated over snap_correlation_m leaves on a wall of
+// length L: noise * sqrt(3 * correlation / L). A short noisy wall turns readily, a long one only
+// as far as its fit is unsure. The wall's offset is fitted again with its new direction.
 void snap_to_lattice(const Ring& ring, const std::vector<std::pair<int, int>>& runs, std::vector<Line>& lines,
                      const Vec2& lattice, const CornerOptions& o, double pixel_size, double noise) {
   if (o.snap_max_deg <= 0) return;
-  const double max_shift = std::max({o.snap_shift_m, o.snap_noise * noise, 0.5 * pixel_size});
   const double min_cos = std::cos(o.snap_max_deg * M_PI / 180.0);
+  const double correlation = std::max(o.snap_correlation_m, pixel_size);
   for (std::size_t r = 0; r < runs.size(); ++r) {
     const Vec2 target = nearest_on_lattice(lines[r].normal, lattice);
     const double cos_turn = std::clamp(target.dot(lines[r].normal), -1.0, 1.0);
     if (cos_turn < min_cos || cos_turn > 1 - 1e-15) continue;
-    const Vec2 chord = ring[(runs[r].first + runs[r].second) % ring.size()] - ring[runs[r].first];
-    const double shift = std::sqrt(1 - cos_turn * cos_turn) * 0.5 * chord.norm();
-    if (shift <= max_shift) lines[r] = fit_line(ring, runs[r].first, runs[r].second, target);
+    const double length = run_length(ring, runs[r].first, runs[r].second);
+    const double uncertainty = noise * std::sqrt(3 * correlation / std::max(length, correlation));
+    const double shift = std::sqrt(1 - cos_turn * cos_turn) * 0.5 * length;
+    if (shift <= std::max(o.snap_shift_m, o.snap_noise * uncertainty)) lines[r] = fit_line(ring, runs[r].first, runs[r].second, target);
   }
 }
 

@@ -14,7 +14,7 @@ namespace lodforge {
 struct CornerOptions {
   std::string route = "original";  // fit the lines to the original contour, or the deformed one
   double min_run_px = 2.0;         // runs shorter than this (in pixel edges) join a neighbour
-  double min_run_noise = 3.0;      // ... and runs shorter than this many times the boundary noise
+  double min_run_noise = 2.0;      // ... and runs shorter than this many times the boundary noise
   double parallel_angle_deg = 10.0;  // consecutive lines closer than this in angle get a step
   double max_corner_shift_m = 1.25;  // an intersection farther than this from the run junction is
                                      // replaced by a step between the two lines
@@ -25,11 +25,12 @@ struct CornerOptions {
   double curve_window_px = 16.0;     // ... measured as the mean offset over windows of this length
   double curve_window_m = 4.0;       // ... and at least this (m)
   double curve_tolerance_noise = 0.5;  // a curve's contour is simplified to a pixel and this many times the noise
-  double snap_max_deg = 15.0;        // a straight wall within this of the building's lattice ...
-  double snap_shift_m = 0.25;        // ... is turned onto it when its ends move by at most this (m) ...
-  double snap_noise = 2.0;           // ... or this many times the boundary noise
+  double snap_max_deg = 10.0;        // a straight wall within this of the building's lattice ...
+  double snap_shift_m = 0.0;         // ... is turned onto it when its ends move by at most this (m) ...
+  double snap_noise = 2.0;           // ... or this many times its direction's uncertainty at its ends
+  double snap_correlation_m = 1.0;   // ... from the boundary noise, correlated over this length (m)
   double merge_offset_m = 0.1;       // consecutive parallel walls offset by less than this (m) ...
-  double merge_noise = 1.0;          // ... or this many times the boundary noise are one wall
+  double merge_noise = 0.5;          // ... or this many times the boundary noise are one wall
   double max_cut_m = 3.0;            // an oblique wall shorter than this between square walls is a rounded corner
   double split_px = 1.0;             // a run whose parts lie this far apart (parallel) becomes lines and steps (0 = off)
   double split_m = 0.5;              // ... and at least this far in metres
@@ -53,7 +54,8 @@ struct CornerOptions {
     v("curve_tolerance_noise", curve_tolerance_noise, "a curved wall's contour is simplified by Douglas-Peucker to a pixel or this many times the boundary noise, the larger", Check::at_least(0));
     v("snap_max_deg", snap_max_deg, "a straight wall within this angle of the building's lattice (its main direction and quarter turns of it) is turned onto the lattice when that moves its ends little (degrees, 0 = off)", Check::between(0, 45));
     v("snap_shift_m", snap_shift_m, "... by at most this (m) ...", Check::at_least(0));
-    v("snap_noise", snap_noise, "... or by at most this many times the building's boundary noise", Check::at_least(0));
+    v("snap_noise", snap_noise, "... or by at most this many times the uncertainty of its fitted direction at its ends (noise * sqrt(3 * snap_correlation_m / length))", Check::at_least(0));
+    v("snap_correlation_m", snap_correlation_m, "the length over which the boundary noise is taken to be correlated, for that uncertainty (m, at least a pixel)", Check::above(0));
     v("merge_offset_m", merge_offset_m, "parallel walls offset by less than this (m), consecutive or joined by a riser at most twice that long, become one wall", Check::at_least(0));
     v("merge_noise", merge_noise, "... or by less than this many times the building's boundary noise", Check::at_least(0));
     v("max_cut_m", max_cut_m, "an oblique wall shorter than this (m) between two square walls of the lattice is a corner the segmentation rounded: the two walls meet at their intersection (0 = off)", Check::at_least(0));

@@ -46,7 +46,7 @@ Ring rectangle_of(const Moments& m, const Vec2& normal) {
   // A w x h rectangle: area w h, moments h w^3 / 12 and w h^3 / 12.
   const double w = std::sqrt(12 * along / m.area), h = std::sqrt(12 * across / m.area);
   const Vec2 c = m.centroid, u = 0.5 * w * t, v = 0.5 * h * n;
-  return {c - u - v, c + u - v, c + u + v, c - u + v};  // counter-clockwise: t then n = t turned left
+  return {c - u - v, c - u + v, c + u + v, c + u - v};  // counter-clockwise (t is n turned left)
 }
 
 double distance_to_segment(const Vec2& p, const Vec2& a, const Vec2& b) {
@@ -88,14 +88,30 @@ Ring best_rectangle(const Ring& ring, const std::vector<Vec2>& normals, double* 
   const Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> eig(m.central);
   candidates.push_back(eig.eigenvectors().col(0));
   for (int k = 0; k < 30; ++k) candidates.emplace_back(std::cos(k * M_PI / 60), std::sin(k * M_PI / 60));
-  Ring best;
-  for (const Vec2& n : candidates) {
-    Ring r = rectangle_of(m, n);
-    if (r.empty()) continue;
-    const double d = mean_distance_to_boundary(ring, {r, {}});
-    if (d < *fit) { *fit = d; best = std::move(r); }
+  // The edge midpoints relative to the centroid, with their lengths.
+  std::vector<std::pair<Vec2, double>> mids;
+  for (std::size_t i = 0; i < ring.size(); ++i) {
+    const Vec2 e = edge_vector(ring, i);
+    mids.push_back({ring[i] + 0.5 * e - m.centroid, e.norm()});
   }
-  return best;
+  Vec2 best_normal = Vec2::Zero();
+  for (const Vec2& candidate : candidates) {
+    const Vec2 n = candidate.normalized(), t(-n.y(), n.x());
+    const double along = t.dot(m.central * t), across = n.dot(m.central * n);
+    if (along <= 0 || across <= 0) continue;
+    // The distance to the boundary of the box of half sides a, b in its own frame.
+    const double a = 0.5 * std::sqrt(12 * along / m.area), b = 0.5 * std::sqrt(12 * across / m.area);
+    double sum = 0, weight = 0;
+    for (const auto& [p, w] : mids) {
+      const double u = std::abs(t.dot(p)) - a, v = std::abs(n.dot(p)) - b;
+      const double d = u <= 0 && v <= 0 ? std::min(-u, -v) : std::hypot(std::max(u, 0.0), std::max(v, 0.0));
+      sum += w * d;
+      weight += w;
+    }
+    const double d = weight > 0 ? sum / weight : 0.0;
+    if (d < *fit) { *fit = d; best_normal = n; }
+  }
+  return best_normal.squaredNorm() > 0 ? rectangle_of(m, best_normal) : Ring{};
 }
 
 }  // namespace lodforge

@@ -11,13 +11,15 @@
 namespace lodforge {
 
 struct ModelOptions {
-  double rectangle_tolerance = 0.5;  // in boundary-noise units: how much worse a rectangle may explain the contour
+  double outline_tolerance = 0.5;    // in boundary-noise units: how much worse the regular outline may explain the contour
+  double rectangle_tolerance = 0.5;  // ... and a rectangle
   double min_noise_px = 0.3;         // the noise assumed at least (a staircase's quantization)
   double fallback_fit_px = 0.5;      // a rectangle replaces a failed building's fallback when it fits within this ...
   double fallback_fit_noise = 1.5;   // ... plus this many times the noise
 
   template <class V>
   void visit(V& v) {
+    v("outline_tolerance", outline_tolerance, "the regular outline (walls held to the lattice, steps and curves judged against the noise) is kept when it explains the contour (mean distance of the contour to it) no worse than the plain one (pixel thresholds) plus this many times the boundary noise", Check::at_least(0));
     v("rectangle_tolerance", rectangle_tolerance, "a building becomes the oriented rectangle of its contour's moments when that explains the contour no worse than the regularized outline plus this many times the boundary noise (mean distance of the contour to each; 0 = off)", Check::at_least(0));
     v("min_noise_px", min_noise_px, "the boundary noise is taken as at least this (pixels; a staircase's own)", Check::at_least(0));
     v("fallback_fit_px", fallback_fit_px, "when the chain fails, the rectangle replaces the Douglas-Peucker fallback if the contour lies within this (pixels) ...", Check::at_least(0));

@@ -26,6 +26,12 @@ struct StageError : std::runtime_error {
   std::string stage;
 };
 
+// A building over its time budget: it gets the fallback, not another model (the budget is a
+// safety net for pathological contours).
+struct BudgetExceeded : StageError {
+  using StageError::StageError;
+};
+
 using Clock = std::chrono::steady_clock;
 
 std::vector<Ring> translate(const std::vector<Ring>& rings, const Vec2& offset, double scale) {
@@ -88,7 +94,7 @@ std::vector<Ring> deform_rings(const std::vector<Ring>& rings_px, const EdgeLabe
   std::vector<Vec2> targets;
   for (const BoundaryEdge& b : mesh.boundary) targets.push_back(directions[coarse_labels[b.ring][b.edge]]);
   const DeformationResult d = deform(mesh, targets, o.deformation, over_budget);
-  if (d.stopped) throw StageError("deformation", "time budget of " + std::to_string(o.budget.max_seconds) + " s exceeded");
+  if (d.stopped) throw BudgetExceeded("deformation", "time budget of " + std::to_string(o.budget.max_seconds) + " s exceeded");
   result.alignment_rms_deg = d.rms_deg;
   result.alignment_max_deg = d.max_deg;
   result.deformation_iterations = d.iterations;
@@ -158,6 +164,45 @@ double total_turning(const std::vector<Vec2>& normals) {
   return turning / (2 * M_PI);
 }
 
+using StageProblem = std::pair<std::string, std::string>;  // stage, problem (empty: none)
+
+// The corner polygon of the rings (metres from origin) at a context, validated: an invalid polygon
+// is retried with coarser run absorption (short runs are where crossings come from), then again
+// with runs left unsplit (steps are short too).
+StageProblem outline(const std::vector<Ring>& rings, const EdgeLabels& labels, const std::vector<Vec2>& directions,
+                     const CoreOptions& o, const Vec2& origin, double pixel_size, const CornerContext& context,
+                     double min_run_px, PolygonWithHoles& footprint) {
+  CornerOptions corner_options = o.corners;
+  std::string problem;
+  try {
+    for (const double split_px : {o.corners.split_px, 0.0}) {
+      corner_options.split_px = split_px;
+      corner_options.min_run_px = min_run_px;
+      for (int attempt = 0; attempt <= o.corners.repair_attempts; ++attempt) {
+        footprint = corner_polygon(rings, labels, directions, corner_options, origin, pixel_size, context);
+        problem = polygon_problem(footprint);
+        if (problem.empty()) return {};
+        corner_options.min_run_px = std::max(2.0, 2 * corner_options.min_run_px);
+      }
+    }
+  } catch (const StageError& e) {
+    return {e.stage, e.what()};
+  }
+  return {"validation", problem};
+}
+
+// How well a polygon explains the contour: the length-weighted mean distance of every ring's
+// edges to the polygon's boundary.
+double contour_fit(const std::vector<Ring>& rings, const PolygonWithHoles& polygon) {
+  double sum = 0, total = 0;
+  for (const Ring& ring : rings) {
+    const double length = perimeter(ring);
+    sum += length * mean_distance_to_boundary(ring, polygon);
+    total += length;
+  }
+  return total > 0 ? sum / total : 0.0;
+}
+
 // The building's lattice: the direction with the most labeled contour length.
 Vec2 main_direction(const EdgeLabels& labels, const std::vector<std::vector<double>>& lengths, const std::vector<Vec2>& directions) {
   std::vector<double> support(directions.size(), 0.0);
@@ -205,7 +250,7 @@ void run_chain(const std::vector<Ring>& rings, double pixel_size, const CoreOpti
     all_normals.insert(all_normals.end(), input.normals.back().begin(), input.normals.back().end());
     all_lengths.insert(all_lengths.end(), input.lengths.back().begin(), input.lengths.back().end());
   }
-  if (over_budget()) throw StageError("smoothing", "time budget exceeded");
+  if (over_budget()) throw BudgetExceeded("smoothing", "time budget exceeded");
   for (const DominantDirection& d : detect_directions(all_normals, all_lengths, o.directions)) {
     input.directions.push_back(d.normal);
     input.support.push_back(d.support);
@@ -242,7 +287,7 @@ void run_chain(const std::vector<Ring>& rings, double pixel_size, const CoreOpti
     refine_directions(rings, labels, input.directions, pixel_size, o.refinement);
   }
   release_runs(rings, labels, input.directions, pixel_size, noise, o.refinement);
-  if (over_budget()) throw StageError("labeling", "time budget exceeded");
+  if (over_budget()) throw BudgetExceeded("labeling", "time budget exceeded");
   result.directions = input.directions;
   result.labels = labels;
 
@@ -253,33 +298,26 @@ void run_chain(const std::vector<Ring>& rings, double pixel_size, const CoreOpti
     fit_rings = deform_rings(translate(rings, origin, pixel_size), labels, input.directions, o, over_budget, result);
     for (Ring& ring : fit_rings) for (Vec2& p : ring) p *= pixel_size;
   }
-  // Runs shorter than min_run_noise times the noise are absorbed: a wall shorter than the noise
-  // is not told from it.
-  CornerOptions corner_options = o.corners;
-  corner_options.min_run_px = std::max(o.corners.min_run_px, o.corners.min_run_noise * noise / pixel_size);
-  const double noise_min_run = corner_options.min_run_px;
+  // Two outlines from the same labels: the regular one (runs shorter than min_run_noise times
+  // the noise absorbed, walls held to the lattice, steps, curves and cuts judged against the noise)
+  // and the plain one (the paper's corners with pixel thresholds), and the regular one kept
+  // unless it explains the contour worse than the plain one by more than the noise allows.
   CornerContext context;
   if (on_lattice) context.lattice = main_direction(labels, input.lengths, input.directions);
   context.noise = noise;
-  // Corners, validated; an invalid polygon is retried with coarser run absorption (short runs are
-  // where crossings come from) before the building is given up to the fallback.
-  std::string problem;
-  PolygonWithHoles footprint;
-  // When every attempt fails, they are made again with runs left unsplit (steps are short too).
-  for (const double split_px : {o.corners.split_px, 0.0}) {
-    corner_options.split_px = split_px;
-    corner_options.min_run_px = noise_min_run;
-    for (int attempt = 0; attempt <= o.corners.repair_attempts; ++attempt) {
-      footprint = corner_polygon(fit_rings, labels, input.directions, corner_options, origin, pixel_size, context);
-      problem = polygon_problem(footprint);
-      if (problem.empty()) break;
-      corner_options.min_run_px = std::max(2.0, 2 * corner_options.min_run_px);
-    }
-    if (problem.empty() || split_px == 0) break;
-  }
-  if (!problem.empty()) throw StageError("validation", problem);
-  result.footprint = std::move(footprint);
-  result.model = "lines";
+  PolygonWithHoles regular, plain;
+  const StageProblem regular_problem =
+      outline(fit_rings, labels, input.directions, o, origin, pixel_size, context,
+              std::max(o.corners.min_run_px, o.corners.min_run_noise * noise / pixel_size), regular);
+  const StageProblem plain_problem =
+      outline(fit_rings, labels, input.directions, o, origin, pixel_size, CornerContext{}, o.corners.min_run_px, plain);
+  if (!regular_problem.second.empty() && !plain_problem.second.empty())
+    throw StageError(regular_problem.first, regular_problem.second);
+  const double allowed = o.models.outline_tolerance * model_noise(result, pixel_size, o.models);
+  const bool regular_wins = !plain_problem.second.empty() ||
+                            (regular_problem.second.empty() && contour_fit(rings, regular) <= contour_fit(rings, plain) + allowed);
+  result.footprint = std::move(regular_wins ? regular : plain);
+  result.model = regular_wins ? "regular" : "lines";
   choose_rectangle(rings, pixel_size, o.models, result);
 }
 
@@ -303,8 +341,13 @@ BuildingResult regularize_building(const std::vector<Ring>& rings, double pixel_
   const auto over_budget = [&] {
     return std::chrono::duration<double>(Clock::now() - start).count() > o.budget.max_seconds;
   };
+  bool rescue = true;  // a failed chain may still be a rectangle, unless it ran out of time
   try {
     run_chain(rings, pixel_size, o, result, over_budget);
+  } catch (const BudgetExceeded& e) {
+    result.ok = rescue = false;
+    result.failed_stage = e.stage;
+    result.reason = e.what();
   } catch (const StageError& e) {
     result.ok = false;
     result.failed_stage = e.stage;
@@ -318,7 +361,7 @@ BuildingResult regularize_building(const std::vector<Ring>& rings, double pixel_
     // A failed chain on a rectangle-like contour (a building of a few pixels, say): its moment
     // rectangle when the contour lies within a pixel fraction and its noise of it.
     double fit = 0;
-    Ring rectangle = rings.size() == 1 ? best_rectangle(rings[0], result.directions, &fit) : Ring{};
+    Ring rectangle = rescue && rings.size() == 1 ? best_rectangle(rings[0], result.directions, &fit) : Ring{};
     if (!rectangle.empty() && fit <= o.models.fallback_fit_px * pixel_size + o.models.fallback_fit_noise * model_noise(result, pixel_size, o.models) &&
         polygon_problem({rectangle, {}}).empty()) {
       result.footprint = {std::move(rectangle), {}};

@@ -3,6 +3,7 @@
 #include <Eigen/Geometry>
 #include <cmath>
 #include <cstdlib>
+#include <functional>
 #include <memory>
 
 #include "eval/metrics.hpp"
@@ -25,8 +26,10 @@ PolygonWithHoles rotated(const PolygonWithHoles& p, double angle_deg) {
   return out;
 }
 
-RasterizedShape rasterize_shape(const PolygonWithHoles& truth, double pixel_size, double noise_px,
-                                double corner_radius_px, std::uint64_t seed) {
+namespace {
+
+RasterizedShape rasterize(const PolygonWithHoles& truth, double pixel_size,
+                          const std::function<cv::Mat(const cv::Mat&)>& degrade) {
   Vec2 lo = truth.outer.front(), hi = truth.outer.front();
   for (const Vec2& q : truth.outer) { lo = lo.cwiseMin(q); hi = hi.cwiseMax(q); }
   const double margin = 5.0;
@@ -39,11 +42,28 @@ RasterizedShape rasterize_shape(const PolygonWithHoles& truth, double pixel_size
   const int rows = int(std::ceil((y0 - lo.y() + margin) / pixel_size));
   cv::Mat mask = cv::Mat::zeros(rows, cols, CV_8U);
   rasterize(mask, truth, s.transform);
-  if (noise_px > 0 || corner_radius_px > 0) mask = degrade_mask(mask, noise_px, corner_radius_px, seed);
-  s.mask = mask;
+  s.mask = degrade(mask);
   ContourOptions options;
-  s.buildings = extract_contours(mask, s.transform, options).buildings;
+  s.buildings = extract_contours(s.mask, s.transform, options).buildings;
   return s;
+}
+
+}  // namespace
+
+RasterizedShape rasterize_shape(const PolygonWithHoles& truth, double pixel_size, double noise_px,
+                                double corner_radius_px, std::uint64_t seed) {
+  return rasterize(truth, pixel_size, [&](const cv::Mat& mask) {
+    return noise_px > 0 || corner_radius_px > 0 ? degrade_mask(mask, noise_px, corner_radius_px, seed) : mask;
+  });
+}
+
+RasterizedShape rasterize_shape_m(const PolygonWithHoles& truth, double pixel_size, double wobble_m, double wavelength_m,
+                                  double radius_m, std::uint64_t seed) {
+  return rasterize(truth, pixel_size, [&](const cv::Mat& mask) {
+    // As synth: RMS of a wave of that amplitude; the field's blur from the wavelength (Rice).
+    return degrade_mask(mask, wobble_m / std::sqrt(2.0) / pixel_size, radius_m / pixel_size, seed,
+                        wavelength_m / (2 * M_PI * std::sqrt(2.0)) / pixel_size, true);
+  });
 }
 
 double iou(const PolygonWithHoles& a, const PolygonWithHoles& b) { return polygon_iou(a, b); }

@@ -25,6 +25,12 @@ struct RasterizedShape {
 RasterizedShape rasterize_shape(const PolygonWithHoles& truth, double pixel_size, double noise_px,
                                 double corner_radius_px, std::uint64_t seed);
 
+// The same with the degradation given in metres, as a network's at any pixel size: a boundary
+// wobble of amplitude wobble_m and wavelength wavelength_m along the boundary, corners rounded
+// by radius_m (synth's boundary_noise_m, noise_wavelength_m, corner_radius_m).
+RasterizedShape rasterize_shape_m(const PolygonWithHoles& truth, double pixel_size, double wobble_m, double wavelength_m,
+                                  double radius_m, std::uint64_t seed);
+
 double iou(const PolygonWithHoles& a, const PolygonWithHoles& b);
 
 // Directory of ../shared/data (LODFORGE_SHARED_DATA overrides).
