@@ -1,6 +1,7 @@
 #include "models/rectangle.hpp"
 
 #include <Eigen/Eigenvalues>
+#include <algorithm>
 #include <cmath>
 #include <limits>
 
@@ -61,6 +62,30 @@ double distance_to_segment(const Vec2& p, const Vec2& a, const Vec2& b) {
 Ring moment_rectangle(const Ring& ring, const Vec2& normal) {
   if (ring.size() < 3) return {};
   return rectangle_of(moments_of(ring), normal);
+}
+
+double distance_quantile_to_boundary(const Ring& ring, const PolygonWithHoles& polygon, double q) {
+  std::vector<std::pair<double, double>> distances;  // distance, edge length
+  double total = 0;
+  for (std::size_t i = 0; i < ring.size(); ++i) {
+    const Vec2 e = edge_vector(ring, i), mid = ring[i] + 0.5 * e;
+    double best = std::numeric_limits<double>::infinity();
+    auto scan = [&](const Ring& r) {
+      for (std::size_t k = 0; k < r.size(); ++k) best = std::min(best, distance_to_segment(mid, r[k], r[(k + 1) % r.size()]));
+    };
+    scan(polygon.outer);
+    for (const Ring& h : polygon.holes) scan(h);
+    distances.push_back({best, e.norm()});
+    total += e.norm();
+  }
+  if (distances.empty()) return 0.0;
+  std::sort(distances.begin(), distances.end());
+  double acc = 0;
+  for (const auto& [d, w] : distances) {
+    acc += w;
+    if (acc >= q * total) return d;
+  }
+  return distances.back().first;
 }
 
 double mean_distance_to_boundary(const Ring& ring, const PolygonWithHoles& polygon) {

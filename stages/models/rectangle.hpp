@@ -12,18 +12,18 @@ namespace lodforge {
 
 struct ModelOptions {
   double outline_tolerance = 0.5;    // in boundary-noise units: how much worse the regular outline may explain the contour
-  double rectangle_tolerance = 0.5;  // ... and a rectangle
+  double rectangle_tolerance = 1.0;  // ... and a rectangle, by the 90th percentile of the distances
   double min_noise_px = 0.3;         // the noise assumed at least (a staircase's quantization)
   double fallback_fit_px = 0.5;      // a rectangle replaces a failed building's fallback when it fits within this ...
-  double fallback_fit_noise = 1.5;   // ... plus this many times the noise
+  double fallback_fit_ratio = 2.0;   // ... or this many times as far as the fallback (mean distances)
 
   template <class V>
   void visit(V& v) {
     v("outline_tolerance", outline_tolerance, "the regular outline (walls held to the lattice, steps and curves judged against the noise) is kept when it explains the contour (mean distance of the contour to it) no worse than the plain one (pixel thresholds) plus this many times the boundary noise", Check::at_least(0));
-    v("rectangle_tolerance", rectangle_tolerance, "a building becomes the oriented rectangle of its contour's moments when that explains the contour no worse than the regularized outline plus this many times the boundary noise (mean distance of the contour to each; 0 = off)", Check::at_least(0));
+    v("rectangle_tolerance", rectangle_tolerance, "a building becomes the oriented rectangle of its contour's moments when that explains the contour no worse than the regularized outline plus this many times the boundary noise (the 90th percentile of the distances of the contour to each: a rectangle must follow the contour everywhere, not on average; 0 = off)", Check::at_least(0));
     v("min_noise_px", min_noise_px, "the boundary noise is taken as at least this (pixels; a staircase's own)", Check::at_least(0));
-    v("fallback_fit_px", fallback_fit_px, "when the chain fails, the rectangle replaces the Douglas-Peucker fallback if the contour lies within this (pixels) ...", Check::at_least(0));
-    v("fallback_fit_noise", fallback_fit_noise, "... plus this many times the boundary noise of it, on average", Check::at_least(0));
+    v("fallback_fit_px", fallback_fit_px, "when the chain fails, the rectangle replaces the Douglas-Peucker fallback if the contour lies within this (pixels, mean distance) of it ...", Check::at_least(0));
+    v("fallback_fit_ratio", fallback_fit_ratio, "... or within this many times the fallback's own mean distance to the contour", Check::at_least(0));
   }
 };
 
@@ -33,6 +33,9 @@ Ring moment_rectangle(const Ring& ring, const Vec2& normal);
 
 // The length-weighted mean distance from the ring's edge midpoints to the polygon's boundary.
 double mean_distance_to_boundary(const Ring& ring, const PolygonWithHoles& polygon);
+
+// ... and the length-weighted q-quantile of those distances.
+double distance_quantile_to_boundary(const Ring& ring, const PolygonWithHoles& polygon, double q);
 
 // The best moment rectangle of the ring over the candidate normals, its principal axes and
 // every 3 degrees: the one whose boundary lies closest to the ring. *fit: its mean distance.

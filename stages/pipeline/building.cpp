@@ -153,12 +153,19 @@ double lattice_share(const std::vector<std::vector<Vec2>>& normals, const std::v
   return total > 0 ? on / total : 0.0;
 }
 
-// How many full turns the normals make along a ring, each turn counted whichever way it goes.
-double total_turning(const std::vector<Vec2>& normals) {
-  double turning = 0;
+// How many full turns the normals make along a ring, each turn counted whichever way it goes,
+// sampled every `step` of contour (so that a staircase's pixel-scale zigzag does not count).
+double total_turning(const Ring& ring, const std::vector<Vec2>& normals, double step) {
+  std::vector<Vec2> samples;
+  double along = step;
   for (std::size_t i = 0; i < normals.size(); ++i) {
-    const Vec2& a = normals[i];
-    const Vec2& b = normals[(i + 1) % normals.size()];
+    if (along >= step) { samples.push_back(normals[i]); along = 0; }
+    along += edge_vector(ring, i).norm();
+  }
+  double turning = 0;
+  for (std::size_t i = 0; i < samples.size(); ++i) {
+    const Vec2& a = samples[i];
+    const Vec2& b = samples[(i + 1) % samples.size()];
     turning += std::abs(std::atan2(cross(a, b), a.dot(b)));
   }
   return turning / (2 * M_PI);
@@ -224,9 +231,10 @@ void choose_rectangle(const std::vector<Ring>& rings, double pixel_size, const M
   double rectangle_fit = 0;
   Ring rectangle = best_rectangle(rings[0], result.directions, &rectangle_fit);
   if (rectangle.empty()) return;
-  const double outline_fit = mean_distance_to_boundary(rings[0], result.footprint);
-  if (rectangle_fit > outline_fit + o.rectangle_tolerance * model_noise(result, pixel_size, o)) return;
   PolygonWithHoles candidate{std::move(rectangle), {}};
+  const double outline_fit = distance_quantile_to_boundary(rings[0], result.footprint, 0.9);
+  rectangle_fit = distance_quantile_to_boundary(rings[0], candidate, 0.9);
+  if (rectangle_fit > outline_fit + o.rectangle_tolerance * model_noise(result, pixel_size, o)) return;
   if (!polygon_problem(candidate).empty()) return;
   result.footprint = std::move(candidate);
   result.model = "rectangle";
@@ -267,7 +275,7 @@ void run_chain(const std::vector<Ring>& rings, double pixel_size, const CoreOpti
   // A round or oblique shape (little of it along the lattice, its outline turning about once, as
   // a convex one does, not back and forth as a wobble does) has no lattice to hold its walls to.
   const bool on_lattice = lattice_share(input.normals, input.lengths, lattice, o.refinement.lattice_deg) >= o.refinement.min_lattice_share ||
-                          total_turning(input.normals[0]) >= o.refinement.min_turning;
+                          total_turning(rings[0], input.normals[0], std::max(1.0, 2 * pixel_size)) >= o.refinement.min_turning;
   result.noise_m = noise;
   input.support.assign(input.directions.size(), 0.0);
   for (std::size_t r = 0; r < labels.size(); ++r)
@@ -318,7 +326,7 @@ void run_chain(const std::vector<Ring>& rings, double pixel_size, const CoreOpti
                             (regular_problem.second.empty() && contour_fit(rings, regular) <= contour_fit(rings, plain) + allowed);
   result.footprint = std::move(regular_wins ? regular : plain);
   result.model = regular_wins ? "regular" : "lines";
-  choose_rectangle(rings, pixel_size, o.models, result);
+  if (on_lattice) choose_rectangle(rings, pixel_size, o.models, result);  // a round shape is no rectangle
 }
 
 }  // namespace
@@ -359,18 +367,19 @@ BuildingResult regularize_building(const std::vector<Ring>& rings, double pixel_
   }
   if (!result.ok) {
     // A failed chain on a rectangle-like contour (a building of a few pixels, say): its moment
-    // rectangle when the contour lies within a pixel fraction and its noise of it.
+    // rectangle, when that lies as close to the contour as the Douglas-Peucker fallback does
+    // (within fallback_fit_ratio times its mean distance, or fallback_fit_px).
+    result.footprint = fallback_footprint(rings, o.fallback.tolerance_m);
     double fit = 0;
     Ring rectangle = rescue && rings.size() == 1 ? best_rectangle(rings[0], result.directions, &fit) : Ring{};
-    if (!rectangle.empty() && fit <= o.models.fallback_fit_px * pixel_size + o.models.fallback_fit_noise * model_noise(result, pixel_size, o.models) &&
+    const double fallback_fit = rectangle.empty() ? 0.0 : mean_distance_to_boundary(rings[0], result.footprint);
+    if (!rectangle.empty() && fit <= std::max(o.models.fallback_fit_px * pixel_size, o.models.fallback_fit_ratio * fallback_fit) &&
         polygon_problem({rectangle, {}}).empty()) {
       result.footprint = {std::move(rectangle), {}};
       result.ok = true;
       result.model = "rectangle";
       result.failed_stage.clear();
       result.reason.clear();
-    } else {
-      result.footprint = fallback_footprint(rings, o.fallback.tolerance_m);
     }
   }
   result.seconds = std::chrono::duration<double>(Clock::now() - start).count();
