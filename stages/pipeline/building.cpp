@@ -274,7 +274,9 @@ void run_chain(const std::vector<Ring>& rings, double pixel_size, const CoreOpti
   const double noise = lattice_noise(rings, input.normals, lattice, pixel_size, o.noise);
   // A round or oblique shape (little of it along the lattice, its outline turning about once, as
   // a convex one does, not back and forth as a wobble does) has no lattice to hold its walls to.
-  const bool on_lattice = lattice_share(input.normals, input.lengths, lattice, o.refinement.lattice_deg) >= o.refinement.min_lattice_share ||
+  // (A building of a few dozen pixels shows no curvature: it is taken as on its lattice.)
+  const bool on_lattice = perimeter(rings[0]) < o.refinement.min_round_px * pixel_size ||
+                          lattice_share(input.normals, input.lengths, lattice, o.refinement.lattice_deg) >= o.refinement.min_lattice_share ||
                           total_turning(rings[0], input.normals[0], std::max(1.0, 2 * pixel_size)) >= o.refinement.min_turning;
   result.noise_m = noise;
   input.support.assign(input.directions.size(), 0.0);
