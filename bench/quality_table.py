@@ -14,7 +14,8 @@ METRICS = [("overall_iou", "overall IoU", "{:.4f}", True), ("blob_iou", "blob Io
            ("f1", "F1", "{:.3f}", True), ("mean_iou", "mean IoU", "{:.4f}", True), ("c_iou", "C-IoU", "{:.3f}", True),
            ("n_ratio", "N-ratio", "{:.2f}", None), ("polis_m", "PoLiS (m)", "{:.3f}", False),
            ("hausdorff_p95_m", "Hausdorff p95 (m)", "{:.2f}", False),
-           ("max_tangent_angle_deg", "max tangent (°)", "{:.1f}", False), ("corner_share_5deg", "corners ≤ 5°", "{:.2f}", True)]
+           ("max_tangent_angle_deg", "max tangent (°)", "{:.1f}", False), ("corner_share_5deg", "corners ≤ 5°", "{:.2f}", True),
+           ("right_angle_share", "right angles", "{:.2f}", True)]
 TARGET = ["overall_iou", "polis_m", "max_tangent_angle_deg"]
 PEERS = ["cgal", "douglas_peucker", "none"]
 
@@ -39,7 +40,8 @@ for d in datasets:
         rows[m] = (metrics, stats)
     any_row = next(iter(rows.values()))[0]
     out.append(f"### {TITLES.get(d, d)}\n")
-    out.append(f"{any_row['predicted']} footprints against {any_row['truth']} true footprints.\n")
+    out.append(f"{any_row['predicted']} footprints against {any_row['truth']} true footprints; "
+               f"right-angled corners of the truth: {any_row.get('truth_right_angle_share', 0):.2f}.\n")
     out.append("| method | " + " | ".join(h for _, h, _, _ in METRICS) + " | fallbacks | ms / building (median, p99) |")
     out.append("|---" * (len(METRICS) + 3) + "|")
     for m in methods:

@@ -64,9 +64,10 @@ Ring moment_rectangle(const Ring& ring, const Vec2& normal) {
   return rectangle_of(moments_of(ring), normal);
 }
 
-double distance_quantile_to_boundary(const Ring& ring, const PolygonWithHoles& polygon, double q) {
-  std::vector<std::pair<double, double>> distances;  // distance, edge length
-  double total = 0;
+// The distance of each of the ring's edge midpoints to the polygon's boundary, with the edge's
+// length: (distance, length).
+static std::vector<std::pair<double, double>> boundary_distances(const Ring& ring, const PolygonWithHoles& polygon) {
+  std::vector<std::pair<double, double>> distances;
   for (std::size_t i = 0; i < ring.size(); ++i) {
     const Vec2 e = edge_vector(ring, i), mid = ring[i] + 0.5 * e;
     double best = std::numeric_limits<double>::infinity();
@@ -76,11 +77,16 @@ double distance_quantile_to_boundary(const Ring& ring, const PolygonWithHoles& p
     scan(polygon.outer);
     for (const Ring& h : polygon.holes) scan(h);
     distances.push_back({best, e.norm()});
-    total += e.norm();
   }
+  return distances;
+}
+
+double distance_quantile_to_boundary(const Ring& ring, const PolygonWithHoles& polygon, double q) {
+  std::vector<std::pair<double, double>> distances = boundary_distances(ring, polygon);
   if (distances.empty()) return 0.0;
   std::sort(distances.begin(), distances.end());
-  double acc = 0;
+  double total = 0, acc = 0;
+  for (const auto& d : distances) total += d.second;
   for (const auto& [d, w] : distances) {
     acc += w;
     if (acc >= q * total) return d;
@@ -90,16 +96,9 @@ double distance_quantile_to_boundary(const Ring& ring, const PolygonWithHoles& p
 
 double mean_distance_to_boundary(const Ring& ring, const PolygonWithHoles& polygon) {
   double sum = 0, weight = 0;
-  for (std::size_t i = 0; i < ring.size(); ++i) {
-    const Vec2 e = edge_vector(ring, i), mid = ring[i] + 0.5 * e;
-    double best = std::numeric_limits<double>::infinity();
-    auto scan = [&](const Ring& r) {
-      for (std::size_t k = 0; k < r.size(); ++k) best = std::min(best, distance_to_segment(mid, r[k], r[(k + 1) % r.size()]));
-    };
-    scan(polygon.outer);
-    for (const Ring& h : polygon.holes) scan(h);
-    sum += e.norm() * best;
-    weight += e.norm();
+  for (const auto& [d, w] : boundary_distances(ring, polygon)) {
+    sum += w * d;
+    weight += w;
   }
   return weight > 0 ? sum / weight : 0.0;
 }
