@@ -125,11 +125,9 @@ static GeoTransform shifted(const GeoTransform& t, const cv::Rect& box) {
 static cv::Mat segmentation_of(const cv::Mat& truth, const SynthOptions& o, Rng& rng) {
   const int rows = truth.rows, cols = truth.cols;
   const double px = o.pixel_size_m;
-  const double noise_px = o.boundary_noise_m >= 0 ? o.boundary_noise_m / std::sqrt(2.0) / px : o.boundary_noise_px;  // RMS of a wave of that amplitude
+  const double noise_px = o.boundary_noise_m >= 0 ? wobble_rms_px(o.boundary_noise_m, px) : o.boundary_noise_px;
   const double radius_px = o.corner_radius_m >= 0 ? o.corner_radius_m / px : o.corner_radius_px;
-  // A Gaussian-blurred white noise of blur s has the correlation exp(-d^2 / 4s^2): its level
-  // crosses zero every pi * sqrt(2) * s on average (Rice), a wavelength of 2 pi sqrt(2) s.
-  const double correlation_px = o.noise_wavelength_m > 0 ? o.noise_wavelength_m / (2 * M_PI * std::sqrt(2.0)) / px : 3.0;
+  const double correlation_px = o.noise_wavelength_m > 0 ? wobble_correlation_px(o.noise_wavelength_m, px) : 3.0;
   cv::Mat mask = degrade_mask(truth, noise_px, radius_px, o.seed * 7919 + 2, correlation_px,
                               o.boundary_noise_m >= 0 || o.corner_radius_m >= 0);
   const int speckles = int(o.speckle_per_km2 * o.width_m * o.height_m / 1e6);
@@ -258,6 +256,14 @@ cv::Mat noise_of_nearest_boundary(const cv::Mat& mask, const cv::Mat& noise) {
 }
 
 }  // namespace
+
+double wobble_rms_px(double amplitude_m, double pixel_size) { return amplitude_m / std::sqrt(2.0) / pixel_size; }
+
+// A Gaussian-blurred white noise of blur s has the correlation exp(-d^2 / 4s^2): its level
+// crosses zero every pi * sqrt(2) * s on average (Rice), a wavelength of 2 pi sqrt(2) s.
+double wobble_correlation_px(double wavelength_m, double pixel_size) {
+  return wavelength_m / (2 * M_PI * std::sqrt(2.0)) / pixel_size;
+}
 
 cv::Mat degrade_mask(const cv::Mat& truth, double noise_px, double corner_radius_px, std::uint64_t seed,
                      double correlation_px, bool physical) {

@@ -80,4 +80,9 @@ SynthCity segment_footprints(const std::vector<PolygonWithHoles>& footprints, co
 cv::Mat degrade_mask(const cv::Mat& mask, double noise_px, double corner_radius_px, std::uint64_t seed,
                      double correlation_px = 3.0, bool physical = false);
 
+// The wobble in metres as degrade_mask takes it in pixels: the RMS displacement of a wave of that
+// amplitude, and the Gaussian correlation whose mean wavelength along the boundary is wavelength_m.
+double wobble_rms_px(double amplitude_m, double pixel_size);
+double wobble_correlation_px(double wavelength_m, double pixel_size);
+
 }  // namespace lodforge

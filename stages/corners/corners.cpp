@@ -120,14 +120,6 @@ void split_parallel(const Ring& ring, int first, int count, const Vec2& normal, 
   out.push_back({first, count});
 }
 
-// The unit normal among the lattice's four (lattice turned by quarter turns) nearest to n.
-Vec2 nearest_on_lattice(const Vec2& n, const Vec2& lattice) {
-  const Vec2 quarter(-lattice.y(), lattice.x());
-  const double a = n.dot(lattice), b = n.dot(quarter);
-  if (std::abs(a) >= std::abs(b)) return a >= 0 ? lattice : Vec2(-lattice);
-  return b >= 0 ? quarter : Vec2(-quarter);
-}
-
 // Turns each straight wall onto the building's lattice (its main direction and quarter turns)
 // when it lies within snap_max_deg of it and the turn moves the wall's ends by no more than
 // snap_shift_m, or snap_noise times the uncertainty of its fitted direction at its ends, which a
@@ -140,7 +132,7 @@ void snap_to_lattice(const Ring& ring, const std::vector<std::pair<int, int>>& r
   const double min_cos = std::cos(o.snap_max_deg * M_PI / 180.0);
   const double correlation = std::max(o.snap_correlation_m, pixel_size);
   for (std::size_t r = 0; r < runs.size(); ++r) {
-    const Vec2 target = nearest_on_lattice(lines[r].normal, lattice);
+    const Vec2 target = nearest_lattice_axis(lines[r].normal, lattice);
     const double cos_turn = std::clamp(target.dot(lines[r].normal), -1.0, 1.0);
     if (cos_turn < min_cos || cos_turn > 1 - 1e-15) continue;
     const double length = run_length(ring, runs[r].first, runs[r].second);
@@ -182,7 +174,7 @@ void merge_parallel(const Ring& ring, std::vector<std::pair<int, int>>& runs, st
 
 // True when the line lies exactly on the lattice (turned onto it, or fitted with it).
 bool on_lattice(const Line& line, const Vec2& lattice) {
-  return nearest_on_lattice(line.normal, lattice).dot(line.normal) > 1 - 1e-12;
+  return nearest_lattice_axis(line.normal, lattice).dot(line.normal) > 1 - 1e-12;
 }
 
 // An oblique run shorter than max_cut between two square walls of the lattice is a corner that

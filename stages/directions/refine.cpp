@@ -133,34 +133,32 @@ void refine_directions(const std::vector<Ring>& rings, EdgeLabels& labels, std::
 }
 
 bool drop_insignificant_directions(const std::vector<Ring>& rings, const EdgeLabels& labels, std::vector<Vec2>& directions,
-                                   double noise, const RefineOptions& o) {
+                                   const Vec2& main, double noise, const RefineOptions& o) {
   if (o.min_wall_m <= 0 || directions.size() <= 2) return false;
-  std::vector<double> support(directions.size(), 0.0);
   std::vector<std::vector<double>> run_lengths(directions.size());
   for (std::size_t r = 0; r < rings.size(); ++r)
     for (auto [first, count] : label_runs(labels[r])) {
       double length = 0;
       for (int k = 0; k < count; ++k) length += edge_vector(rings[r], (first + k) % rings[r].size()).norm();
-      support[labels[r][first]] += length;
       run_lengths[labels[r][first]].push_back(length);
     }
-  const Vec2 main = directions[std::max_element(support.begin(), support.end()) - support.begin()];
   const double lattice_sin = std::sin(o.lattice_deg * M_PI / 180.0);
   std::vector<Vec2> kept;
   for (std::size_t l = 0; l < directions.size(); ++l) {
-    // Off the lattice by the smaller of the angles to the main direction and to its quarter turn.
-    const double off = std::min(std::abs(directions[l].dot(main)), std::abs(cross(directions[l], main)));
+    // Off the lattice: the sine of its angle to the nearest of the lattice's four directions.
+    const double off = std::abs(cross(directions[l], nearest_lattice_axis(directions[l], main)));
     bool significant = off <= lattice_sin;
     for (double length : run_lengths[l])
       significant |= length >= o.min_wall_m && length * off >= o.min_wall_noise * noise;
-    if (support[l] > 0 && significant) kept.push_back(directions[l]);
+    if (!run_lengths[l].empty() && significant) kept.push_back(directions[l]);
   }
   if (kept.size() == directions.size()) return false;
   // The lattice's four directions stay available, whatever was dropped.
   const Vec2 quarter(-main.y(), main.x());
+  const double lattice_cos = std::cos(o.lattice_deg * M_PI / 180.0);
   for (const Vec2& axis : {main, quarter, Vec2(-main), Vec2(-quarter)}) {
     bool present = false;
-    for (const Vec2& d : kept) present |= d.dot(axis) > std::cos(o.lattice_deg * M_PI / 180.0);
+    for (const Vec2& d : kept) present |= d.dot(axis) > lattice_cos;
     if (!present) kept.push_back(axis);
   }
   directions.swap(kept);

@@ -48,14 +48,14 @@ using EdgeLabels = std::vector<std::vector<int>>;
 void refine_directions(const std::vector<Ring>& rings, EdgeLabels& labels, std::vector<Vec2>& directions,
                        double pixel_size, const RefineOptions& options);
 
-// Drops the directions that are off the building's lattice (the direction with the most labeled
-// length and its quarter turns, within lattice_deg) and have no run long enough: a real
+// Drops the directions that are off the building's lattice (main, the direction with the most
+// labeled length, and its quarter turns, within lattice_deg) and have no run long enough: a real
 // oblique wall is a long straight run, a wobble's are short: a run at least min_wall_m long that
 // reaches across the lattice by min_wall_noise times the boundary noise. The lattice's four
 // directions are added where missing.
 // Returns whether any was dropped (the labels then refer to the old numbering: label again).
 bool drop_insignificant_directions(const std::vector<Ring>& rings, const EdgeLabels& labels, std::vector<Vec2>& directions,
-                                   double noise, const RefineOptions& options);
+                                   const Vec2& main, double noise, const RefineOptions& options);
 
 // Releases long runs from their shared direction: a run whose own least-squares direction
 // differs from its label's enough to move the run's ends by more than release_px pixels (and

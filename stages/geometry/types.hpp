@@ -1,6 +1,7 @@
 // Plain geometry types shared by all stages. Coordinates are map metres.
 #pragma once
 #include <Eigen/Core>
+#include <cmath>
 #include <vector>
 
 namespace lodforge {
@@ -29,5 +30,14 @@ inline Vec2 outward_normal(const Vec2& t) { return Vec2(t.y(), -t.x()).normalize
 inline Vec2 tangent_of_normal(const Vec2& n) { return Vec2(-n.y(), n.x()); }
 
 inline double cross(const Vec2& a, const Vec2& b) { return a.x() * b.y() - a.y() * b.x(); }
+
+// Of the four unit normals of a building's lattice (lattice, and it turned by quarter turns), the
+// one nearest to n.
+inline Vec2 nearest_lattice_axis(const Vec2& n, const Vec2& lattice) {
+  const Vec2 quarter(-lattice.y(), lattice.x());
+  const double a = n.dot(lattice), b = n.dot(quarter);
+  if (std::abs(a) >= std::abs(b)) return a >= 0 ? lattice : Vec2(-lattice);
+  return b >= 0 ? quarter : Vec2(-quarter);
+}
 
 }  // namespace lodforge

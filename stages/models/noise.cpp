@@ -6,6 +6,7 @@
 
 #include "corners/corners.hpp"
 #include "labeling/mrf.hpp"
+#include "models/statistics.hpp"
 
 namespace lodforge {
 
@@ -72,18 +73,8 @@ double lattice_noise(const std::vector<Ring>& rings, const std::vector<std::vect
       for (const auto& [p, w] : middle) residuals.push_back({std::abs(normal.dot(p - mean)), w});
     }
   }
-  if (residuals.empty()) return 0.0;
-  std::sort(residuals.begin(), residuals.end());
-  double total = 0;
-  for (const auto& r : residuals) total += r.second;
   // A Gaussian's |x| has its quantile q at z((1 + q) / 2) standard deviations.
-  const double q = o.quantile, z = std::sqrt(2.0) * inverse_erf(q);
-  double acc = 0;
-  for (const auto& [distance, weight] : residuals) {
-    acc += weight;
-    if (acc >= q * total) return distance / z;
-  }
-  return residuals.back().first / z;
+  return weighted_quantile(std::move(residuals), o.quantile) / (std::sqrt(2.0) * inverse_erf(o.quantile));
 }
 
 }  // namespace lodforge

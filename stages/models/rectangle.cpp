@@ -1,5 +1,7 @@
 #include "models/rectangle.hpp"
 
+#include "models/statistics.hpp"
+
 #include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <cmath>
@@ -82,16 +84,7 @@ static std::vector<std::pair<double, double>> boundary_distances(const Ring& rin
 }
 
 double distance_quantile_to_boundary(const Ring& ring, const PolygonWithHoles& polygon, double q) {
-  std::vector<std::pair<double, double>> distances = boundary_distances(ring, polygon);
-  if (distances.empty()) return 0.0;
-  std::sort(distances.begin(), distances.end());
-  double total = 0, acc = 0;
-  for (const auto& d : distances) total += d.second;
-  for (const auto& [d, w] : distances) {
-    acc += w;
-    if (acc >= q * total) return d;
-  }
-  return distances.back().first;
+  return weighted_quantile(boundary_distances(ring, polygon), q);
 }
 
 double mean_distance_to_boundary(const Ring& ring, const PolygonWithHoles& polygon) {

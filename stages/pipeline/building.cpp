@@ -146,9 +146,8 @@ double lattice_share(const std::vector<std::vector<Vec2>>& normals, const std::v
   double on = 0, total = 0;
   for (std::size_t r = 0; r < normals.size(); ++r)
     for (std::size_t i = 0; i < normals[r].size(); ++i) {
-      const double c = std::max(std::abs(normals[r][i].dot(lattice)), std::abs(cross(normals[r][i], lattice)));
       total += lengths[r][i];
-      if (c >= min_cos) on += lengths[r][i];
+      if (nearest_lattice_axis(normals[r][i], lattice).dot(normals[r][i]) >= min_cos) on += lengths[r][i];
     }
   return total > 0 ? on / total : 0.0;
 }
@@ -210,11 +209,18 @@ double contour_fit(const std::vector<Ring>& rings, const PolygonWithHoles& polyg
   return total > 0 ? sum / total : 0.0;
 }
 
-// The building's lattice: the direction with the most labeled contour length.
-Vec2 main_direction(const EdgeLabels& labels, const std::vector<std::vector<double>>& lengths, const std::vector<Vec2>& directions) {
-  std::vector<double> support(directions.size(), 0.0);
+// The contour length labeled with each direction.
+std::vector<double> labeled_support(const EdgeLabels& labels, const std::vector<std::vector<double>>& lengths,
+                                    std::size_t directions) {
+  std::vector<double> support(directions, 0.0);
   for (std::size_t r = 0; r < labels.size(); ++r)
     for (std::size_t i = 0; i < labels[r].size(); ++i) support[labels[r][i]] += lengths[r][i];
+  return support;
+}
+
+// The building's lattice: the direction with the most labeled contour length.
+Vec2 main_direction(const EdgeLabels& labels, const std::vector<std::vector<double>>& lengths, const std::vector<Vec2>& directions) {
+  const std::vector<double> support = labeled_support(labels, lengths, directions.size());
   return directions[std::max_element(support.begin(), support.end()) - support.begin()];
 }
 
@@ -224,16 +230,16 @@ double model_noise(const BuildingResult& result, double pixel_size, const ModelO
 }
 
 // Replaces the chain's outline by the building's moment rectangle when that explains the contour
-// (mean distance of the contour to the outline) no worse than the outline plus the allowed noise:
+// (90th percentile of the contour's distances to each) no worse than the outline plus the allowed noise:
 // the simplest outline that explains the contour within its noise.
 void choose_rectangle(const std::vector<Ring>& rings, double pixel_size, const ModelOptions& o, BuildingResult& result) {
   if (o.rectangle_tolerance <= 0 || rings.size() != 1 || result.footprint.outer.size() <= 4) return;
-  double rectangle_fit = 0;
-  Ring rectangle = best_rectangle(rings[0], result.directions, &rectangle_fit);
+  double mean_fit = 0;  // the best rectangle's mean distance, which chose it
+  Ring rectangle = best_rectangle(rings[0], result.directions, &mean_fit);
   if (rectangle.empty()) return;
   PolygonWithHoles candidate{std::move(rectangle), {}};
   const double outline_fit = distance_quantile_to_boundary(rings[0], result.footprint, 0.9);
-  rectangle_fit = distance_quantile_to_boundary(rings[0], candidate, 0.9);
+  const double rectangle_fit = distance_quantile_to_boundary(rings[0], candidate, 0.9);
   if (rectangle_fit > outline_fit + o.rectangle_tolerance * model_noise(result, pixel_size, o)) return;
   if (!polygon_problem(candidate).empty()) return;
   result.footprint = std::move(candidate);
@@ -279,23 +285,19 @@ void run_chain(const std::vector<Ring>& rings, double pixel_size, const CoreOpti
                           lattice_share(input.normals, input.lengths, lattice, o.refinement.lattice_deg) >= o.refinement.min_lattice_share ||
                           total_turning(rings[0], input.normals[0], std::max(1.0, 2 * pixel_size)) >= o.refinement.min_turning;
   result.noise_m = noise;
-  input.support.assign(input.directions.size(), 0.0);
-  for (std::size_t r = 0; r < labels.size(); ++r)
-    for (std::size_t i = 0; i < labels[r].size(); ++i) input.support[labels[r][i]] += input.lengths[r][i];
-  if (on_lattice && drop_insignificant_directions(rings, labels, input.directions, noise, o.refinement)) {
+  // Drops the insignificant directions and labels again without them, their support unknown.
+  const auto drop_and_label = [&] {
+    if (!on_lattice || !drop_insignificant_directions(rings, labels, input.directions, main_direction(labels, input.lengths, input.directions), noise, o.refinement))
+      return false;
     input.support.assign(input.directions.size(), 1.0);
     labels = label_edges(input, o.labeling);
-    input.support.assign(input.directions.size(), 0.0);
-    for (std::size_t r = 0; r < labels.size(); ++r)
-      for (std::size_t i = 0; i < labels[r].size(); ++i) input.support[labels[r][i]] += input.lengths[r][i];
-  }
+    return true;
+  };
+  drop_and_label();
+  input.support = labeled_support(labels, input.lengths, input.directions.size());
   labels = label_edges(input, o.labeling);
   refine_directions(rings, labels, input.directions, pixel_size, o.refinement);
-  if (on_lattice && drop_insignificant_directions(rings, labels, input.directions, noise, o.refinement)) {  // once more, on the new runs
-    input.support.assign(input.directions.size(), 1.0);
-    labels = label_edges(input, o.labeling);
-    refine_directions(rings, labels, input.directions, pixel_size, o.refinement);
-  }
+  if (drop_and_label()) refine_directions(rings, labels, input.directions, pixel_size, o.refinement);  // once more, on the new runs
   release_runs(rings, labels, input.directions, pixel_size, noise, o.refinement);
   if (over_budget()) throw BudgetExceeded("labeling", "time budget exceeded");
   result.directions = input.directions;

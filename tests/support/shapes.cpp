@@ -60,9 +60,8 @@ RasterizedShape rasterize_shape(const PolygonWithHoles& truth, double pixel_size
 RasterizedShape rasterize_shape_m(const PolygonWithHoles& truth, double pixel_size, double wobble_m, double wavelength_m,
                                   double radius_m, std::uint64_t seed) {
   return rasterize(truth, pixel_size, [&](const cv::Mat& mask) {
-    // As synth: RMS of a wave of that amplitude; the field's blur from the wavelength (Rice).
-    return degrade_mask(mask, wobble_m / std::sqrt(2.0) / pixel_size, radius_m / pixel_size, seed,
-                        wavelength_m / (2 * M_PI * std::sqrt(2.0)) / pixel_size, true);
+    return degrade_mask(mask, wobble_rms_px(wobble_m, pixel_size), radius_m / pixel_size, seed,
+                        wobble_correlation_px(wavelength_m, pixel_size), true);
   });
 }
 
