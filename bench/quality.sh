@@ -13,7 +13,7 @@
 #   campus_clean the same footprints rasterized at 0.25 m, not degraded
 #   synth        a 1 km x 1 km procedural city at 0.25 m (lodforge synth --seed 11)
 # Methods: lodforge (the default regularizer), paper (deformation, the paper's deformed corner
-# route, for contours up to 2,000 edges), paper_coarse (the same on a coarse mesh), cgal,
+# route, its mesh bounded by budget.max_mesh_vertices), paper_coarse (the same on a coarser mesh), cgal,
 # douglas_peucker, none (the raw contour).
 set -euo pipefail
 root="$(cd "$(dirname "$0")/.." && pwd)"
@@ -57,9 +57,9 @@ prepare() {
 method_args() {
   case "$1" in
     lodforge) echo "" ;;
-    # The paper's route; contours over 2,000 edges take the original route (the deformation of
-    # such contours takes minutes each, see docs/performance.md).
-    paper) echo "--regularizer deformation --route deformed --set budget.max_deformation_edges=2000" ;;
+    # The paper's route with its default budgets: the mesh coarsened to about
+    # budget.max_mesh_vertices vertices, the Newton iterations bounded by budget.max_deformation_work.
+    paper) echo "--regularizer deformation --route deformed" ;;
     # The paper's route on a coarse mesh (runs simplified to 1 px, mesh edges up to 20 px).
     paper_coarse) echo "--regularizer deformation --route deformed --set deformation.simplify_px=1 --set triangulation.size_bound_px=20" ;;
     cgal|douglas_peucker|none) echo "--regularizer $1" ;;

@@ -5,7 +5,7 @@ import argparse, json, os, re
 
 from doc_section import write_section
 
-NAMES = {"lodforge": "**lodforge** (default)", "paper": "paper (deformed route, ≤ 2,000 edges)", "paper_coarse": "paper, coarse mesh (1 px runs, 20 px mesh)", "cgal": "CGAL Shape_regularization",
+NAMES = {"lodforge": "**lodforge** (default)", "paper": "paper (deformed route, bounded mesh)", "paper_coarse": "paper, coarse mesh (1 px runs, 20 px mesh)", "cgal": "CGAL Shape_regularization",
          "douglas_peucker": "Douglas–Peucker (0.5 m)", "none": "raw contour"}
 TITLES = {"delft": "Delft: AHN3 class 6 (0.5 m) vs BGT inside the AOI",
           "campus": "TU Delft campus: BAG footprints, segmentation simulated at 0.25 m (degraded, seed 1)",

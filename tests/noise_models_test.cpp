@@ -92,5 +92,44 @@ TEST(Models, MomentRectangleOfARectangleIsItself) {
   EXPECT_NEAR(test::iou({best, {}}, truth), 1.0, 1e-6);
 }
 
+// The paper's deformed route on a fine raster: a 40 x 30 m house at 5 cm (a 2,800-pixel
+// staircase) is meshed about as coarsely as at 0.5 m (budget.max_mesh_vertices), and still gives
+// four square corners.
+TEST(DeformedRoute, TheMeshIsBoundedOnAFineRaster) {
+  const PolygonWithHoles truth = test::rotated({{{0, 0}, {40, 0}, {40, 30}, {0, 30}}, {}}, 23.0);
+  CoreOptions o;
+  o.corners.route = "deformed";
+  for (const double pixel : {0.05, 0.5}) {
+    const test::RasterizedShape shape = test::rasterize_shape_m(truth, pixel, 0.0, 8.0, 0.0, 1);
+    ASSERT_EQ(shape.buildings.size(), 1u);
+    const BuildingResult r = regularize_building(shape.buildings[0].rings, pixel, o);
+    ASSERT_TRUE(r.ok) << pixel << ": " << r.reason;
+    EXPECT_EQ(r.route, "deformed") << pixel << ": " << r.note;
+    EXPECT_GT(r.mesh_vertices, 0) << pixel;
+    EXPECT_LE(r.mesh_vertices, 2 * o.budget.max_mesh_vertices) << pixel;
+    EXPECT_EQ(r.footprint.outer.size(), 4u) << pixel;
+    EXPECT_GE(test::iou(r.footprint, truth), 0.98) << pixel;
+  }
+}
+
+// A deformation over its work budget is not a failure: the building takes the original route,
+// with the same outline as when asked for it, and says why.
+TEST(DeformedRoute, OverItsWorkBudgetTheBuildingTakesTheOriginalRoute) {
+  const PolygonWithHoles truth = test::rotated(kL, 12.0);
+  const test::RasterizedShape shape = test::rasterize_shape_m(truth, 0.25, 0.25, 8.0, 0.5, 2);
+  ASSERT_EQ(shape.buildings.size(), 1u);
+  CoreOptions o;
+  o.corners.route = "deformed";
+  o.budget.max_deformation_work = 1;
+  const BuildingResult r = regularize_building(shape.buildings[0].rings, 0.25, o);
+  ASSERT_TRUE(r.ok) << r.reason;
+  EXPECT_EQ(r.route, "original");
+  EXPECT_NE(r.note.find("budget.max_deformation_work"), std::string::npos) << r.note;
+  CoreOptions original;
+  const BuildingResult expected = regularize_building(shape.buildings[0].rings, 0.25, original);
+  EXPECT_EQ(r.footprint.outer, expected.footprint.outer);
+  EXPECT_TRUE(expected.note.empty()) << expected.note;
+}
+
 }  // namespace
 }  // namespace lodforge

@@ -25,7 +25,7 @@ namespace {
 BuildingSelector parse_selector(const Args& args) {
   BuildingSelector selector;
   if (args.has("building-rgb") && args.has("building-value"))
-    throw InputError("lodforge regularize: give either --building-value or --building-rgb, not both");
+    throw InputError("give either --building-value or --building-rgb, not both");
   auto numbers = [](const std::string& text, const std::string& flag) {
     std::vector<int> out;
     std::size_t start = 0;
@@ -37,7 +37,7 @@ BuildingSelector parse_selector(const Args& args) {
         out.push_back(std::stoi(item, &used));
         if (used != item.size()) throw std::invalid_argument(item);
       } catch (const std::exception&) {
-        throw InputError("lodforge regularize: " + flag + " '" + text + "': not a comma-separated list of integers");
+        throw InputError("" + flag + " '" + text + "': not a comma-separated list of integers");
       }
       if (comma == std::string::npos) break;
       start = comma + 1;
@@ -46,7 +46,7 @@ BuildingSelector parse_selector(const Args& args) {
   };
   if (auto rgb = args.get("building-rgb")) {
     const auto v = numbers(*rgb, "--building-rgb");
-    if (v.size() != 3) throw InputError("lodforge regularize: --building-rgb '" + *rgb + "': needs three values R,G,B");
+    if (v.size() != 3) throw InputError("--building-rgb '" + *rgb + "': needs three values R,G,B");
     selector.rgb = std::array<int, 3>{v[0], v[1], v[2]};
   } else if (auto values = args.get("building-value")) {
     selector.values = numbers(*values, "--building-value");
@@ -87,12 +87,12 @@ int run_regularize(int argc, char** argv) {
   int threads = 0;
   if (auto t = args.get("threads")) {
     try { threads = std::stoi(*t); } catch (...) { threads = -1; }
-    if (threads < 0) throw InputError("lodforge regularize: --threads '" + *t + "': must be a number >= 0");
+    if (threads < 0) throw InputError("--threads '" + *t + "': must be a number >= 0");
   }
   const std::string regularizer = args.get("regularizer").value_or("deformation");
   const auto& names = regularizer_names();
   if (std::find(names.begin(), names.end(), regularizer) == names.end())
-    throw InputError("lodforge regularize: --regularizer '" + regularizer + "': must be one of: " + regularizer_list());
+    throw InputError("--regularizer '" + regularizer + "': must be one of: " + regularizer_list());
   const BuildingSelector selector = parse_selector(args);
   check_output_path(out_path);
 
@@ -119,7 +119,7 @@ int run_regularize(int argc, char** argv) {
 
   std::vector<FootprintRecord> records(count);
   std::map<std::string, int> failures;
-  int failed = 0;
+  int failed = 0, rerouted = 0;
   for (std::size_t i = 0; i < count; ++i) {
     const BuildingResult& r = results[i];
     FootprintRecord& rec = records[i];
@@ -127,8 +127,9 @@ int run_regularize(int argc, char** argv) {
     rec.polygon = r.footprint;
     rec.status = r.status();
     rec.failed_stage = r.failed_stage;
-    rec.reason = r.reason;
-    rec.regularizer = !r.ok ? "douglas_peucker" : regularizer == "deformation" ? "deformation_" + options.core.corners.route : regularizer;
+    rec.reason = r.ok ? r.note : r.reason;
+    rec.regularizer = !r.ok ? "douglas_peucker" : regularizer == "deformation" ? "deformation_" + r.route : regularizer;
+    if (r.ok && !r.note.empty()) ++rerouted;
     if (!r.ok) {
       ++failed;
       ++failures[r.failed_stage];
@@ -143,6 +144,8 @@ int run_regularize(int argc, char** argv) {
   for (const auto& [stage, n] : failures) by_stage += (by_stage.empty() ? " (" : ", ") + stage + ": " + std::to_string(n);
   if (!by_stage.empty()) by_stage += ")";
   spdlog::info("wrote {} footprints to {}: {} ok, {} fallback{}", count, out_path, count - failed, failed, by_stage);
+  if (rerouted > 0)
+    spdlog::info("{} building(s) took the original corner route instead of the deformed one (over a budget; the reason is in their 'reason' field)", rerouted);
   if (auto stats = args.get("stats")) {
     // Times overall, then by contour size (edges of all rings), which the cost grows with.
     struct SizeClass { const char* name; std::size_t below; std::vector<double> seconds; };
@@ -168,7 +171,7 @@ int run_regularize(int argc, char** argv) {
     for (double s : all) total += s;
     std::ostringstream out;
     out << "{\"regularizer\": \"" << regularizer << "\", \"route\": \"" << options.core.corners.route << "\", \"buildings\": " << count
-        << ", \"ok\": " << count - failed << ", \"fallback\": " << failed << ", \"seconds_total\": " << total << ", " << times(all)
+        << ", \"ok\": " << count - failed << ", \"fallback\": " << failed << ", \"original_route\": " << rerouted << ", \"seconds_total\": " << total << ", " << times(all)
         << ",\n \"by_size\": {";
     for (std::size_t c = 0; c < classes.size(); ++c)
       out << (c ? ",\n  " : "\n  ") << "\"" << classes[c].name << "\": {\"buildings\": " << classes[c].seconds.size() << ", "

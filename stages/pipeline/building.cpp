@@ -70,13 +70,35 @@ std::vector<std::vector<char>> coarse_vertices(const std::vector<Ring>& rings, c
   return kept;
 }
 
+// A deformation that did not finish within its budget: the building takes the original route.
+struct DeformationSkipped : std::runtime_error {
+  using std::runtime_error::runtime_error;
+};
+
+std::size_t kept_count(const std::vector<std::vector<char>>& kept) {
+  std::size_t n = 0;
+  for (const auto& ring : kept) for (char k : ring) n += k;
+  return n;
+}
+
 // The deformed positions of every ring vertex (pixel units in, pixel units out). The mesh is
 // built on the rings simplified per labeled run (options.deformation.simplify_px); a removed
 // vertex follows its simplified edge, at its arc-length position along the original run.
+// The mesh is bounded (budget.max_mesh_vertices): runs are simplified further and triangles
+// made larger until about that many vertices remain, so a fine raster (0.1 m) meshes a house
+// as coarsely as a 0.5 m one; the Newton iterations are bounded by budget.max_deformation_work.
 std::vector<Ring> deform_rings(const std::vector<Ring>& rings_px, const EdgeLabels& labels,
                                const std::vector<Vec2>& directions, const CoreOptions& o,
                                const std::function<bool()>& over_budget, BuildingResult& result) {
-  const auto kept = coarse_vertices(rings_px, labels, o.deformation.simplify_px);
+  const int max_vertices = o.budget.max_mesh_vertices;
+  double tolerance = o.deformation.simplify_px;
+  auto kept = coarse_vertices(rings_px, labels, tolerance);
+  // Half of the mesh's vertices at most on its boundary; the tolerance doubles (at most to
+  // 64 px, where every run is its two ends).
+  while (max_vertices > 0 && kept_count(kept) > std::size_t(max_vertices / 2) && tolerance < 64) {
+    tolerance = std::max(2 * tolerance, 1.0);
+    kept = coarse_vertices(rings_px, labels, tolerance);
+  }
   std::vector<Ring> coarse(rings_px.size());
   EdgeLabels coarse_labels(rings_px.size());
   for (std::size_t r = 0; r < rings_px.size(); ++r)
@@ -85,16 +107,38 @@ std::vector<Ring> deform_rings(const std::vector<Ring>& rings_px, const EdgeLabe
         coarse[r].push_back(rings_px[r][i]);
         coarse_labels[r].push_back(labels[r][i]);  // the edge from a kept vertex lies in one run
       }
+  // A refined mesh of longest edge h has about area / (kMeshDensity h^2) interior vertices.
+  constexpr double kMeshDensity = 0.25;
+  double size_bound = o.triangulation.size_bound_px;
+  if (max_vertices > 0) {
+    double area_px = signed_area(coarse[0]);
+    for (std::size_t r = 1; r < coarse.size(); ++r) area_px += signed_area(coarse[r]);
+    const double interior = std::max(double(max_vertices) - double(kept_count(kept)), max_vertices / 2.0);
+    size_bound = std::max(size_bound, std::sqrt(std::abs(area_px) / (kMeshDensity * interior)));
+  }
   TriangleMesh mesh;
   try {
-    mesh = triangulate(coarse, o.triangulation.size_bound_px, o.triangulation);
+    mesh = triangulate(coarse, size_bound, o.triangulation);
   } catch (const std::exception& e) {
     throw StageError("triangulation", e.what());
   }
   std::vector<Vec2> targets;
   for (const BoundaryEdge& b : mesh.boundary) targets.push_back(directions[coarse_labels[b.ring][b.edge]]);
-  const DeformationResult d = deform(mesh, targets, o.deformation, over_budget);
-  if (d.stopped) throw BudgetExceeded("deformation", "time budget of " + std::to_string(o.budget.max_seconds) + " s exceeded");
+  // The work budget counts Newton iterations (one stop check each) times the mesh's vertices.
+  const double vertices = double(mesh.vertices.size());
+  double work = 0;
+  bool over_work = false;
+  const auto stop = [&] {
+    work += vertices;
+    over_work = o.budget.max_deformation_work > 0 && work > o.budget.max_deformation_work;
+    return over_work || over_budget();
+  };
+  const DeformationResult d = deform(mesh, targets, o.deformation, stop);
+  result.mesh_vertices = int(mesh.vertices.size());
+  if (d.stopped)
+    throw DeformationSkipped(over_work ? "deformation stopped after budget.max_deformation_work = " + std::to_string(long(o.budget.max_deformation_work)) +
+                                             " vertex-iterations (mesh of " + std::to_string(mesh.vertices.size()) + " vertices)"
+                                       : "deformation stopped at the time budget of " + std::to_string(o.budget.max_seconds) + " s");
   result.alignment_rms_deg = d.rms_deg;
   result.alignment_max_deg = d.max_deg;
   result.deformation_iterations = d.iterations;
@@ -306,9 +350,18 @@ void run_chain(const std::vector<Ring>& rings, double pixel_size, const CoreOpti
   // Corner lines are fitted in a local frame (metres from the first vertex) for numerical range.
   const Vec2 origin = rings[0][0];
   std::vector<Ring> fit_rings = translate(rings, origin, 1.0);
-  if (o.corners.route == "deformed" && edges <= std::size_t(o.budget.max_deformation_edges)) {
-    fit_rings = deform_rings(translate(rings, origin, pixel_size), labels, input.directions, o, over_budget, result);
-    for (Ring& ring : fit_rings) for (Vec2& p : ring) p *= pixel_size;
+  result.route = "original";
+  if (o.corners.route == "deformed" && edges > std::size_t(o.budget.max_deformation_edges)) {
+    result.note = "contour of " + std::to_string(edges) + " edges, more than budget.max_deformation_edges = " +
+                  std::to_string(o.budget.max_deformation_edges) + ": original route";
+  } else if (o.corners.route == "deformed") {
+    try {
+      fit_rings = deform_rings(translate(rings, origin, pixel_size), labels, input.directions, o, over_budget, result);
+      for (Ring& ring : fit_rings) for (Vec2& p : ring) p *= pixel_size;
+      result.route = "deformed";
+    } catch (const DeformationSkipped& e) {
+      result.note = std::string(e.what()) + ": original route";
+    }
   }
   // Two outlines from the same labels: the regular one (runs shorter than min_run_noise times
   // the noise absorbed, walls held to the lattice, steps, curves and cuts judged against the noise)

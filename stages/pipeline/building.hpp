@@ -20,8 +20,11 @@ struct BuildingResult {
   EdgeLabels labels;             // per ring, per contour edge
   double alignment_rms_deg = -1, alignment_max_deg = -1;  // after deformation, if run
   int deformation_iterations = 0;
+  int mesh_vertices = 0;         // of the deformation mesh, if one was built
   double noise_m = -1;          // the boundary noise measured on the contour (m), when labeled
   std::string model;            // "lines" (the chain's outline), "rectangle", or empty for the fallback
+  std::string route;            // the chain's corner route taken: "original" or "deformed"; empty otherwise
+  std::string note;             // when ok: why the route taken is not the one asked for (a budget), else empty
   double seconds = 0;
 
   std::string status() const { return ok ? "ok" : "fallback"; }

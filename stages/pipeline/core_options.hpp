@@ -30,12 +30,16 @@ struct FallbackOptions {
 struct BudgetOptions {
   int max_edges = 200000;             // contours with more edges get the fallback
   int max_deformation_edges = 20000;  // larger contours skip the deformation route
+  int max_mesh_vertices = 600;        // the deformation mesh is coarsened to about this many vertices
+  double max_deformation_work = 1.2e5; // mesh vertices x Newton iterations; beyond: the original route
   double max_seconds = 60.0;          // per building
 
   template <class V>
   void visit(V& v) {
     v("max_edges", max_edges, "contours with more boundary edges get the fallback footprint", Check::at_least(3));
     v("max_deformation_edges", max_deformation_edges, "contours with more edges are not deformed (they take the 'original' route)", Check::at_least(3));
+    v("max_mesh_vertices", max_mesh_vertices, "the deformation mesh is kept to about this many vertices: each labeled run is simplified further and the mesh edges grow beyond triangulation.size_bound_px until it fits (0 = no bound, the paper's full mesh)", Check::at_least(0));
+    v("max_deformation_work", max_deformation_work, "the deformation stops after this many mesh vertices x Newton iterations, and the building takes the 'original' route, the reason recorded (0 = no bound)", Check::at_least(0));
     v("max_seconds", max_seconds, "time limit per building (s); a building over it gets the fallback", Check::above(0));
   }
 };
