@@ -12,6 +12,7 @@
 #include <map>
 #include <ogrsf_frmts.h>
 #include <sstream>
+#include <sys/file.h>
 #include <sys/resource.h>
 #include <sys/wait.h>
 #include <thread>
@@ -133,40 +134,50 @@ TEST_F(SynthRun, OutputsAreByteIdenticalForOneAndTwoThreads) {
   EXPECT_EQ(without_timings(slurp(dir / "small_cache_out" / "report.json")), without_timings(slurp(dir / "h1_out" / "report.json")));
 }
 
-TEST_F(SynthRun, AFailedTileStopsTheRunAndEveryTileMarkedDoneIsComplete) {
+// Issue 15: lodforge replaces only files it can prove it wrote. A user's files beside the tiles
+// stay; a directory or a foreign file at a tile's output name stops the run before any work.
+TEST_F(SynthRun, OnlyLodforgesOwnFilesAreReplaced) {
   Result r = lodforge("run " + job("ref", seg, 60).string() + " --threads 2");
   ASSERT_EQ(r.code, 0) << r.output;
   const auto ref = output_bytes(dir / "ref_out");
-  // A tile in the middle of the run cannot write its CityGML file: a directory is in the way.
   std::vector<std::string> gml;
   for (const auto& [name, bytes] : ref)
     if (name.size() > 4 && name.compare(name.size() - 4, 4, ".gml") == 0) gml.push_back(name);
   ASSERT_GT(gml.size(), 6u);
+  const fs::path out = dir / "mine_out";
+  fs::create_directories(out / "tiles");
+  std::ofstream(out / "tiles" / "r0001_c0001.obj.orig") << "x";
+  std::ofstream(out / "tiles" / "r0000_c0000.txt") << "y";
+  // A directory in the way of a tile's output.
   const std::string blocked = gml[gml.size() / 2];
-  fs::create_directories(dir / "fail_out" / blocked);
-  std::ofstream(dir / "fail_out" / blocked / "keep") << "x";
-  r = lodforge("run " + job("fail", seg, 60).string() + " --threads 2");
-  EXPECT_NE(r.code, 0) << r.output;
-  EXPECT_FALSE(fs::exists(dir / "fail_out" / "report.json"));
-  // The tiles in flight when it failed either finished whole or were not marked done: a tile
-  // marked done has every file of the clean run, byte for byte.
-  int done = 0;
-  for (const auto& e : fs::directory_iterator(dir / "fail_work")) {
-    if (e.path().extension() != ".done") continue;
-    ++done;
-    const std::string tile = e.path().stem().string();
-    for (const auto& [name, bytes] : ref)
-      if (name.rfind("tiles/" + tile + ".", 0) == 0) {
-        ASSERT_TRUE(fs::is_regular_file(dir / "fail_out" / name)) << tile << " is marked done without " << name;
-        EXPECT_EQ(slurp(dir / "fail_out" / name), bytes) << name;
-      }
-  }
-  EXPECT_GT(done, 0);
-  // Without the obstacle, a rerun completes to the clean run's bytes.
-  fs::remove_all(dir / "fail_out" / blocked);
-  r = lodforge("run " + job("fail", seg, 60).string() + " --threads 2");
+  fs::create_directories(out / blocked);
+  r = lodforge("run " + job("mine", seg, 60).string() + " --threads 2");
+  EXPECT_EQ(r.code, 1) << r.output;
+  EXPECT_NE(r.output.find("' is in the way of a tile's output and is not a regular file"), std::string::npos) << r.output;
+  EXPECT_EQ(r.output.find("internal error"), std::string::npos) << r.output;
+  fs::remove_all(out / blocked);
+  // A file lodforge did not write, at a tile's output name.
+  std::ofstream(out / blocked) << "someone else's";
+  r = lodforge("run " + job("mine", seg, 60).string() + " --threads 2");
+  EXPECT_EQ(r.code, 1) << r.output;
+  EXPECT_NE(r.output.find("exists and lodforge did not write it"), std::string::npos) << r.output;
+  EXPECT_EQ(slurp(out / blocked), "someone else's");
+  EXPECT_FALSE(fs::exists(out / "report.json"));
+  fs::remove(out / blocked);
+  r = lodforge("run " + job("mine", seg, 60).string() + " --threads 2");
   ASSERT_EQ(r.code, 0) << r.output;
-  EXPECT_TRUE(output_bytes(dir / "fail_out") == ref);
+  // A rerun with other options replaces every tile's files, and still not the user's.
+  r = lodforge("run " + job("mine", seg, 60).string() + " --threads 2 --set stages.labeling.kappa2=2");
+  ASSERT_EQ(r.code, 0) << r.output;
+  EXPECT_EQ(slurp(out / "tiles" / "r0001_c0001.obj.orig"), "x");
+  EXPECT_EQ(slurp(out / "tiles" / "r0000_c0000.txt"), "y");
+  // ... and back to the first options: the first run's bytes.
+  r = lodforge("run " + job("mine", seg, 60).string() + " --threads 2");
+  ASSERT_EQ(r.code, 0) << r.output;
+  auto mine = output_bytes(out);
+  mine.erase("tiles/r0001_c0001.obj.orig");
+  mine.erase("tiles/r0000_c0000.txt");
+  EXPECT_TRUE(mine == ref);
 }
 
 TEST_F(Run, KilledRunResumesToTheSameBytes) {
@@ -206,7 +217,12 @@ TEST_F(Run, KilledRunResumesToTheSameBytes) {
   r = lodforge("run " + killed.string() + " --threads 2");
   ASSERT_EQ(r.code, 0) << r.output;
   EXPECT_NE(r.output.find("resumed"), std::string::npos);
-  EXPECT_TRUE(output_bytes(dir / "clean_out") == output_bytes(dir / "killed_out"));
+  const auto clean_files = output_bytes(dir / "clean_out"), killed_files = output_bytes(dir / "killed_out");
+  EXPECT_EQ(clean_files.size(), killed_files.size());
+  for (const auto& [name, bytes] : clean_files) {
+    const auto it = killed_files.find(name);
+    EXPECT_TRUE(it != killed_files.end() && it->second == bytes) << name;
+  }
 }
 
 TEST_F(SynthRun, RerunResumesAndAStageOptionRecomputesOnlyWhatDependsOnIt) {
@@ -431,6 +447,125 @@ TEST_F(Rerun, WindowSmallerThanATileIsRefused) {
   const Result r = lodforge("run " + write_job("gpkg", "").string() + " --set tiling.max_window_m=60");
   EXPECT_EQ(r.code, 1);
   EXPECT_NE(r.output.find("tiling.max_window_m: must be >= tile_size_m + 2 * halo_m"), std::string::npos) << r.output;
+}
+
+// Issue 15: every building of the mask is in the outputs whatever the tiling: tile sizes that
+// cut buildings, with no halo or a small one, give the one-tile run's footprints.
+TEST_F(SynthRun, EveryTilingGivesTheOneTileRunsBuildings) {
+  Result r = lodforge("run " + job("whole", seg, 400).string());
+  ASSERT_EQ(r.code, 0) << r.output;
+  const auto whole = footprints(dir / "whole_out");
+  ASSERT_GT(whole.size(), 20u);
+  int k = 0;
+  for (const double tile : {37.0, 60.0, 100.0})
+    for (const double halo : {0.0, 0.3, 3.0}) {
+      const std::string name = "t" + std::to_string(k++);
+      r = lodforge("run " + job(name, seg, tile).string() + " --set tiling.halo_m=" + std::to_string(halo));
+      ASSERT_EQ(r.code, 0) << r.output;
+      EXPECT_TRUE(footprints(dir / (name + "_out")) == whole) << "tile " << tile << " m, halo " << halo << " m";
+    }
+}
+
+// Issue 15: a checkpoint or an output that changed after it was written is not trusted: the
+// tile is computed again, and merge refuses files that are not as the run wrote them.
+TEST_F(Rerun, ChangedCheckpointsAndOutputsAreNotTrusted) {
+  const fs::path job = write_job("gpkg, obj, cityjson");
+  ASSERT_EQ(lodforge("run " + job.string()).code, 0);
+  const auto ref = output_bytes(dir / "out");
+  // One coordinate byte changed in a footprint checkpoint (the tile's done marker removed).
+  const fs::path buildings = dir / "work" / "r0001_c0001.buildings";
+  ASSERT_TRUE(fs::exists(buildings));
+  std::string bytes = slurp(buildings);
+  bytes[bytes.size() / 2] ^= 0x10;
+  std::ofstream(buildings, std::ios::binary | std::ios::trunc) << bytes;
+  fs::remove(dir / "work" / "r0001_c0001.done");
+  Result r = lodforge("run " + job.string());
+  ASSERT_EQ(r.code, 0) << r.output;
+  EXPECT_TRUE(output_bytes(dir / "out") == ref);
+  // An output deleted, another truncated: merge names them and writes nothing ...
+  fs::remove(dir / "out" / "tiles" / "r0001_c0001.obj");
+  fs::resize_file(dir / "out" / "tiles" / "r0001_c0002.city.json", 100);
+  r = lodforge("merge " + (dir / "out").string());
+  EXPECT_EQ(r.code, 1) << r.output;
+  EXPECT_NE(r.output.find("r0001_c0001.obj' is missing"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("r0001_c0002.city.json' changed since the run wrote it"), std::string::npos) << r.output;
+  EXPECT_FALSE(fs::exists(dir / "out" / "merged"));
+  // ... a rerun writes those tiles again, and merge takes them.
+  r = lodforge("run " + job.string());
+  ASSERT_EQ(r.code, 0) << r.output;
+  EXPECT_NE(r.output.find("r0001_c0001.obj is missing or changed"), std::string::npos) << r.output;
+  EXPECT_TRUE(output_bytes(dir / "out") == ref);
+  ASSERT_EQ(lodforge("merge " + (dir / "out").string()).code, 0);
+  for (const auto& e : fs::directory_iterator(dir / "out" / "merged"))
+    EXPECT_EQ(e.path().filename().string().find("partial"), std::string::npos) << e.path();
+}
+
+// Issue 15: a rerun with other options removes the earlier index and report as it starts, so a
+// rerun killed part-way cannot leave an index that merge takes with a mix of tiles.
+TEST_F(Rerun, AnInterruptedRerunLeavesNoIndexToMerge) {
+  const fs::path job = write_job("gpkg");
+  ASSERT_EQ(lodforge("run " + job.string()).code, 0);
+  ASSERT_TRUE(fs::exists(dir / "out" / "tile_index.geojson"));
+  const pid_t pid = fork();
+  if (pid == 0) {
+    const int null = ::open("/dev/null", O_WRONLY);
+    dup2(null, 1);
+    dup2(null, 2);
+    execl(LODFORGE_BINARY, LODFORGE_BINARY, "run", job.c_str(), "--threads", "1", "--set", "stages.labeling.kappa2=2", nullptr);
+    _exit(127);
+  }
+  for (int wait = 0; wait < 20000 && fs::exists(dir / "out" / "tile_index.geojson"); ++wait)
+    std::this_thread::sleep_for(std::chrono::microseconds(200));
+  kill(pid, SIGKILL);
+  waitpid(pid, nullptr, 0);
+  if (!fs::exists(dir / "out" / "tile_index.geojson")) {  // (else the rerun had finished: a whole index)
+    EXPECT_FALSE(fs::exists(dir / "out" / "report.json"));
+    const Result r = lodforge("merge " + (dir / "out").string());
+    EXPECT_EQ(r.code, 1) << r.output;
+    EXPECT_NE(r.output.find("no tile_index.geojson"), std::string::npos) << r.output;
+  }
+  // The rerun completed gives what an uninterrupted one gives.
+  const Result r = lodforge("run " + job.string() + " --set stages.labeling.kappa2=2");
+  ASSERT_EQ(r.code, 0) << r.output;
+  ASSERT_EQ(lodforge("merge " + (dir / "out").string()).code, 0);
+}
+
+// Issue 15: one run at a time in a work directory; temporary files of killed runs are cleaned.
+TEST_F(Rerun, ASecondRunIsRefusedAndStaleTemporariesAreRemoved) {
+  const fs::path job = write_job("gpkg");
+  fs::create_directories(dir / "work");
+  const int fd = ::open((dir / "work" / "lodforge.lock").c_str(), O_RDWR | O_CREAT, 0644);
+  ASSERT_GE(fd, 0);
+  ASSERT_EQ(flock(fd, LOCK_EX | LOCK_NB), 0);
+  ASSERT_EQ(::write(fd, "4242\n", 5), 5);
+  Result r = lodforge("run " + job.string());
+  EXPECT_EQ(r.code, 1) << r.output;
+  EXPECT_NE(r.output.find("another lodforge run (pid 4242) is using it"), std::string::npos) << r.output;
+  EXPECT_FALSE(fs::exists(dir / "out" / "tile_index.geojson"));
+  ::close(fd);
+  // A checkpoint half-written by a killed run (a pid no process has, an hour old).
+  const fs::path stale = dir / "work" / "r0000_c0000.contours.tmp-4194305";
+  std::ofstream(stale) << "half";
+  fs::last_write_time(stale, fs::file_time_type::clock::now() - std::chrono::hours(1));
+  r = lodforge("run " + job.string());
+  ASSERT_EQ(r.code, 0) << r.output;
+  EXPECT_FALSE(fs::exists(stale));
+}
+
+// Issue 15: options and arguments that used to be taken silently are refused, naming the key.
+TEST_F(Rerun, QuietlyWrongOptionsAreRefused) {
+  const auto refused = [&](const std::string& extra, const std::string& args, const std::string& expected) {
+    const Result r = lodforge("run " + write_job("gpkg", extra).string() + args);
+    EXPECT_EQ(r.code, 1) << extra << args << "\n" << r.output;
+    EXPECT_NE(r.output.find(expected), std::string::npos) << extra << args << "\n" << r.output;
+    EXPECT_EQ(r.output.find("lodforge run: error: lodforge run:"), std::string::npos) << r.output;
+  };
+  refused("tiling: {tile_size_m: 20}\n", "", "tiling: given twice");
+  refused("", " --set stages.contour.connectivity=5", "stages.contour.connectivity: must be 4 or 8");
+  refused("", " --set output.formats=", "output.formats: needs at least one format");
+  refused("", " --shard 1/3x", "--shard '1/3x': expected K/N with two whole numbers");
+  refused("", " --set tiling.tile_size_m=0.01", "tiling.tile_size_m: 0.010000 m is less than 16 pixels");
+  EXPECT_FALSE(fs::exists(dir / "out" / "tiles" / "r0000_c0000.gpkg"));
 }
 
 }  // namespace

@@ -28,17 +28,17 @@ void Args::parse(int argc, char** argv, int first) {
     }
     const Spec* spec = nullptr;
     for (const Spec& s : specs_) if ("--" + s.name == arg) spec = &s;
-    if (!spec) throw InputError("lodforge " + command_ + ": unknown argument '" + arg + "' (see lodforge " + command_ + " --help)");
+    if (!spec) throw InputError("unknown argument '" + arg + "' (see lodforge " + command_ + " --help)");
     if (!spec->takes_value) {
       values_[spec->name].push_back("true");
       continue;
     }
     if (!has_inline) {
-      if (i + 1 >= argc) throw InputError("lodforge " + command_ + ": " + arg + " needs a value (" + spec->meta + ")");
+      if (i + 1 >= argc) throw InputError(arg + " needs a value (" + spec->meta + ")");
       inline_value = argv[++i];
     }
     if (!spec->repeatable && values_.count(spec->name))
-      throw InputError("lodforge " + command_ + ": " + arg + " given more than once");
+      throw InputError(arg + " given more than once");
     values_[spec->name].push_back(inline_value);
   }
 }
@@ -51,7 +51,7 @@ std::optional<std::string> Args::get(const std::string& name) const {
 
 std::string Args::require(const std::string& name) const {
   auto v = get(name);
-  if (!v) throw InputError("lodforge " + command_ + ": --" + name + " is required (see lodforge " + command_ + " --help)");
+  if (!v) throw InputError("--" + name + " is required (see lodforge " + command_ + " --help)");
   return *v;
 }
 

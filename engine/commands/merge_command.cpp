@@ -1,5 +1,7 @@
 // lodforge merge OUT_DIR: combines a run's per-tile files into one file per format (and the
 // shards' tile indexes into one), streaming, in tile order.
+#include <cerrno>
+#include <csignal>
 #include <filesystem>
 #include <fstream>
 #include <gdal_priv.h>
@@ -9,12 +11,14 @@
 #include <regex>
 #include <spdlog/spdlog.h>
 #include <sstream>
+#include <unistd.h>
 
 #include "cli/args.hpp"
 #include "commands/commands.hpp"
 #include "io/atomic_file.hpp"
 #include "io/errors.hpp"
 #include "io/model_writers.hpp"
+#include "run/checkpoint.hpp"
 
 namespace lodforge {
 
@@ -166,14 +170,26 @@ void merge_cityjson(const std::vector<fs::path>& files, const fs::path& target) 
   o.commit();
 }
 
+void merge_ogr_into(const std::vector<fs::path>& files, const fs::path& target, const fs::path& temp, const std::string& driver_name);
+
 // GeoPackage / GeoJSON through OGR: the first tile's layer definition, every feature appended.
 void merge_ogr(const std::vector<fs::path>& files, const fs::path& target, const std::string& driver_name) {
   GDALAllRegister();
   CPLSetConfigOption("OGR_CURRENT_DATE", "2000-01-01T00:00:00.000Z");
   // No SpatiaLite set-up for each GeoPackage opened (~1 ms a file; no SQL is run here).
   CPLSetConfigOption("SPATIALITE_LOAD", "NO");
-  const fs::path temp = target.parent_path() / (target.stem().string() + ".partial" + target.extension().string());
+  const fs::path temp = target.parent_path() / (target.stem().string() + ".partial-" + std::to_string(getpid()) + target.extension().string());
   fs::remove(temp);
+  try {
+    merge_ogr_into(files, target, temp, driver_name);
+  } catch (...) {
+    std::error_code ec;
+    fs::remove(temp, ec);
+    throw;
+  }
+}
+
+void merge_ogr_into(const std::vector<fs::path>& files, const fs::path& target, const fs::path& temp, const std::string& driver_name) {
   GDALDataset* out = GetGDALDriverManager()->GetDriverByName(driver_name.c_str())->Create(temp.c_str(), 0, 0, 0, GDT_Unknown, nullptr);
   if (!out) throw InputError("'" + target.string() + "': cannot create");
   OGRLayer* layer = nullptr;
@@ -246,13 +262,20 @@ void merge_indexes(const fs::path& dir) {
   const std::vector<fs::path> parts = shard_parts(dir, "tile_index", "geojson", "tile indexes");
   if (parts.empty()) return;
   std::vector<std::pair<std::string, std::string>> features;  // (tile name, feature)
-  std::string header;
-  const std::regex tile(R"re("tile": "([^"]+)")re");
+  std::string header, first_key;
+  const std::regex tile(R"re("tile": "([^"]+)")re"), key(R"re("run_key": "([0-9a-f]+)")re");
   for (const fs::path& p : parts) {
     std::ifstream in(p);
     std::string line;
     std::getline(in, line);
     header = line;
+    // Shards of one run: the same inputs, options and tiling (the run key), else not one result.
+    std::smatch m;
+    const std::string run_key = std::regex_search(line, m, key) ? std::string(m[1]) : "none";
+    if (first_key.empty()) first_key = run_key;
+    else if (run_key != first_key)
+      throw InputError("'" + p.string() + "': from a run with other inputs or options (run key " + run_key + ") than '" +
+                       parts.front().string() + "' (" + first_key + "); rerun the shards with one job");
     while (std::getline(in, line)) {
       std::smatch m;
       if (line.rfind("{\"type\": \"Feature\"", 0) != 0 || !std::regex_search(line, m, tile)) continue;
@@ -340,23 +363,59 @@ void merge_reports(const fs::path& dir) {
   o.commit();
 }
 
-// The files the tile index lists (the run's own, not whatever else is in tiles/), in tile order.
-std::vector<fs::path> indexed_files(const fs::path& dir, const std::string& extension) {
+// The files the tile index lists (the run's own, not whatever else is in tiles/), in tile order,
+// with the fingerprint each had when the run wrote it.
+std::vector<std::pair<fs::path, std::string>> indexed_outputs(const fs::path& dir) {
   std::ifstream in(dir / "tile_index.geojson");
-  if (!in) throw InputError("'" + dir.string() + "': no tile_index.geojson; is it a lodforge run's output.dir?");
-  std::vector<fs::path> out;
-  const std::regex listed(R"re("(tiles/[^"]+)")re");
+  if (!in) throw InputError("'" + dir.string() + "': no tile_index.geojson; is it a lodforge run's output.dir (a finished one)?");
+  std::vector<std::pair<fs::path, std::string>> out;
+  const std::regex quoted(R"re("([^"]+)")re");
+  const auto list_after = [](const std::string& line, const std::string& name) {
+    const std::size_t at = line.find("\"" + name + "\": [");
+    if (at == std::string::npos) return std::string();
+    const std::size_t open = line.find('[', at);
+    return line.substr(open, line.find(']', open) - open);
+  };
   for (std::string line; std::getline(in, line);) {
-    const std::size_t at = line.find("\"outputs\": [");
-    if (at == std::string::npos) continue;
-    const std::string list = line.substr(at, line.find(']', at) - at);
-    for (std::sregex_iterator it(list.begin(), list.end(), listed), stop; it != stop; ++it) {
-      const std::string file = (*it)[1];
-      if (file.size() > extension.size() && file.compare(file.size() - extension.size(), extension.size(), extension) == 0)
-        out.push_back(dir / file);
-    }
+    const std::string files = list_after(line, "outputs"), fingerprints = list_after(line, "fingerprints");
+    std::vector<std::string> f, p;
+    for (std::sregex_iterator it(files.begin(), files.end(), quoted), stop; it != stop; ++it) f.push_back((*it)[1]);
+    for (std::sregex_iterator it(fingerprints.begin(), fingerprints.end(), quoted), stop; it != stop; ++it) p.push_back((*it)[1]);
+    for (std::size_t i = 0; i < f.size(); ++i) out.emplace_back(dir / f[i], i < p.size() ? p[i] : std::string());
   }
   return out;
+}
+
+// Every listed file as the run wrote it, before anything is merged; else one error naming them.
+void verify_outputs(const fs::path& dir, const std::vector<std::pair<fs::path, std::string>>& outputs) {
+  std::vector<std::string> bad;
+  for (const auto& [file, fingerprint] : outputs) {
+    const std::string now = file_fingerprint(file.string());
+    if (now.empty()) bad.push_back("'" + file.string() + "' is missing");
+    else if (fingerprint.empty()) bad.push_back("'" + file.string() + "' has no fingerprint in the tile index (an index of an older lodforge)");
+    else if (now != fingerprint) bad.push_back("'" + file.string() + "' changed since the run wrote it");
+  }
+  if (bad.empty()) return;
+  std::string text = "'" + (dir / "tile_index.geojson").string() + "': " + std::to_string(bad.size()) + " of its " +
+                     std::to_string(outputs.size()) + " files are not as the run wrote them; rerun `lodforge run` with the job " +
+                     "(it writes them again), then merge:";
+  for (std::size_t i = 0; i < bad.size() && i < 5; ++i) text += "\n  " + bad[i];
+  if (bad.size() > 5) text += "\n  ...";
+  throw InputError(text);
+}
+
+// Temporary files of merges that were killed (their writer gone): never complete, removed.
+void remove_stale_partials(const fs::path& merged) {
+  std::error_code ec;
+  for (const auto& e : fs::directory_iterator(merged, ec)) {
+    const std::string name = e.path().filename().string();
+    const std::size_t at = name.find(".partial");
+    if (at == std::string::npos || name.rfind("lodforge.", 0) != 0) continue;
+    const std::size_t digits = name.find_first_of("0123456789", at);
+    const pid_t writer = digits == at + 9 ? pid_t(std::atol(name.c_str() + digits)) : 0;
+    if (writer > 0 && writer != getpid() && (kill(writer, 0) == 0 || errno != ESRCH)) continue;  // another merge at work
+    fs::remove(e.path(), ec);
+  }
 }
 
 }  // namespace
@@ -367,7 +426,7 @@ int run_merge(int argc, char** argv) {
   args.value("formats", "F[,F...]", "formats to merge (default: every format found)").flag("help", "show this help");
   if (argc < 3 || std::string(argv[2]) == "--help") {
     if (argc >= 3) { std::cout << args.help(); return 0; }
-    throw InputError("lodforge merge: give the run's output directory: lodforge merge OUT_DIR");
+    throw InputError("give the run's output directory: lodforge merge OUT_DIR");
   }
   const fs::path dir = argv[2];
   args.parse(argc, argv, 3);
@@ -378,12 +437,23 @@ int run_merge(int argc, char** argv) {
     std::stringstream s(*f);
     for (std::string x; std::getline(s, x, ',');) formats.push_back(x);
   }
+  for (const std::string& format : formats)
+    if (format != "citygml" && format != "cityjson" && format != "obj" && format != "gpkg" && format != "geojson")
+      throw InputError("--formats: unknown format '" + format + "'");
   merge_indexes(dir);
   merge_reports(dir);
+  const auto outputs = indexed_outputs(dir);
+  verify_outputs(dir, outputs);
   fs::create_directories(dir / "merged");
+  remove_stale_partials(dir / "merged");
   for (const std::string& format : formats) {
     const std::string extension = extension_of(format);
-    const auto files = indexed_files(dir, extension);
+    std::vector<fs::path> files;
+    for (const auto& output : outputs) {
+      const std::string name = output.first.filename().string();
+      if (name.size() > extension.size() && name.compare(name.size() - extension.size(), extension.size(), extension) == 0)
+        files.push_back(output.first);
+    }
     if (files.empty()) continue;
     const fs::path target = dir / "merged" / ("lodforge" + extension);
     if (format == "citygml") merge_citygml(files, target);
@@ -391,7 +461,7 @@ int run_merge(int argc, char** argv) {
     else if (format == "obj") merge_obj(files, target);
     else if (format == "gpkg") merge_ogr(files, target, "GPKG");
     else if (format == "geojson") merge_ogr(files, target, "GeoJSON");
-    else throw InputError("lodforge merge: --formats: unknown format '" + format + "'");
+    else throw InputError("--formats: unknown format '" + format + "'");
     spdlog::info("{}: {} tiles", target.string(), files.size());
   }
   return 0;

@@ -12,6 +12,8 @@
 #include <map>
 #include <mutex>
 #include <spdlog/spdlog.h>
+#include <regex>
+#include <set>
 #include <sstream>
 #include <sys/stat.h>
 #include <tbb/global_control.h>
@@ -56,15 +58,15 @@ struct Shard {
 Shard parse_shard(const std::string& text) {
   Shard s;
   const auto slash = text.find('/');
-  try {
-    if (slash == std::string::npos) throw std::invalid_argument(text);
-    s.index = std::stoi(text.substr(0, slash));
-    s.count = std::stoi(text.substr(slash + 1));
-  } catch (const std::exception&) {
-    throw InputError("lodforge run: --shard '" + text + "': expected K/N, e.g. 0/4");
-  }
-  if (s.count < 1 || s.index < 0 || s.index >= s.count)
-    throw InputError("lodforge run: --shard '" + text + "': needs 0 <= K < N");
+  const auto whole_number = [](const std::string& part, int& value) {
+    if (part.empty() || part.size() > 9 || part.find_first_not_of("0123456789") != std::string::npos) return false;
+    value = std::stoi(part);
+    return true;
+  };
+  if (slash == std::string::npos || !whole_number(text.substr(0, slash), s.index) || !whole_number(text.substr(slash + 1), s.count))
+    throw InputError("--shard '" + text + "': expected K/N with two whole numbers, e.g. 0/4");
+  if (s.count < 1 || s.index >= s.count)
+    throw InputError("--shard '" + text + "': needs 0 <= K < N");
   return s;
 }
 
@@ -124,7 +126,7 @@ int run_job(int argc, char** argv) {
       .flag("help", "show this help");
   if (argc < 3 || std::string(argv[2]).rfind("--", 0) == 0) {
     if (argc >= 3 && std::string(argv[2]) == "--help") { std::cout << args.help(); return 0; }
-    throw InputError("lodforge run: give a job file: lodforge run JOB.yaml (see lodforge config --defaults)");
+    throw InputError("give a job file: lodforge run JOB.yaml (see lodforge config --defaults)");
   }
   const std::string job_path = argv[2];
   args.parse(argc, argv, 3);
@@ -171,6 +173,13 @@ int run_job(int argc, char** argv) {
   fs::create_directories(out_dir / "tiles", ec);
   if (ec || access(out_dir.c_str(), W_OK) != 0) throw InputError("output.dir '" + out_dir.string() + "': cannot create or write");
   const CheckpointStore store(job.work_dir);
+  // One run (or one run per shard) at a time in a work directory.
+  const WorkDirLock lock(job.work_dir, shard.count > 1 ? "lodforge.shard-" + std::to_string(shard.index) + "-of-" +
+                                                             std::to_string(shard.count) + ".lock"
+                                                       : std::string("lodforge.lock"));
+  // Checkpoints half-written by killed runs (10 minutes old, their writer gone) are cleaned.
+  if (const int stale = remove_stale_temporaries(job.work_dir, 600))
+    spdlog::info("work_dir {}: removed {} temporary file(s) left by killed runs", job.work_dir, stale);
   // A killed run may have left temporary files (named .partial-PID); they never look complete,
   // but go once their writer is gone. Another shard's files in progress stay.
   for (const auto& entry : fs::directory_iterator(out_dir / "tiles")) {
@@ -189,6 +198,13 @@ int run_job(int argc, char** argv) {
   const std::string ortho_source = job.inputs.orthophoto.path.empty() ? "" : aligned_source(job.inputs.orthophoto.path, grid_spec, (fs::path(job.work_dir) / "orthophoto.aligned.vrt").string(), false);
   if (!dtm_source.empty() && dtm_source != job.inputs.dtm.path) spdlog::info("{}: resampled onto the segmentation's grid ({})", job.inputs.dtm.path, dtm_source);
   const double pixel = seg.transform.pixel_size();
+  // A tile of a few pixels makes a file per tile and format without end, and no building fits it.
+  constexpr double kMinTilePixels = 16;
+  if (job.tiling.tile_size_m < kMinTilePixels * pixel)
+    throw InputError("tiling.tile_size_m: " + std::to_string(job.tiling.tile_size_m) + " m is less than " +
+                     std::to_string(int(kMinTilePixels)) + " pixels of " + std::to_string(pixel) + " m of '" +
+                     job.inputs.segmentation.path + "'; give at least " + std::to_string(kMinTilePixels * pixel) +
+                     " m (tiles of 100-500 m are usual)");
   const TileGrid grid(seg.size, int(std::lround(job.tiling.tile_size_m / pixel)));
   const int halo_px = int(std::ceil(job.tiling.halo_m / pixel));
   const int max_window_px = int(std::ceil(job.tiling.max_window_m / pixel));
@@ -202,6 +218,7 @@ int run_job(int argc, char** argv) {
   Job key_job = job;
   key_job.threads = 0;
   key_job.work_dir.clear();
+  key_job.output.dir.clear();  // where the files go, not what they hold (a done tile's files are checked where they are)
   key_job.tiling.gdal_cache_mb = 0;  // memory, not results: resuming with another cache size reuses every tile
   const std::string contour_options = options_text(key_job.stages.contour);
   const std::string heights_options = options_text(key_job.stages.heights) + file_identity(job.inputs.dsm.path) + file_identity(job.inputs.dtm.path);
@@ -212,6 +229,56 @@ int run_job(int argc, char** argv) {
                                       std::to_string(grid.tile_px) + "/" + std::to_string(halo_px) + "/" + std::to_string(max_window_px));
   std::string transform_text;
   for (double c : seg.transform.c) transform_text += std::to_string(c) + ",";
+  // The tile indexes an earlier run left list lodforge's own files (which this run may replace).
+  // One made from other inputs or options describes a run that is no more: it goes, with its
+  // report, so that `merge` cannot take a mix of old and new tiles from an interrupted rerun.
+  const std::string run_key = hex(job_key);
+  std::set<std::string> indexed_outputs;
+  {
+    const std::string suffix = shard.count > 1 ? ".shard-" + std::to_string(shard.index) + "-of-" + std::to_string(shard.count) : "";
+    std::set<std::string> suffixes{"", suffix};
+    for (const std::string& sfx : suffixes) {
+      const fs::path index = out_dir / ("tile_index" + sfx + ".geojson");
+      std::ifstream in(index);
+      if (!in) continue;
+      std::stringstream buffer;
+      buffer << in.rdbuf();
+      const std::string text = buffer.str();
+      static const std::regex listed(R"re("outputs": \[([^\]]*)\])re"), quoted(R"re("([^"]+)")re"), key(R"re("run_key": "([0-9a-f]+)")re");
+      for (std::sregex_iterator it(text.begin(), text.end(), listed), stop; it != stop; ++it) {
+        const std::string list = (*it)[1];
+        for (std::sregex_iterator q(list.begin(), list.end(), quoted); q != stop; ++q) indexed_outputs.insert((*q)[1]);
+      }
+      std::smatch m;
+      if (std::regex_search(text, m, key) && m[1] == run_key) continue;
+      in.close();
+      fs::remove(index, ec);
+      fs::remove(out_dir / ("report" + sfx + ".json"), ec);
+      spdlog::info("{}: from a run with other inputs or options; removed with its report (this run writes new ones)", index.string());
+    }
+  }
+  // Nothing that is not lodforge's is replaced: a file at a tile's output name that no index or
+  // done marker lists is the user's, and stops the run before any work.
+  {
+    std::vector<std::string> extensions;
+    for (const std::string& format : job.output.formats) extensions.push_back(extension_of(format));
+    extensions.push_back(".png");
+    for (int t : tiles) {
+      std::optional<std::set<std::string>> own;  // the tile's last done marker's files, read when needed
+      for (const std::string& extension : extensions) {
+        const std::string relative = "tiles/" + grid.name(t) + extension;
+        const fs::path file = out_dir / relative;
+        if (!fs::exists(fs::symlink_status(file, ec))) continue;
+        if (!fs::is_regular_file(fs::symlink_status(file, ec)))
+          throw InputError("output.dir: '" + file.string() + "' is in the way of a tile's output and is not a regular file; move it away");
+        if (indexed_outputs.count(relative)) continue;
+        if (!own) own = store.own_files(grid.name(t));
+        if (!own->count(relative))
+          throw InputError("output.dir: '" + file.string() + "' exists and lodforge did not write it (no tile index or work_dir " +
+                           "lists it); move it away or give another output.dir");
+      }
+    }
+  }
 
   CPLSetConfigOption("OGR_CURRENT_DATE", "2000-01-01T00:00:00.000Z");  // byte-identical GeoPackages
   // The block budget: three quarters for the decoded blocks the threads share, a quarter for
@@ -232,7 +299,7 @@ int run_job(int argc, char** argv) {
   });
   const RunPlan plan{job, seg.size, seg.transform, *input_crs, pixel, grid, halo_px, max_window_px, selector,
                      dsm_source, dtm_source, ortho_source, store, contour_options, core_options, heights_options,
-                     transform_text, job_key, out_dir, &readers};
+                     transform_text, job_key, out_dir, &readers, &indexed_outputs};
 
   // At most `tokens` tiles in flight: one per thread and one more, so that a thread finds the next
   // tile while the oldest waits to be recorded in order (each in flight holds its windows: more
@@ -253,7 +320,7 @@ int run_job(int argc, char** argv) {
   const auto start = Clock::now();
   // Serial source; parallel tiles, each writing its own files; serial in-order bookkeeping (the
   // index and report are sorted into tile order when written).
-  using Done = std::pair<std::shared_ptr<TileResult>, std::vector<std::string>>;  // the tile and its files
+  using Done = std::pair<std::shared_ptr<TileResult>, TileOutputs>;  // the tile and its files
   tbb::parallel_pipeline(
       tokens,
       tbb::make_filter<void, int>(tbb::filter_mode::serial_in_order,
@@ -266,7 +333,7 @@ int run_job(int argc, char** argv) {
                                       [&](int tile) {
                                         if (tile < 0) { plan.crs.wkt(); return Done{}; }
                                         std::shared_ptr<TileResult> r = process_tile(plan, tile);
-                                        std::vector<std::string> files = write_tile_outputs(plan, *r);
+                                        TileOutputs files = write_tile_outputs(plan, *r);
                                         r->quicklook_background.release();  // written; not kept while queued
                                         return Done{std::move(r), std::move(files)};
                                       }) &

@@ -44,6 +44,8 @@ Job load_job(const std::string& path, const std::vector<std::string>& overrides)
                          &job.inputs.orthophoto.path, &job.output.dir, &job.work_dir})
     resolve(*p);
   if (job.inputs.segmentation.path.empty()) errors.push_back("inputs.segmentation.path: required");
+  if (job.output.formats.empty())
+    errors.push_back("output.formats: needs at least one format (citygml, cityjson, obj, gpkg, geojson); a run without one writes no model");
   if (job.tiling.max_window_m < job.tiling.tile_size_m + 2 * job.tiling.halo_m)
     errors.push_back("tiling.max_window_m: must be >= tile_size_m + 2 * halo_m (" +
                      std::to_string(job.tiling.tile_size_m + 2 * job.tiling.halo_m) + ")");

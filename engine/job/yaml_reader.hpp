@@ -59,12 +59,18 @@ class YamlReader {
     prefix_ = saved;
   }
 
-  // Reports the keys of the current mapping that no declaration read.
+  // Reports the keys of the current mapping that no declaration read, and keys given twice
+  // (YAML forbids them; yaml-cpp would silently read the first).
   void report_unknown() {
     const YAML::Node& map = nodes_.back();
     if (!map.IsMap()) return;
+    std::set<std::string> keys;
     for (auto it = map.begin(); it != map.end(); ++it) {
       const std::string key = it->first.as<std::string>();
+      if (!keys.insert(key).second) {
+        errors.push_back(prefix_ + key + ": given twice (line " + std::to_string(it->first.Mark().line + 1) + "); give each key once");
+        continue;
+      }
       if (!seen_.back().count(key)) errors.push_back(prefix_ + key + ": unknown key");
     }
   }

@@ -4,6 +4,10 @@
 #include <filesystem>
 #include <fstream>
 #include <sstream>
+#include <cerrno>
+#include <csignal>
+#include <fcntl.h>
+#include <sys/file.h>
 #include <unistd.h>
 
 #include "io/errors.hpp"
@@ -15,7 +19,7 @@ namespace fs = std::filesystem;
 namespace {
 
 constexpr std::uint32_t kMagic = 0x4c4f4446;  // "LODF"
-constexpr std::uint32_t kVersion = 1;
+constexpr std::uint32_t kVersion = 2;  // 2: a checksum of the payload in the header
 
 class Writer {
  public:
@@ -82,6 +86,7 @@ void write_atomically(const fs::path& path, const std::string& payload, std::uin
   header.pod(kVersion);
   header.pod(key);
   header.pod<std::uint64_t>(payload.size());
+  header.pod<std::uint64_t>(fnv1a(payload));
   const fs::path temp = path.string() + ".tmp-" + std::to_string(getpid());
   {
     std::ofstream out(temp, std::ios::binary | std::ios::trunc);
@@ -96,18 +101,20 @@ void write_atomically(const fs::path& path, const std::string& payload, std::uin
   fs::rename(temp, path);
 }
 
-std::optional<Reader> read_checked(const fs::path& path, std::uint64_t key) {
+// key: the expected key, or none to take any.
+std::optional<Reader> read_checked(const fs::path& path, std::optional<std::uint64_t> key) {
   std::ifstream in(path, std::ios::binary);
   if (!in) return std::nullopt;
   std::ostringstream buffer;
   buffer << in.rdbuf();
   try {
     Reader r(buffer.str());
-    if (r.pod<std::uint32_t>() != kMagic || r.pod<std::uint32_t>() != kVersion || r.pod<std::uint64_t>() != key)
-      return std::nullopt;
+    if (r.pod<std::uint32_t>() != kMagic || r.pod<std::uint32_t>() != kVersion) return std::nullopt;
+    if (const auto found = r.pod<std::uint64_t>(); key && found != *key) return std::nullopt;
     const auto size = r.pod<std::uint64_t>();
-    std::string rest = buffer.str().substr(4 + 4 + 8 + 8);
-    if (rest.size() != size) return std::nullopt;
+    const auto checksum = r.pod<std::uint64_t>();
+    std::string rest = buffer.str().substr(4 + 4 + 8 + 8 + 8);
+    if (rest.size() != size || fnv1a(rest) != checksum) return std::nullopt;  // changed since written: recomputed
     return Reader(rest);
   } catch (const std::exception&) {
     return std::nullopt;
@@ -115,6 +122,37 @@ std::optional<Reader> read_checked(const fs::path& path, std::uint64_t key) {
 }
 
 }  // namespace
+
+std::string file_fingerprint(const std::string& path) {
+  std::error_code ec;
+  if (!fs::is_regular_file(path, ec)) return {};
+  std::ifstream in(path, std::ios::binary);
+  if (!in) return {};
+  std::uint64_t hash = fnv1a(std::string());
+  std::uint64_t size = 0;
+  std::vector<char> buffer(1 << 16);
+  while (in.read(buffer.data(), std::streamsize(buffer.size())) || in.gcount() > 0) {
+    hash = fnv1a(buffer.data(), std::size_t(in.gcount()), hash);
+    size += std::uint64_t(in.gcount());
+  }
+  return std::to_string(size) + ":" + hex(hash);
+}
+
+TileOutputs summary_outputs(const std::string& summary) {
+  TileOutputs out;
+  std::istringstream in(summary);
+  for (std::string line; std::getline(in, line);) {
+    if (line.rfind("output\t", 0) != 0) continue;
+    const std::size_t tab = line.find('\t', 7);
+    if (tab == std::string::npos) continue;
+    out.emplace_back(line.substr(7, tab - 7), line.substr(tab + 1));
+  }
+  return out;
+}
+
+std::string summary_output_line(const std::string& relative_path, const std::string& fingerprint) {
+  return "output\t" + relative_path + "\t" + fingerprint + "\n";
+}
 
 std::string hex(std::uint64_t value) {
   char buffer[17];
@@ -248,6 +286,33 @@ void CheckpointStore::mark_done(const std::string& tile, std::uint64_t key, cons
   write_atomically(path("done", tile), w.str(), key);
 }
 
+std::optional<std::string> CheckpointStore::last_done_summary(const std::string& tile) const {
+  auto r = read_checked(path("done", tile), std::nullopt);
+  if (!r) return std::nullopt;
+  try {
+    return r->text();
+  } catch (const std::exception&) {
+    return std::nullopt;
+  }
+}
+
+void CheckpointStore::record_intent(const std::string& tile, const std::vector<std::string>& relative_paths) const {
+  std::string lines;
+  for (const std::string& p : relative_paths) lines += p + "\n";
+  save_blob("writing", tile, 0, lines);
+}
+
+std::set<std::string> CheckpointStore::own_files(const std::string& tile) const {
+  std::set<std::string> files;
+  if (auto last = last_done_summary(tile))
+    for (const auto& output : summary_outputs(*last)) files.insert(output.first);
+  if (auto intent = load_blob("writing", tile, 0)) {
+    std::istringstream in(*intent);
+    for (std::string line; std::getline(in, line);) if (!line.empty()) files.insert(line);
+  }
+  return files;
+}
+
 std::optional<std::string> CheckpointStore::done_summary(const std::string& tile, std::uint64_t key) const {
   auto r = read_checked(path("done", tile), key);
   if (!r) return std::nullopt;
@@ -256,6 +321,51 @@ std::optional<std::string> CheckpointStore::done_summary(const std::string& tile
   } catch (const std::exception&) {
     return std::nullopt;
   }
+}
+
+WorkDirLock::WorkDirLock(const std::string& directory, const std::string& name) {
+  const std::string path = (fs::path(directory) / name).string();
+  fd_ = open(path.c_str(), O_RDWR | O_CREAT | O_CLOEXEC, 0644);
+  if (fd_ < 0) throw InputError("work_dir '" + directory + "': cannot create the lock file " + name + ": " + std::strerror(errno));
+  if (flock(fd_, LOCK_EX | LOCK_NB) != 0) {
+    char buffer[32] = {};
+    const ssize_t n = pread(fd_, buffer, sizeof buffer - 1, 0);
+    close(fd_);
+    fd_ = -1;
+    const std::string pid = n > 0 ? std::string(buffer, std::size_t(n)) : "unknown";
+    throw InputError("work_dir '" + directory + "': another lodforge run (pid " + pid.substr(0, pid.find('\n')) +
+                     ") is using it; wait for it to end, or give this run another work_dir and output.dir");
+  }
+  const std::string pid = std::to_string(getpid()) + "\n";
+  if (ftruncate(fd_, 0) != 0 || pwrite(fd_, pid.data(), pid.size(), 0) != ssize_t(pid.size())) {
+    // The lock holds all the same; only the pid shown to a second run is missing.
+  }
+}
+
+WorkDirLock::~WorkDirLock() {
+  if (fd_ >= 0) close(fd_);  // releases the lock (the file stays: removing it would race a new holder)
+}
+
+int remove_stale_temporaries(const std::string& directory, double min_age_seconds) {
+  int removed = 0;
+  std::error_code ec;
+  const auto now = fs::file_time_type::clock::now();
+  for (const auto& entry : fs::directory_iterator(directory, ec)) {
+    const std::string name = entry.path().filename().string();
+    std::size_t at = name.rfind(".tmp-");
+    std::size_t skip = 5;
+    if (at == std::string::npos) { at = name.rfind(".partial-"); skip = 9; }
+    if (at == std::string::npos) continue;
+    const std::string digits = name.substr(at + skip);
+    if (digits.empty() || digits.find_first_not_of("0123456789") != std::string::npos || digits.size() > 9) continue;
+    const pid_t writer = pid_t(std::stol(digits));
+    if (writer == getpid() || kill(writer, 0) == 0 || errno != ESRCH) continue;  // alive (or not ours to judge)
+    std::error_code time_error;
+    const auto written = fs::last_write_time(entry.path(), time_error);
+    if (time_error || std::chrono::duration<double>(now - written).count() < min_age_seconds) continue;
+    if (fs::remove(entry.path(), time_error)) ++removed;
+  }
+  return removed;
 }
 
 }  // namespace lodforge

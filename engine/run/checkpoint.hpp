@@ -4,6 +4,7 @@
 #pragma once
 #include <cstdint>
 #include <optional>
+#include <set>
 #include <string>
 #include <vector>
 
@@ -35,6 +36,13 @@ class CheckpointStore {
   // A tile whose outputs were written under this key is complete; its summary is kept with it.
   void mark_done(const std::string& tile, std::uint64_t key, const std::string& summary) const;
   std::optional<std::string> done_summary(const std::string& tile, std::uint64_t key) const;
+  // The tile's last done marker whatever its key (an earlier run's, other options): the files it lists
+  // are lodforge's own. Empty when there is none or it does not check.
+  std::optional<std::string> last_done_summary(const std::string& tile) const;
+  // The files under output.dir that lodforge wrote or was about to write for the tile (its last
+  // done marker's, and those recorded by record_intent before writing): its own, to replace.
+  void record_intent(const std::string& tile, const std::vector<std::string>& relative_paths) const;
+  std::set<std::string> own_files(const std::string& tile) const;
 
  private:
   // One file per tile and stage; the key inside says which inputs it was made from.
@@ -43,5 +51,33 @@ class CheckpointStore {
 };
 
 std::string hex(std::uint64_t value);
+
+// "SIZE:HASH" of a regular file's bytes, recorded when lodforge writes an output and checked before
+// the output is trusted again (resume, merge); empty when the file is missing or not regular.
+std::string file_fingerprint(const std::string& path);
+
+// The output files a tile summary lists ("output\tRELATIVE_PATH\tFINGERPRINT" lines): (path, fingerprint).
+using TileOutputs = std::vector<std::pair<std::string, std::string>>;
+TileOutputs summary_outputs(const std::string& summary);
+std::string summary_output_line(const std::string& relative_path, const std::string& fingerprint);
+
+// A run's hold on its work directory: an exclusive lock (flock) on DIR/NAME, which holds the
+// holder's pid, for as long as the object lives. A second holder is refused with an InputError
+// naming the first's pid. (Shards lock their own name: they share a work directory.)
+class WorkDirLock {
+ public:
+  WorkDirLock(const std::string& directory, const std::string& name);
+  ~WorkDirLock();
+  WorkDirLock(const WorkDirLock&) = delete;
+  WorkDirLock& operator=(const WorkDirLock&) = delete;
+
+ private:
+  int fd_ = -1;
+};
+
+// Removes the temporary files (NAME.tmp-PID, NAME.partial-PID) of writers that are gone: no
+// process PID on this machine and untouched for min_age_seconds (a writer on another machine of
+// a shared work directory holds its temporary file for seconds, not minutes). Returns how many.
+int remove_stale_temporaries(const std::string& directory, double min_age_seconds);
 
 }  // namespace lodforge

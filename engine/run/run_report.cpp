@@ -68,7 +68,7 @@ std::vector<std::string> in_tile_order(std::vector<std::pair<int, std::string>> 
 
 }  // namespace
 
-void record_tile(Totals& totals, const RunPlan& plan, const TileResult& result, const std::vector<std::string>& outputs) {
+void record_tile(Totals& totals, const RunPlan& plan, const TileResult& result, const TileOutputs& outputs) {
   const TileGrid& grid = plan.grid;
   const TileResult* r = &result;
   std::size_t count = 0;
@@ -88,7 +88,9 @@ void record_tile(Totals& totals, const RunPlan& plan, const TileResult& result, 
   feature << "{\"type\": \"Feature\", \"properties\": {\"tile\": \"" << r->name << "\", \"col\": " << r->tile % grid.cols
           << ", \"row\": " << r->tile / grid.cols << ", \"status\": \"" << (count ? "done" : "empty")
           << "\", \"buildings\": " << count << ", \"origin\": [" << a.x() << ", " << b.y() << "], \"outputs\": [";
-  for (std::size_t i = 0; i < outputs.size(); ++i) feature << (i ? ", " : "") << '"' << outputs[i] << '"';
+  for (std::size_t i = 0; i < outputs.size(); ++i) feature << (i ? ", " : "") << '"' << outputs[i].first << '"';
+  feature << "], \"fingerprints\": [";
+  for (std::size_t i = 0; i < outputs.size(); ++i) feature << (i ? ", " : "") << '"' << outputs[i].second << '"';
   feature << "]}, \"geometry\": {\"type\": \"Polygon\", \"coordinates\": [[[" << a.x() << ", " << a.y() << "], [" << b.x()
           << ", " << a.y() << "], [" << b.x() << ", " << b.y() << "], [" << a.x() << ", " << b.y() << "], [" << a.x()
           << ", " << a.y() << "]]]}}";
@@ -110,7 +112,7 @@ void write_index_and_report(const Totals& totals, const RunPlan& plan, const std
   // The tile index and the run report (one per shard when sharded).
   const std::string suffix = shard.count > 1 ? ".shard-" + std::to_string(shard.index) + "-of-" + std::to_string(shard.count) : "";
   std::ostringstream index;
-  index << "{\"type\": \"FeatureCollection\", \"name\": \"tile_index\"";
+  index << "{\"type\": \"FeatureCollection\", \"name\": \"tile_index\", \"run_key\": \"" << hex(plan.job_key) << "\"";
   if (const std::string crs = plan.crs.epsg(); !crs.empty())
     index << ", \"crs\": {\"type\": \"name\", \"properties\": {\"name\": \"urn:ogc:def:crs:" << crs.substr(0, crs.find(':')) << "::" << crs.substr(crs.find(':') + 1) << "\"}}";
   index << ", \"features\": [\n";

@@ -22,7 +22,7 @@ struct Totals {
 };
 
 // Adds a finished (or resumed) tile to the totals and the index.
-void record_tile(Totals& totals, const RunPlan& plan, const TileResult& result, const std::vector<std::string>& outputs);
+void record_tile(Totals& totals, const RunPlan& plan, const TileResult& result, const TileOutputs& outputs);
 
 // Writes tile_index[.shard-K-of-N].geojson and report[...].json; logs the summary.
 void write_index_and_report(const Totals& totals, const RunPlan& plan, const std::string& job_path, int shard_index,

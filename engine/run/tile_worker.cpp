@@ -1,6 +1,7 @@
 #include "run/tile_worker.hpp"
 
 #include <map>
+#include <set>
 #include <mutex>
 
 #include <tbb/enumerable_thread_specific.h>
@@ -10,6 +11,7 @@
 #include <opencv2/imgproc.hpp>
 #include <optional>
 #include <sstream>
+#include <spdlog/spdlog.h>
 #include <tbb/parallel_for.h>
 #include <tbb/task_group.h>
 #include <tbb/task_arena.h>
@@ -234,10 +236,17 @@ std::shared_ptr<TileResult> process_tile(const RunPlan& plan, int tile) {
   r->name = grid.name(tile);
   const std::uint64_t done_key = fnv1a(r->name, plan.job_key);
   if (auto summary = store.done_summary(r->name, done_key)) {
-    r->skipped = true;
-    r->summary = *summary;
-    plan.readers->finished_reading(tile);
-    return r;
+    // Complete, if its files are still those it wrote; else made again (from its checkpoints).
+    std::string changed;
+    for (const auto& [relative, fingerprint] : summary_outputs(*summary))
+      if (changed.empty() && file_fingerprint((plan.out_dir / relative).string()) != fingerprint) changed = relative;
+    if (changed.empty()) {
+      r->skipped = true;
+      r->summary = *summary;
+      plan.readers->finished_reading(tile);
+      return r;
+    }
+    spdlog::warn("tile {}: {} is missing or changed since it was written; the tile is written again", r->name, changed);
   }
   std::uint64_t contour_key = 0;
   std::optional<TileBuildings> contours;
@@ -323,7 +332,7 @@ std::shared_ptr<TileResult> process_tile(const RunPlan& plan, int tile) {
   return r;
 }
 
-std::vector<std::string> write_tile_outputs(const RunPlan& plan, TileResult& result) {
+TileOutputs write_tile_outputs(const RunPlan& plan, TileResult& result) {
   const Job& job = plan.job;
   const TileGrid& grid = plan.grid;
   const CheckpointStore& store = plan.store;
@@ -332,19 +341,35 @@ std::vector<std::string> write_tile_outputs(const RunPlan& plan, TileResult& res
 
   // The inputs' CRS, checked (first use) before this tile touches any output.
   const std::string& crs_wkt = plan.crs.wkt();
-  std::vector<std::string> outputs;
+  if (r->skipped) return summary_outputs(r->summary);
   const cv::Rect tile_rect = grid.rect(r->tile);
-  if (!r->skipped) {
-    // Files of this tile from an earlier run with other options (another format, no buildings
-    // any more) must not outlive it.
-    std::error_code ec;
-    for (const auto& entry : fs::directory_iterator(out_dir / "tiles", ec))
-      if (entry.path().filename().string().rfind(r->name + ".", 0) == 0) fs::remove(entry.path(), ec);
+  // Files of this tile from an earlier run with other options (another format, no buildings any
+  // more) must not outlive it: those its last done marker or an earlier tile index lists, and
+  // only those (whatever else is in tiles/ is not lodforge's).
+  {
+    std::set<std::string> earlier = store.own_files(r->name);
+    if (plan.indexed_outputs)
+      for (auto it = plan.indexed_outputs->lower_bound("tiles/" + r->name + "."); it != plan.indexed_outputs->end() && it->rfind("tiles/" + r->name + ".", 0) == 0; ++it)
+        earlier.insert(*it);
+    for (const std::string& relative : earlier) {
+      std::error_code ec;
+      if (fs::is_regular_file(out_dir / relative, ec)) fs::remove(out_dir / relative, ec);
+    }
   }
   WriterContext context{crs_wkt, plan.crs.epsg(), r->name, plan.transform.to_map(tile_rect.x, tile_rect.y + tile_rect.height)};
-  if (!r->buildings.empty() || r->skipped) {
+  std::vector<std::string> written;  // relative to out_dir
+  {
+    // What is about to be written is recorded first: a run killed before this tile is marked done
+    // leaves files that are provably lodforge's (the next run replaces them, nothing else).
+    std::vector<std::string> intent;
+    if (!r->buildings.empty())
+      for (const std::string& format : job.output.formats) intent.push_back("tiles/" + r->name + extension_of(format));
+    if (!r->quicklook_background.empty()) intent.push_back("tiles/" + r->name + ".png");
+    store.record_intent(r->name, intent);
+  }
+  if (!r->buildings.empty()) {
     const std::vector<std::string>& formats = job.output.formats;
-    if (!r->skipped) {
+    {
       // The formats are written side by side (each its own file); a thread with no tile left to
       // take helps the last ones. An error in any is rethrown here, after all have stopped.
       // The models (LOD1 solids included) are made once for all the formats.
@@ -364,21 +389,27 @@ std::vector<std::string> write_tile_outputs(const RunPlan& plan, TileResult& res
       }); });
       for (double s : seconds) r->write_seconds += s;
     }
-    for (const std::string& format : formats) {
-      const std::string relative = "tiles/" + r->name + extension_of(format);
-      if (fs::exists(out_dir / relative)) outputs.push_back(relative);
-    }
+    for (const std::string& format : formats) written.push_back("tiles/" + r->name + extension_of(format));
   }
-  if (!r->skipped && !r->quicklook_background.empty()) {
+  if (!r->quicklook_background.empty()) {
     std::vector<QuicklookOutline> outlines;
     for (const BuildingOutput& b : r->buildings) outlines.push_back({b.footprint, b.ok});
     GeoTransform t = plan.transform;
     t.c[0] = plan.transform.to_map(tile_rect.x, tile_rect.y).x();
     t.c[3] = plan.transform.to_map(tile_rect.x, tile_rect.y).y();
     write_quicklook((out_dir / ("tiles/" + r->name + ".png")).string(), r->quicklook_background, t, outlines);
+    written.push_back("tiles/" + r->name + ".png");
   }
-  if (fs::exists(out_dir / ("tiles/" + r->name + ".png"))) outputs.push_back("tiles/" + r->name + ".png");
-  if (!r->skipped) store.mark_done(r->name, fnv1a(r->name, plan.job_key), r->summary);
+  // Each file with its fingerprint, in the done marker and (by the caller) in the tile index:
+  // a later run or merge trusts it only while it is unchanged.
+  TileOutputs outputs;
+  for (const std::string& relative : written) {
+    std::string fingerprint = file_fingerprint((out_dir / relative).string());
+    if (fingerprint.empty()) throw InputError("'" + (out_dir / relative).string() + "': written, but gone or not a file");
+    r->summary += summary_output_line(relative, fingerprint);
+    outputs.emplace_back(relative, std::move(fingerprint));
+  }
+  store.mark_done(r->name, fnv1a(r->name, plan.job_key), r->summary);
   return outputs;
 }
 

@@ -5,6 +5,7 @@
 #include <filesystem>
 #include <memory>
 #include <opencv2/core/mat.hpp>
+#include <set>
 #include <string>
 #include <vector>
 
@@ -61,6 +62,8 @@ struct RunPlan {
   std::uint64_t job_key;  // inputs' identity, every option and the tiling: a complete tile's key
   std::filesystem::path out_dir;
   ReaderPool* readers;  // per-thread open rasters, owned by the run
+  // Files under out_dir that an earlier tile index lists: lodforge's own, which it may replace.
+  const std::set<std::string>* indexed_outputs = nullptr;
 };
 
 struct TileResult {
@@ -89,6 +92,6 @@ cv::Rect tile_read_area(const RunPlan& plan, int tile);
 
 // Writes the tile's files (every format and the quick look) and marks it complete; returns the
 // files it has, relative to out_dir.
-std::vector<std::string> write_tile_outputs(const RunPlan& plan, TileResult& result);
+TileOutputs write_tile_outputs(const RunPlan& plan, TileResult& result);
 
 }  // namespace lodforge

@@ -50,6 +50,13 @@ MaskWindowReader::MaskWindowReader(const std::string& path, const BuildingSelect
     delete impl_;
     throw InputError("'" + path + "': a building colour needs an RGB raster with 3 bands");
   }
+  if (!selector.rgb && impl_->dataset->GetRasterCount() > 1) {
+    const int bands = impl_->dataset->GetRasterCount();
+    GDALClose(impl_->dataset);
+    delete impl_;
+    throw InputError("'" + path + "': has " + std::to_string(bands) + " bands; building values are read from a one-band class raster " +
+                     "(for an RGB label raster give inputs.segmentation.building_rgb, e.g. [0, 0, 255])");
+  }
 }
 
 MaskWindowReader::~MaskWindowReader() {
@@ -109,6 +116,14 @@ int first_window_margin(int halo_px, int tile_px, int max_window_px) {
   return std::max(halo_px, std::min(2 * halo_px, (max_window_px - tile_px) / 2));
 }
 
+namespace {
+
+// The window grows around a building that touches its inner border by the halo, and by one
+// pixel at least: with no halo, the building would never be read whole (and would be lost).
+int growth_px(int halo_px) { return std::max(1, halo_px); }
+
+}  // namespace
+
 TileWindow find_tile_window(const MaskWindowReader& reader, const TileGrid& grid, int tile, int halo_px,
                             int max_window_px, int connectivity) {
   const cv::Rect bounds(0, 0, grid.raster.width, grid.raster.height);
@@ -131,7 +146,8 @@ TileWindow find_tile_window(const MaskWindowReader& reader, const TileGrid& grid
       const cv::Rect global = box + out.window.tl();
       if ((global & tile_rect).empty() || !touches_inner_border(box, out.window, grid.raster)) continue;
       // Possibly owned by this tile and not whole: read around it, if that still fits.
-      const cv::Rect wanted = grown | ((global + cv::Size(2 * halo_px, 2 * halo_px) - cv::Point(halo_px, halo_px)) & bounds);
+      const int grow = growth_px(halo_px);
+      const cv::Rect wanted = grown | ((global + cv::Size(2 * grow, 2 * grow) - cv::Point(grow, grow)) & bounds);
       if (wanted.width > max_window_px || wanted.height > max_window_px) {
         out.too_large.push_back("a building reaching at least from pixel (row " + std::to_string(global.y) + ", col " +
                                 std::to_string(global.x) + ") to (row " + std::to_string(global.y + global.height) + ", col " +

@@ -19,6 +19,14 @@ std::string Check::problem(double value) const {
     return std::string("must be ") + (min_exclusive ? "> " : ">= ") + number(min);
   }
   if (value > max) return "must be <= " + number(max);
+  if (!values.empty()) {
+    std::string all;
+    for (double v : values) {
+      if (v == value) return {};
+      all += (all.empty() ? "" : " or ") + number(v);
+    }
+    return "must be " + all;
+  }
   return {};
 }
 

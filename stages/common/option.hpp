@@ -14,6 +14,7 @@ struct Check {
   double max = std::numeric_limits<double>::infinity();
   bool min_exclusive = false;
   std::vector<std::string> choices;  // for string options
+  std::vector<double> values;        // for numbers taking one of a few values
 
   static Check at_least(double v) { Check c; c.min = v; return c; }
   static Check above(double v) { Check c = at_least(v); c.min_exclusive = true; return c; }
@@ -21,6 +22,11 @@ struct Check {
   static Check one_of(std::vector<std::string> values) {
     Check c;
     c.choices = std::move(values);
+    return c;
+  }
+  static Check one_of_numbers(std::vector<double> allowed) {
+    Check c;
+    c.values = std::move(allowed);
     return c;
   }
   // Empty when value is allowed, else the message ("must be >= 0").

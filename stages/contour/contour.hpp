@@ -20,7 +20,7 @@ struct ContourOptions {
 
   template <class V>
   void visit(V& v) {
-    v("connectivity", connectivity, "pixel connectivity of a building: 4 or 8", Check::between(4, 8));
+    v("connectivity", connectivity, "pixel connectivity of a building: 4 or 8", Check::one_of_numbers({4, 8}));
     v("min_area_m2", min_area_m2, "components smaller than this are dropped (m^2)", Check::at_least(0));
     v("min_hole_area_m2", min_hole_area_m2, "holes smaller than this are filled (m^2)", Check::at_least(0));
   }
