@@ -568,5 +568,71 @@ TEST_F(Rerun, QuietlyWrongOptionsAreRefused) {
   EXPECT_FALSE(fs::exists(dir / "out" / "tiles" / "r0000_c0000.gpkg"));
 }
 
+// A raster of any size as a VRT without sources (every pixel 0): nothing is stored.
+void write_empty_vrt(const fs::path& path, long width, long height, int bands) {
+  std::ofstream vrt(path);
+  vrt << "<VRTDataset rasterXSize=\"" << width << "\" rasterYSize=\"" << height << "\">\n"
+      << "  <GeoTransform>85000, 0.25, 0, 447000, 0, -0.25</GeoTransform>\n";
+  for (int b = 1; b <= bands; ++b) vrt << "  <VRTRasterBand dataType=\"Byte\" band=\"" << b << "\"/>\n";
+  vrt << "</VRTDataset>\n";
+}
+
+// Issue 15: inputs that used to give an empty result without a word.
+TEST_F(Rerun, EmptyOrMisreadMasksAreToldNotSilent) {
+  // A mask without any building pixel: the run ends, and says what to check.
+  write_empty_vrt(dir / "zeros.vrt", 400, 400, 1);
+  std::ofstream(dir / "zeros.yaml") << "inputs: {segmentation: {path: zeros.vrt}}\ntiling: {tile_size_m: 50}\noutput: {dir: zeros_out}\nwork_dir: zeros_work\n";
+  Result r = lodforge("run " + (dir / "zeros.yaml").string());
+  EXPECT_EQ(r.code, 0) << r.output;
+  EXPECT_NE(r.output.find("no building found in"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("inputs.segmentation.building_values right for this raster"), std::string::npos) << r.output;
+  // A three-band (colour) raster read with class values is refused, with the key to use.
+  write_empty_vrt(dir / "rgb.vrt", 400, 400, 3);
+  std::ofstream(dir / "rgb.yaml") << "inputs: {segmentation: {path: rgb.vrt, building_values: [6]}}\noutput: {dir: rgb_out}\nwork_dir: rgb_work\n";
+  r = lodforge("run " + (dir / "rgb.yaml").string());
+  EXPECT_EQ(r.code, 1) << r.output;
+  EXPECT_NE(r.output.find("has 3 bands; building values are read from a one-band class raster"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("building_rgb"), std::string::npos) << r.output;
+  // regularize reads a mask whole: 10^10 pixels are refused with advice, not asked of the allocator.
+  write_empty_vrt(dir / "huge.vrt", 100000, 100000, 1);
+  r = lodforge("regularize --mask " + (dir / "huge.vrt").string() + " --out " + (dir / "huge.gpkg").string());
+  EXPECT_EQ(r.code, 1) << r.output;
+  EXPECT_NE(r.output.find("100000 x 100000 pixels is more than this command reads at once"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("lodforge run JOB.yaml"), std::string::npos) << r.output;
+}
+
+// Issue 15: a full disk stops the run with a message that says so, and nothing that looks
+// complete; with room again, the rerun gives the same files as a run that never failed.
+// (Needs a small tmpfs: mounted when the tests run as root, else skipped.)
+TEST_F(Rerun, AFullDiskIsReportedAndTheRerunCompletes) {
+  const fs::path job = write_job("gpkg, obj");
+  ASSERT_EQ(lodforge("run " + job.string()).code, 0);
+  const auto ref = output_bytes(dir / "out");
+  const fs::path small = dir / "small_disk";
+  fs::create_directories(small);
+  if (test::shell("mount -t tmpfs -o size=400k tmpfs " + small.string() + " 2>&1").code != 0)
+    GTEST_SKIP() << "cannot mount a small tmpfs here (not root?): the full-disk case is not tested";
+  struct Unmount {
+    fs::path at;
+    ~Unmount() { test::shell("umount " + at.string() + " 2>/dev/null"); }
+  } unmount{small};
+  std::ofstream(dir / "full.yaml") << "inputs: {segmentation: {path: city/seg_class.tif}}\ntiling: {tile_size_m: 50}\n"
+                                   << "output: {dir: small_disk/out, formats: [gpkg, obj], quicklook: false}\nwork_dir: full_work\n";
+  Result r = lodforge("run " + (dir / "full.yaml").string());
+  EXPECT_EQ(r.code, 1) << r.output;
+  EXPECT_NE(r.output.find("is full ("), std::string::npos) << r.output;
+  EXPECT_EQ(r.output.find("internal error"), std::string::npos) << r.output;
+  EXPECT_FALSE(fs::exists(small / "out" / "tile_index.geojson"));
+  EXPECT_FALSE(fs::exists(small / "out" / "report.json"));
+  for (const auto& e : fs::recursive_directory_iterator(small))
+    EXPECT_EQ(e.path().filename().string().find("partial"), std::string::npos) << e.path();
+  // Room again: the same disk, larger.
+  ASSERT_EQ(test::shell("mount -o remount,size=64m " + small.string() + " 2>&1").code, 0);
+  r = lodforge("run " + (dir / "full.yaml").string());
+  ASSERT_EQ(r.code, 0) << r.output;
+  const auto rerun = output_bytes(small / "out");
+  EXPECT_TRUE(rerun == ref);
+}
+
 }  // namespace
 }  // namespace lodforge

@@ -1,11 +1,14 @@
 // lodforge: one binary, subcommands registered in one explicit list.
 #include <cstring>
+#include <filesystem>
+#include <new>
 #include <malloc.h>
 #include <iostream>
 #include <gdal_priv.h>
 #include <spdlog/spdlog.h>
 
 #include "commands/commands.hpp"
+#include "io/atomic_file.hpp"
 #include "io/errors.hpp"
 
 namespace {
@@ -58,6 +61,14 @@ int main(int argc, char** argv) {
       return c.run(argc, argv);
     } catch (const lodforge::InputError& e) {
       std::cerr << "lodforge " << c.name << ": error: " << e.what() << '\n';
+      return 1;
+    } catch (const std::filesystem::filesystem_error& e) {
+      // A file or directory lodforge could not create, move or remove: the machine's state, not a bug.
+      std::cerr << "lodforge " << c.name << ": error: " << e.what() << lodforge::disk_full_note(e.path1()) << '\n';
+      return 1;
+    } catch (const std::bad_alloc&) {
+      std::cerr << "lodforge " << c.name << ": error: out of memory; give fewer threads, smaller tiles (tiling.tile_size_m) "
+                << "or a smaller tiling.gdal_cache_mb\n";
       return 1;
     } catch (const std::exception& e) {
       std::cerr << "lodforge " << c.name << ": internal error: " << e.what() << '\n';

@@ -23,6 +23,10 @@ class AtomicTextFile {
   bool done_ = false;
 };
 
+// When the file system holding path has (almost) no room left: "; the disk holding 'DIR' is full
+// (N KB free)"; else empty. Appended to write errors, so that a full disk reads as one.
+std::string disk_full_note(const std::filesystem::path& path);
+
 // The whole text at once.
 void write_text_atomically(const std::filesystem::path& path, const std::string& text);
 

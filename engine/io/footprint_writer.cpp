@@ -6,6 +6,7 @@
 #include <unistd.h>
 
 #include "geometry/polygon.hpp"
+#include "io/atomic_file.hpp"
 #include "io/errors.hpp"
 #include "io/ogr_polygon.hpp"
 
@@ -42,7 +43,7 @@ struct FootprintFileWriter::Impl {
   bool transaction = false;
 
   [[noreturn]] void fail(const std::string& what) {
-    const std::string message = "'" + path + "': " + what + ": " + CPLGetLastErrorMsg();
+    const std::string message = "'" + path + "': " + what + ": " + CPLGetLastErrorMsg() + disk_full_note(path);
     close_and_remove();
     throw InputError(message);
   }
@@ -84,7 +85,7 @@ FootprintFileWriter::FootprintFileWriter(const std::string& path, const Footprin
   CPLSetThreadLocalConfigOption("OGR_SQLITE_SYNCHRONOUS", nullptr);
   CPLSetThreadLocalConfigOption("SPATIALITE_LOAD", nullptr);
   if (!impl_->dataset) {
-    const std::string message = "'" + path + "': cannot create: " + CPLGetLastErrorMsg();
+    const std::string message = "'" + path + "': cannot create: " + CPLGetLastErrorMsg() + disk_full_note(path);
     delete impl_;
     throw InputError(message);
   }
@@ -161,7 +162,7 @@ void FootprintFileWriter::finish() {
   GDALClose(impl_->dataset);  // GeoJSON writes its closing bytes here
   impl_->dataset = nullptr;
   if (CPLGetLastErrorType() == CE_Failure) {
-    const std::string message = "'" + impl_->path + "': writing failed: " + CPLGetLastErrorMsg();
+    const std::string message = "'" + impl_->path + "': writing failed: " + CPLGetLastErrorMsg() + disk_full_note(impl_->path);
     impl_->close_and_remove();
     throw InputError(message);
   }

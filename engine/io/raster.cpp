@@ -53,6 +53,12 @@ MaskRaster read_building_mask(const std::string& path, const BuildingSelector& s
     out.crs_wkt = wkt ? wkt : "";
     CPLFree(wkt);
   }
+  // The whole mask is read at once (4 bytes a pixel and more): a raster of a region is run in tiles.
+  constexpr double kMaxPixels = 1e9;
+  if (double(d->GetRasterXSize()) * double(d->GetRasterYSize()) > kMaxPixels)
+    throw InputError("'" + path + "': " + std::to_string(d->GetRasterXSize()) + " x " + std::to_string(d->GetRasterYSize()) +
+                     " pixels is more than this command reads at once (10^9); process it in tiles with `lodforge run JOB.yaml` " +
+                     "(lodforge config --defaults prints a job)");
   if (selector.rgb) {
     if (d->GetRasterCount() < 3)
       throw InputError("'" + path + "': has " + std::to_string(d->GetRasterCount()) +

@@ -10,6 +10,7 @@
 #include <sys/file.h>
 #include <unistd.h>
 
+#include "io/atomic_file.hpp"
 #include "io/errors.hpp"
 
 namespace lodforge {
@@ -95,7 +96,8 @@ void write_atomically(const fs::path& path, const std::string& payload, std::uin
     if (!out) {
       std::error_code ec;
       fs::remove(temp, ec);
-      throw InputError("'" + path.string() + "': cannot write checkpoint (disk full or not writable?)");
+      const std::string full = disk_full_note(path);
+      throw InputError("'" + path.string() + "': cannot write checkpoint" + (full.empty() ? std::string(" (disk full or not writable?)") : full));
     }
   }
   fs::rename(temp, path);

@@ -141,6 +141,9 @@ void write_index_and_report(const Totals& totals, const RunPlan& plan, const std
   if (totals.tiles_processed > 0)
     spdlog::info("one-core time by stage: contours {:.1f} s, regularization {:.1f} s, heights {:.1f} s, writing {:.1f} s",
                  totals.contour_seconds, totals.core_seconds, totals.heights_seconds, totals.write_seconds);
+  if (totals.buildings == 0 && totals.dropped_small == 0 && totals.too_large.empty())
+    spdlog::warn("no building found in {}{}: is inputs.segmentation.{} right for this raster?", job.inputs.segmentation.path,
+                 shard.count > 1 ? " (in this shard)" : "", job.inputs.segmentation.building_rgb.empty() ? "building_values" : "building_rgb");
   spdlog::info("outputs in {} (tile_index{}.geojson, report{}.json)", out_dir.string(), suffix, suffix);
 }
 
