@@ -56,7 +56,15 @@ std::vector<BuildingOutput> regularize_tile(const TileBuildings& tile, const Job
     o.id = std::int64_t(b.first_row) * raster_width + b.first_col;
     o.first_row = b.first_row;
     o.first_col = b.first_col;
-    BuildingResult r = regularize_with(job.regularizer, b.rings, pixel_size, job.stages.core);
+    BuildingResult r;
+    try {
+      r = regularize_with(job.regularizer, b.rings, pixel_size, job.stages.core);
+    } catch (const std::exception& e) {  // one building's failure is its own, never the run's
+      r.ok = false;
+      r.failed_stage = "internal";
+      r.reason = e.what();
+      r.footprint = fallback_footprint(b.rings, job.stages.core.fallback.tolerance_m);
+    }
     o.footprint = std::move(r.footprint);
     o.ok = r.ok;
     o.stage = r.failed_stage;
@@ -296,7 +304,13 @@ std::shared_ptr<TileResult> process_tile(const RunPlan& plan, int tile) {
         }
         const auto started = Clock::now();  // (reads excluded, as for every stage)
         Heights& h = (*heights)[i];
-        h = building_heights(footprint, dsm, dtm ? &*dtm : nullptr, job.stages.heights);
+        try {
+          h = building_heights(footprint, dsm, dtm ? &*dtm : nullptr, job.stages.heights);
+        } catch (const std::exception& e) {  // the building keeps its LOD0, with the reason
+          h = Heights{};
+          h.ok = false;
+          h.reason = std::string("internal: ") + e.what();
+        }
         // The block must be a valid shell to count as LOD1; decided here so that the report,
         // the summary and every file agree.
         if (h.ok) {
