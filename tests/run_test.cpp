@@ -1,5 +1,6 @@
 // The batch engine end to end: tiling, determinism, kill and resume, shards, job errors.
 #include <gtest/gtest.h>
+#include <random>
 #include <regex>
 
 #include <array>
@@ -632,6 +633,49 @@ TEST_F(Rerun, AFullDiskIsReportedAndTheRerunCompletes) {
   ASSERT_EQ(r.code, 0) << r.output;
   const auto rerun = output_bytes(small / "out");
   EXPECT_TRUE(rerun == ref);
+}
+
+// Issue 15, fault injection: random bytes of random checkpoints flipped, random outputs deleted;
+// each rerun ends in the clean run's bytes.
+TEST_F(Rerun, RandomFaultsEndInTheSameBytesAfterARerun) {
+  const fs::path job = write_job("gpkg, obj");
+  ASSERT_EQ(lodforge("run " + job.string()).code, 0);
+  const auto ref = output_bytes(dir / "out");
+  std::mt19937 rng(15);
+  for (int round = 0; round < 6; ++round) {
+    std::vector<fs::path> checkpoints, outputs;
+    for (const auto& e : fs::directory_iterator(dir / "work"))
+      if (e.path().extension() != ".lock") checkpoints.push_back(e.path());
+    for (const auto& e : fs::directory_iterator(dir / "out" / "tiles")) outputs.push_back(e.path());
+    std::sort(checkpoints.begin(), checkpoints.end());
+    std::sort(outputs.begin(), outputs.end());
+    ASSERT_FALSE(checkpoints.empty());
+    const fs::path victim = checkpoints[rng() % checkpoints.size()];
+    std::string bytes = slurp(victim);
+    if (!bytes.empty()) {
+      bytes[rng() % bytes.size()] ^= char(1 << (rng() % 8));
+      std::ofstream(victim, std::ios::binary | std::ios::trunc) << bytes;
+    }
+    // The tile's done marker goes too (half of the time), so the changed checkpoint would be used.
+    if (rng() % 2) fs::remove(victim.parent_path() / (victim.stem().string() + ".done"));
+    const fs::path gone = outputs[rng() % outputs.size()];
+    fs::remove(gone);
+    const Result r = lodforge("run " + job.string());
+    ASSERT_EQ(r.code, 0) << victim << "\n" << r.output;
+    EXPECT_TRUE(output_bytes(dir / "out") == ref) << "round " << round << ": " << victim << " changed, " << gone << " deleted";
+  }
+  ASSERT_EQ(lodforge("merge " + (dir / "out").string()).code, 0);
+}
+
+// Issue 15: merge takes the shards of one run only.
+TEST_F(Rerun, MergeRefusesShardsOfDifferentRuns) {
+  const fs::path job = write_job("gpkg");
+  ASSERT_EQ(lodforge("run " + job.string() + " --shard 0/2").code, 0);
+  ASSERT_EQ(lodforge("run " + job.string() + " --shard 1/2 --set stages.labeling.kappa2=2").code, 0);
+  const Result r = lodforge("merge " + (dir / "out").string());
+  EXPECT_EQ(r.code, 1) << r.output;
+  EXPECT_NE(r.output.find("from a run with other inputs or options"), std::string::npos) << r.output;
+  EXPECT_FALSE(fs::exists(dir / "out" / "merged"));
 }
 
 }  // namespace
