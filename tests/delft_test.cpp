@@ -12,12 +12,12 @@
 namespace lodforge {
 namespace {
 
-std::string delft(const std::string& name) { return test::shared_data() + "/delft-ahn3-bgt/derived/" + name; }
+std::string delft(const std::string& name) { return test::test_data() + "/delft-ahn3-bgt/derived/" + name; }
 
 class Delft : public ::testing::TestWithParam<const char*> {};
 
 TEST_P(Delft, EveryBuildingGetsAValidPolygonAndAStatus) {
-  ASSERT_TRUE(std::filesystem::exists(delft("top_class_50cm.tif"))) << "shared data missing at " << test::shared_data();
+  ASSERT_TRUE(std::filesystem::exists(delft("top_class_50cm.tif"))) << "shared data missing at " << test::test_data();
   const MaskRaster raster = read_building_mask(delft("top_class_50cm.tif"), BuildingSelector{});
   EXPECT_NEAR(raster.transform.pixel_size(), 0.5, 1e-12);
   const ContourResult contours = extract_contours(raster.mask, raster.transform, ContourOptions{});

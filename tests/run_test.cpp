@@ -76,7 +76,7 @@ class Run : public ::testing::Test {
 };
 
 TEST_F(Run, DelftSmallTilesGiveTheSameFootprintsAsOneTile) {
-  const std::string seg = test::shared_data() + "/delft-ahn3-bgt/derived/top_class_50cm.tif";
+  const std::string seg = test::test_data() + "/delft-ahn3-bgt/derived/top_class_50cm.tif";
   ASSERT_TRUE(fs::exists(seg));
   Result r = lodforge("run " + job("small", seg, 32).string());
   ASSERT_EQ(r.code, 0) << r.output;
@@ -355,7 +355,7 @@ TEST_F(Run, DefaultJobIsPrintedAndReadsBackUnchanged) {
   EXPECT_NE(r.output.find("    kappa2: 10"), std::string::npos) << r.output;
   // The printed defaults are a valid job once a segmentation is given.
   std::string text = r.output;
-  text.replace(text.find("path: \"\""), 8, "path: " + test::shared_data() + "/delft-ahn3-bgt/derived/top_class_50cm.tif");
+  text.replace(text.find("path: \"\""), 8, "path: " + test::test_data() + "/delft-ahn3-bgt/derived/top_class_50cm.tif");
   std::ofstream(dir / "defaults.yaml") << text;
   const Result run = lodforge("run " + (dir / "defaults.yaml").string());
   EXPECT_EQ(run.code, 0) << run.output;

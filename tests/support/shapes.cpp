@@ -3,6 +3,7 @@
 #include <Eigen/Geometry>
 #include <cmath>
 #include <cstdlib>
+#include <filesystem>
 #include <functional>
 #include <memory>
 
@@ -67,9 +68,18 @@ RasterizedShape rasterize_shape_m(const PolygonWithHoles& truth, double pixel_si
 
 double iou(const PolygonWithHoles& a, const PolygonWithHoles& b) { return polygon_iou(a, b); }
 
-std::string shared_data() {
-  if (const char* env = std::getenv("LODFORGE_SHARED_DATA")) return env;
-  return LODFORGE_DEFAULT_SHARED_DATA;
+std::string test_data() {
+  if (const char* env = std::getenv("LODFORGE_TEST_DATA")) return env;
+  return std::string(LODFORGE_SOURCE_DIR) + "/tests/data";
+}
+
+std::string schemas() {
+  const auto has_both = [](const std::string& dir) {
+    return std::filesystem::exists(dir + "/citygml2-schemas/citygml/profiles/base/2.0/CityGML.xsd") &&
+           std::filesystem::exists(dir + "/cityjson2-schemas/cityjson.min.schema.json");
+  };
+  if (const char* env = std::getenv("LODFORGE_SCHEMAS")) return has_both(env) ? env : "";
+  return has_both(LODFORGE_DEFAULT_SHARED_DATA) ? LODFORGE_DEFAULT_SHARED_DATA : "";
 }
 
 }  // namespace lodforge::test

@@ -33,7 +33,15 @@ RasterizedShape rasterize_shape_m(const PolygonWithHoles& truth, double pixel_si
 
 double iou(const PolygonWithHoles& a, const PolygonWithHoles& b);
 
-// Directory of ../shared/data (LODFORGE_SHARED_DATA overrides).
-std::string shared_data();
+// The open data sets the tests read: tests/data (LODFORGE_TEST_DATA overrides).
+std::string test_data();
+
+// A directory holding the official schemas, citygml2-schemas/ and cityjson2-schemas/:
+// LODFORGE_SCHEMAS, else ../shared/data beside the clone when it has them; empty when neither.
+std::string schemas();
+// Why a schema validation was skipped, and how to run it.
+inline constexpr const char* kNoSchemas =
+    "no CityGML 2.0 / CityJSON 2.0 schemas found: set LODFORGE_SCHEMAS to a directory holding citygml2-schemas/ "
+    "and cityjson2-schemas/ (the official schemas) to validate the outputs against them";
 
 }  // namespace lodforge::test
