@@ -74,8 +74,94 @@ TEST_F(Cli, UnwritableOutputAndBadOptions) {
   EXPECT_NE(r.output.find("labeling.kappa2: must be >= 0"), std::string::npos) << r.output;
   EXPECT_NE(r.output.find("smoothing.bogus: unknown option"), std::string::npos) << r.output;
   r = lodforge("regularize --frobnicate");
-  EXPECT_EQ(r.code, 1);
+  EXPECT_EQ(r.code, 2);  // a usage error
   EXPECT_NE(r.output.find("unknown argument '--frobnicate'"), std::string::npos) << r.output;
+}
+
+// Issue 16: a command line like the tools people know (CLI11 underneath).
+TEST_F(Cli, OptionsAnywhereShortFormsHelpAndSuggestions) {
+  ASSERT_EQ(lodforge("synth --out " + path("city") + " --size-m 120 --seed 3").code, 0);
+  std::ofstream(path("job.yaml")) << "inputs: {segmentation: {path: city/seg_class.tif}}\ntiling: {tile_size_m: 60}\n"
+                                  << "output: {dir: out, formats: [gpkg], quicklook: false}\nwork_dir: work\n";
+  // Options before the job file, the short form of --threads, a job key spelled as in the job.
+  CommandRun r = lodforge("run --threads 1 -j 2 " + path("job.yaml"));
+  EXPECT_EQ(r.code, 2) << r.output;  // --threads given twice
+  EXPECT_NE(r.output.find("--threads"), std::string::npos) << r.output;
+  r = lodforge("run -j 2 --set stages.labeling.kappa2=5 " + path("job.yaml") + " --progress none");
+  ASSERT_EQ(r.code, 0) << r.output;
+  EXPECT_EQ(r.output.find("{\"progress\""), std::string::npos) << r.output;
+  // regularize takes the same spelling of stage keys as a job (and the short one).
+  r = lodforge("regularize -j 1 --mask " + path("city/seg_class.tif") + " --out " + path("r.gpkg") + " --set stages.labeling.kappa2=-1");
+  EXPECT_EQ(r.code, 1) << r.output;
+  EXPECT_NE(r.output.find("labeling.kappa2: must be >= 0"), std::string::npos) << r.output;
+  // -h and --help on every command, with the exit codes.
+  for (const char* command : {"run", "merge", "eval", "config", "regularize", "synth", "options"}) {
+    for (const char* help : {"-h", "--help"}) {
+      r = lodforge(std::string(command) + " " + help);
+      EXPECT_EQ(r.code, 0) << command << " " << help << "\n" << r.output;
+      EXPECT_NE(r.output.find("exit codes: 0 done, 1 error in the input or the run, 2 usage error"), std::string::npos) << command;
+    }
+  }
+  // Did you mean: a mistyped command or option.
+  r = lodforge("rnu " + path("job.yaml"));
+  EXPECT_EQ(r.code, 2);
+  EXPECT_NE(r.output.find("unknown command 'rnu'; did you mean 'run'?"), std::string::npos) << r.output;
+  r = lodforge("run " + path("job.yaml") + " --threds 2");
+  EXPECT_EQ(r.code, 2);
+  EXPECT_NE(r.output.find("unknown argument '--threds'; did you mean --threads?"), std::string::npos) << r.output;
+  // Flags' values are checked under the flags' names.
+  r = lodforge("synth --out " + path("x") + " --size-m abc");
+  EXPECT_EQ(r.code, 2);
+  EXPECT_NE(r.output.find("--size-m 'abc': expected metres"), std::string::npos) << r.output;
+  r = lodforge("run");
+  EXPECT_EQ(r.code, 2);
+  EXPECT_NE(r.output.find("give a job file"), std::string::npos) << r.output;
+}
+
+// Issue 16: logs on standard error at the level asked for; data on standard output.
+TEST_F(Cli, LogsGoToStandardErrorAtTheLevelAskedFor) {
+  ASSERT_EQ(lodforge("synth --out " + path("city") + " --size-m 120 --seed 3").code, 0);
+  const std::string bin = LODFORGE_BINARY;
+  const std::string regularize = bin + " regularize --mask " + path("city/seg_class.tif") + " --out " + path("r.gpkg");
+  // (test::shell adds 2>&1 after the command: the redirections inside the parentheses come first)
+  CommandRun r = test::shell("(" + regularize + " 2>/dev/null)");
+  EXPECT_EQ(r.code, 0);
+  EXPECT_EQ(r.output, "");  // nothing on stdout
+  r = test::shell("(" + regularize + " 2>&1 >/dev/null)");
+  EXPECT_NE(r.output.find("[info] wrote"), std::string::npos) << r.output;
+  for (const std::string quiet : {" -q", " --log-level warn", " --log-level=error"}) {
+    r = test::shell(regularize + quiet + " 2>&1");
+    EXPECT_EQ(r.code, 0) << quiet << r.output;
+    EXPECT_EQ(r.output.find("[info]"), std::string::npos) << quiet << "\n" << r.output;
+  }
+  r = test::shell("LODFORGE_LOG_LEVEL=warn " + regularize + " 2>&1");
+  EXPECT_EQ(r.output.find("[info]"), std::string::npos) << r.output;
+  r = test::shell(regularize + " --log-level loud 2>&1");
+  EXPECT_EQ(r.code, 2);
+  EXPECT_NE(r.output.find("log level 'loud': must be one of trace, debug, info, warn, error"), std::string::npos) << r.output;
+  // config --defaults prints the job (data) on standard output.
+  r = test::shell("(" + bin + " config --defaults 2>/dev/null)");
+  EXPECT_NE(r.output.find("inputs:"), std::string::npos);
+  // --version names the revision and the libraries.
+  r = test::shell(bin + " --version");
+  EXPECT_EQ(r.code, 0);
+  for (const char* name : {"(git ", "GDAL 3.", "CGAL 5.", "TBB ", "OpenCV 4.", "Ceres "}) EXPECT_NE(r.output.find(name), std::string::npos) << name << r.output;
+}
+
+// Issue 16: inputs through GDAL's virtual file systems, and GDAL configuration options.
+TEST_F(Cli, GdalVirtualFileSystemsAndConfigOptions) {
+  ASSERT_EQ(lodforge("synth --out " + path("city") + " --size-m 120 --seed 3").code, 0);
+  ASSERT_EQ(test::shell("/usr/bin/python3 -c \"import zipfile; zipfile.ZipFile('" + path("city/city.zip") + "', 'w').write('" +
+                        path("city/seg_class.tif") + "', 'seg_class.tif')\"").code, 0);
+  CommandRun r = lodforge("regularize --mask /vsizip/" + path("city/city.zip") + "/seg_class.tif --out " + path("z.gpkg") +
+                          " --config GDAL_CACHEMAX 64");
+  ASSERT_EQ(r.code, 0) << r.output;
+  CommandRun direct = lodforge("regularize --mask " + path("city/seg_class.tif") + " --out " + path("d.gpkg"));
+  ASSERT_EQ(direct.code, 0) << direct.output;
+  EXPECT_EQ(test::slurp(path("z.gpkg")).size(), test::slurp(path("d.gpkg")).size());
+  r = lodforge("regularize --mask /vsizip/" + path("city/city.zip") + "/missing.tif --out " + path("m.gpkg"));
+  EXPECT_EQ(r.code, 1) << r.output;
+  EXPECT_NE(r.output.find("not a raster GDAL can read"), std::string::npos) << r.output;
 }
 
 long feature_count(const std::string& file) {

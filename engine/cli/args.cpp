@@ -1,57 +1,144 @@
 #include "cli/args.hpp"
 
-#include <sstream>
+#include <CLI/CLI.hpp>
+#include <algorithm>
+#include <cctype>
+#include <list>
 
 #include "io/errors.hpp"
 
 namespace lodforge {
 
-Args& Args::value(const std::string& name, const std::string& meta, const std::string& help, bool repeatable) {
-  specs_.push_back({name, meta, help, true, repeatable});
+namespace {
+
+// Edits (insertions, deletions, substitutions) from a to b.
+std::size_t edit_distance(const std::string& a, const std::string& b) {
+  std::vector<std::size_t> row(b.size() + 1);
+  for (std::size_t j = 0; j <= b.size(); ++j) row[j] = j;
+  for (std::size_t i = 1; i <= a.size(); ++i) {
+    std::size_t diagonal = row[0];
+    row[0] = i;
+    for (std::size_t j = 1; j <= b.size(); ++j) {
+      const std::size_t up = row[j];
+      row[j] = std::min({row[j] + 1, row[j - 1] + 1, diagonal + (a[i - 1] == b[j - 1] ? 0 : 1)});
+      diagonal = up;
+    }
+  }
+  return row[b.size()];
+}
+
+}  // namespace
+
+struct Args::Impl {
+  CLI::App app;
+  struct Declared {
+    std::string name;
+    CLI::Option* option;
+    std::vector<std::string>* values;  // for options with values
+  };
+  std::list<std::vector<std::string>> storage;  // stable addresses for CLI11 to fill
+  std::vector<Declared> declared;
+  Impl(const std::string& summary, const std::string& name) : app(summary, name) {}
+};
+
+Args::Args(std::string command, std::string summary)
+    : impl_(std::make_unique<Impl>(std::move(summary), "lodforge " + command)), command_(std::move(command)) {
+  impl_->app.get_formatter()->column_width(32);
+  impl_->app.footer("exit codes: 0 done, 1 error in the input or the run, 2 usage error");
+  // Every command's logging options (applied by main before the command runs).
+  value("log-level", "LEVEL", "trace, debug, info (default), warn or error; also LODFORGE_LOG_LEVEL");
+  flag("quiet", "warnings and errors only, no progress", "q");
+  flag("verbose", "debug messages too", "v");
+  {  // GDAL configuration options, as GDAL's utilities take them (applied by main)
+    std::vector<std::string>& values = impl_->storage.emplace_back();
+    CLI::Option* o = impl_->app.add_option("--config", values, "a GDAL configuration option, e.g. --config GDAL_CACHEMAX 512 (repeatable)");
+    o->type_name("KEY VALUE")->expected(2)->multi_option_policy(CLI::MultiOptionPolicy::TakeAll);
+    impl_->declared.push_back({"config", o, &values});
+  }
+}
+
+Args::~Args() = default;
+
+Args& Args::value(const std::string& name, const std::string& meta, const std::string& help, bool repeatable,
+                  const std::string& short_name) {
+  std::vector<std::string>& values = impl_->storage.emplace_back();
+  CLI::Option* o = impl_->app.add_option((short_name.empty() ? "" : "-" + short_name + ",") + "--" + name, values, help);
+  o->type_name(meta)->expected(1)->allow_extra_args(false);
+  if (repeatable) o->multi_option_policy(CLI::MultiOptionPolicy::TakeAll);
+  else o->multi_option_policy(CLI::MultiOptionPolicy::Throw);
+  impl_->declared.push_back({name, o, &values});
   return *this;
 }
 
-Args& Args::flag(const std::string& name, const std::string& help) {
-  specs_.push_back({name, "", help, false, false});
+Args& Args::flag(const std::string& name, const std::string& help, const std::string& short_name) {
+  if (name == "help") return *this;  // -h/--help is every command's
+  CLI::Option* o = impl_->app.add_flag((short_name.empty() ? "" : "-" + short_name + ",") + "--" + name, help);
+  impl_->declared.push_back({name, o, nullptr});
+  return *this;
+}
+
+Args& Args::positional(const std::string& name, const std::string& meta, const std::string& help) {
+  std::vector<std::string>& values = impl_->storage.emplace_back();
+  CLI::Option* o = impl_->app.add_option(name, values, help);
+  o->type_name(meta)->expected(1);
+  impl_->declared.push_back({name, o, &values});
   return *this;
 }
 
 void Args::parse(int argc, char** argv, int first) {
+  // An option nobody declared is named, with the nearest declared one if it is close (checked
+  // first: CLI11 would hand the value after it to a positional argument and complain of that).
+  const auto declared = [&](const std::string& word) {
+    if (word == "-h" || word == "--help") return true;
+    for (const auto& d : impl_->declared)
+      if (d.option->check_name(word)) return true;
+    return false;
+  };
   for (int i = first; i < argc; ++i) {
-    std::string arg = argv[i];
-    std::string inline_value;
-    bool has_inline = false;
-    if (auto eq = arg.find('='); arg.rfind("--", 0) == 0 && eq != std::string::npos) {
-      inline_value = arg.substr(eq + 1);
-      arg = arg.substr(0, eq);
-      has_inline = true;
-    }
-    const Spec* spec = nullptr;
-    for (const Spec& s : specs_) if ("--" + s.name == arg) spec = &s;
-    if (!spec) throw InputError("unknown argument '" + arg + "' (see lodforge " + command_ + " --help)");
-    if (!spec->takes_value) {
-      values_[spec->name].push_back("true");
+    const std::string argument = argv[i];
+    const bool option = argument.rfind("--", 0) == 0 || (argument.size() == 2 && argument[0] == '-' && std::isalpha(static_cast<unsigned char>(argument[1])));
+    if (!option) continue;
+    const std::string word = argument.substr(0, argument.find('='));
+    if (declared(word)) {
+      const auto it = std::find_if(impl_->declared.begin(), impl_->declared.end(), [&](const auto& d) { return d.option->check_name(word); });
+      if (it != impl_->declared.end() && it->values && word == argument) i += it->name == "config" ? 2 : 1;  // its values, whatever they look like
       continue;
     }
-    if (!has_inline) {
-      if (i + 1 >= argc) throw InputError(arg + " needs a value (" + spec->meta + ")");
-      inline_value = argv[++i];
+    std::string suggestion;
+    std::size_t best = 3;
+    for (const auto& d : impl_->declared) {
+      if (d.option->get_lnames().empty()) continue;  // a positional argument
+      const std::size_t distance = edit_distance(word, "--" + d.name);
+      if (distance < best) { best = distance; suggestion = "--" + d.name; }
     }
-    if (!spec->repeatable && values_.count(spec->name))
-      throw InputError(arg + " given more than once");
-    values_[spec->name].push_back(inline_value);
+    throw UsageError("unknown argument '" + word + "'" + (suggestion.empty() ? "" : "; did you mean " + suggestion + "?") +
+                     " (see lodforge " + command_ + " --help)");
+  }
+  std::vector<std::string> arguments;
+  for (int i = argc - 1; i >= first; --i) arguments.emplace_back(argv[i]);  // CLI11 takes them reversed
+  try {
+    impl_->app.parse(arguments);
+  } catch (const CLI::CallForHelp&) {
+    values_["help"] = {"true"};
+    return;
+  } catch (const CLI::ParseError& e) {
+    throw UsageError(std::string(e.what()) + " (see lodforge " + command_ + " --help)");
+  }
+  for (const auto& d : impl_->declared) {
+    if (d.option->count() == 0) continue;
+    values_[d.name] = d.values ? *d.values : std::vector<std::string>{"true"};
   }
 }
 
 std::optional<std::string> Args::get(const std::string& name) const {
   auto it = values_.find(name);
-  if (it == values_.end()) return std::nullopt;
+  if (it == values_.end() || it->second.empty()) return std::nullopt;
   return it->second.back();
 }
 
 std::string Args::require(const std::string& name) const {
   auto v = get(name);
-  if (!v) throw InputError("--" + name + " is required (see lodforge " + command_ + " --help)");
+  if (!v) throw UsageError("--" + name + " is required (see lodforge " + command_ + " --help)");
   return *v;
 }
 
@@ -60,16 +147,6 @@ std::vector<std::string> Args::all(const std::string& name) const {
   return it == values_.end() ? std::vector<std::string>{} : it->second;
 }
 
-std::string Args::help() const {
-  std::ostringstream s;
-  s << "usage: lodforge " << command_ << " [options]\n\n" << summary_ << "\n\noptions:\n";
-  for (const Spec& spec : specs_) {
-    std::string left = "  --" + spec.name + (spec.takes_value ? " " + spec.meta : "");
-    if (left.size() < 30) left.resize(30, ' ');
-    else left += "\n" + std::string(30, ' ');
-    s << left << spec.help << (spec.repeatable ? " (repeatable)" : "") << '\n';
-  }
-  return s.str();
-}
+std::string Args::help() const { return impl_->app.help(); }
 
 }  // namespace lodforge

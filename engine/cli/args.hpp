@@ -1,7 +1,11 @@
-// A small command-line parser: every flag declared once with its help; unknown flags and
-// missing values are errors that name the flag.
+// The command line of every subcommand, parsed by CLI11: every option declared once with its
+// help; options and positional arguments in any order; -h/--help everywhere; short forms where
+// GDAL's utilities have them (-j threads). Usage errors (an unknown option, with the nearest
+// known one suggested; a missing value; a repeated single option) throw UsageError (exit 2).
+// CLI11 stays inside args.cpp.
 #pragma once
 #include <map>
+#include <memory>
 #include <optional>
 #include <string>
 #include <vector>
@@ -10,25 +14,30 @@ namespace lodforge {
 
 class Args {
  public:
-  Args(std::string command, std::string summary) : command_(std::move(command)), summary_(std::move(summary)) {}
-  // A flag taking a value ("--out FILE"), repeatable if `repeatable`.
-  Args& value(const std::string& name, const std::string& meta, const std::string& help, bool repeatable = false);
-  Args& flag(const std::string& name, const std::string& help);  // a switch without value
-  // Parses argv; throws InputError for unknown flags, missing values, repeated single flags.
+  Args(std::string command, std::string summary);
+  ~Args();
+  Args(const Args&) = delete;
+  Args& operator=(const Args&) = delete;
+  // An option taking a value ("--out FILE", "--out=FILE"; "-j 2" with short_name "j"),
+  // repeatable if `repeatable`.
+  Args& value(const std::string& name, const std::string& meta, const std::string& help, bool repeatable = false,
+              const std::string& short_name = "");
+  Args& flag(const std::string& name, const std::string& help, const std::string& short_name = "");  // a switch
+  // A positional argument (the job file, the output directory), optional for the parser: the
+  // command says when it is missing.
+  Args& positional(const std::string& name, const std::string& meta, const std::string& help);
+  // Parses argv[first..]; throws UsageError. "-h"/"--help" sets has("help").
   void parse(int argc, char** argv, int first);
   bool has(const std::string& name) const { return values_.count(name) > 0; }
   std::optional<std::string> get(const std::string& name) const;
-  std::string require(const std::string& name) const;  // throws InputError if absent
+  std::string require(const std::string& name) const;  // throws UsageError if absent
   std::vector<std::string> all(const std::string& name) const;
   std::string help() const;
 
  private:
-  struct Spec {
-    std::string name, meta, help;
-    bool takes_value, repeatable;
-  };
-  std::string command_, summary_;
-  std::vector<Spec> specs_;
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+  std::string command_;
   std::map<std::string, std::vector<std::string>> values_;
 };
 

@@ -423,13 +423,12 @@ void remove_stale_partials(const fs::path& merged) {
 int run_merge(int argc, char** argv) {
   Args args("merge", "Combines the per-tile files of a run (all shards) into one file per format in OUT_DIR/merged/,\n"
                      "and the shards' tile indexes and run reports into OUT_DIR/tile_index.geojson and OUT_DIR/report.json.\nusage: lodforge merge OUT_DIR [options]");
-  args.value("formats", "F[,F...]", "formats to merge (default: every format found)").flag("help", "show this help");
-  if (argc < 3 || std::string(argv[2]) == "--help") {
-    if (argc >= 3) { std::cout << args.help(); return 0; }
-    throw InputError("give the run's output directory: lodforge merge OUT_DIR");
-  }
-  const fs::path dir = argv[2];
-  args.parse(argc, argv, 3);
+  args.positional("dir", "OUT_DIR", "the run's output directory")
+      .value("formats", "F[,F...]", "formats to merge (default: every format found)");
+  args.parse(argc, argv, 2);
+  if (args.has("help")) { std::cout << args.help(); return 0; }
+  if (!args.has("dir")) throw UsageError("give the run's output directory: lodforge merge OUT_DIR");
+  const fs::path dir = *args.get("dir");
   if (!fs::is_directory(dir / "tiles")) throw InputError("'" + dir.string() + "': no tiles/ directory; is it a lodforge run's output.dir?");
   std::vector<std::string> formats = {"citygml", "cityjson", "obj", "gpkg", "geojson"};
   if (auto f = args.get("formats")) {

@@ -73,9 +73,8 @@ int run_regularize(int argc, char** argv) {
       .value("route", "NAME", "corner route: 'original' (lines fitted to the raw contour) or 'deformed' (the paper)")
       .value("regularizer", "NAME", "one of " + regularizer_list() + " (default: deformation, the paper's chain; see lodforge options)")
       .value("stats", "FILE", "also write a JSON summary: counts by status and the regularization time per building (mean, median, p99; also by contour size)")
-      .value("threads", "N", "worker threads (default: all cores)")
-      .value("set", "KEY=VALUE", "set any stage option, e.g. labeling.kappa2=5 (see lodforge options)", true)
-      .flag("help", "show this help");
+      .value("threads", "N", "worker threads (default: all cores)", false, "j")
+      .value("set", "KEY=VALUE", "set any stage option as in a job, e.g. stages.labeling.kappa2=5 (see lodforge options)", true);
   args.parse(argc, argv, 2);
   if (args.has("help")) { std::cout << args.help(); return 0; }
   const std::string mask_path = args.require("mask");

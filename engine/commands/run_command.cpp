@@ -120,21 +120,22 @@ std::string file_identity(const std::string& path) {
 int run_job(int argc, char** argv) {
   Args args("run", "Processes a whole area as described by a YAML job: tiles, checkpoints, resumable.\n"
                    "usage: lodforge run JOB.yaml [options]   (lodforge config --defaults prints a full job)");
-  args.value("threads", "N", "worker threads, overrides the job's threads (0 = all cores)")
+  args.positional("job", "JOB.yaml", "the job file")
+      .value("threads", "N", "worker threads, overrides the job's threads (0 = all cores)", false, "j")
       .value("shard", "K/N", "process only the tiles of shard K of N (0 <= K < N); N shards give the single-run outputs")
       .value("set", "KEY=VALUE", "override any job option, e.g. stages.labeling.kappa2=5", true)
-      .flag("help", "show this help");
-  if (argc < 3 || std::string(argv[2]).rfind("--", 0) == 0) {
-    if (argc >= 3 && std::string(argv[2]) == "--help") { std::cout << args.help(); return 0; }
-    throw InputError("give a job file: lodforge run JOB.yaml (see lodforge config --defaults)");
-  }
-  const std::string job_path = argv[2];
-  args.parse(argc, argv, 3);
+      .value("progress", "MODE", "auto (a bar on a terminal, else JSON lines on stderr), bar, json or none (-q: none)");
+  args.parse(argc, argv, 2);
   if (args.has("help")) { std::cout << args.help(); return 0; }
+  if (!args.has("job")) throw UsageError("give a job file: lodforge run JOB.yaml (lodforge config --defaults prints one)");
+  const std::string job_path = *args.get("job");
   std::vector<std::string> overrides = args.all("set");
   if (auto t = args.get("threads")) overrides.push_back("threads=" + *t);
   const Job job = load_job(job_path, overrides);
   const Shard shard = args.get("shard") ? parse_shard(*args.get("shard")) : Shard{};
+  const std::string progress_mode = args.has("quiet") ? "none" : args.get("progress").value_or("auto");
+  if (progress_mode != "auto" && progress_mode != "bar" && progress_mode != "json" && progress_mode != "none")
+    throw UsageError("--progress '" + progress_mode + "': must be one of auto, bar, json, none");
 
   // Validate the inputs and the output before any work. Rasters on the segmentation's very grid
   // (the usual case) have their CRS read and compared while the first tiles start (InputCrs:
@@ -314,7 +315,9 @@ int run_job(int argc, char** argv) {
   std::unique_ptr<tbb::global_control> limit;
   if (job.threads > 0) limit = std::make_unique<tbb::global_control>(tbb::global_control::max_allowed_parallelism, job.threads);
   Totals totals;
-  Progress progress(tiles.size(), isatty(STDERR_FILENO));
+  Progress progress(tiles.size(), progress_mode == "none" ? Progress::Mode::none
+                                  : progress_mode == "bar" || (progress_mode == "auto" && isatty(STDERR_FILENO)) ? Progress::Mode::bar
+                                                                                                                  : Progress::Mode::json);
   std::size_t next = 0, tiles_done = 0;
   bool crs_queued = false;  // the inputs' CRS are read as the pipeline's first item (-1), beside the first tile
   const auto start = Clock::now();

@@ -18,7 +18,11 @@ std::map<std::string, std::string> split_assignments(const std::vector<std::stri
 
 void apply_overrides(StageOptions& options, const std::vector<std::string>& assignments) {
   std::vector<std::string> errors;
-  set_and_validate(options, split_assignments(assignments, "--set", errors), errors);
+  // The keys as a job spells them (stages.labeling.kappa2) or without the section (labeling.kappa2).
+  std::map<std::string, std::string> values;
+  for (auto& [key, value] : split_assignments(assignments, "--set", errors))
+    values[key.rfind("stages.", 0) == 0 ? key.substr(7) : key] = value;
+  set_and_validate(options, values, errors);
   if (!errors.empty()) throw input_errors(errors);
 }
 

@@ -1,4 +1,5 @@
 // lodforge synth: writes a procedural city (segmentation, DSM, DTM, true footprints).
+#include <cstdlib>
 #include <filesystem>
 #include <iostream>
 #include <ogr_spatialref.h>
@@ -36,13 +37,27 @@ int run_synth(int argc, char** argv) {
   const fs::path out = args.require("out");
   std::vector<std::string> errors;
   std::map<std::string, std::string> values = split_assignments(args.all("set"), "--set", errors);
+  // The flags' values are checked under the flags' names (the options they set are named in --set).
+  const auto number = [](const std::string& text) {
+    char* end = nullptr;
+    std::strtod(text.c_str(), &end);
+    return !text.empty() && end && *end == '\0';
+  };
   if (auto size = args.get("size-m")) {
     const auto x = size->find('x');
-    values["width_m"] = size->substr(0, x);
-    values["height_m"] = x == std::string::npos ? *size : size->substr(x + 1);
+    const std::string w = size->substr(0, x), h = x == std::string::npos ? *size : size->substr(x + 1);
+    if (!number(w) || !number(h)) throw UsageError("--size-m '" + *size + "': expected metres, W or WxH (e.g. 400 or 500x300)");
+    values["width_m"] = w;
+    values["height_m"] = h;
   }
-  if (auto v = args.get("pixel-size")) values["pixel_size_m"] = *v;
-  if (auto v = args.get("seed")) values["seed"] = *v;
+  if (auto v = args.get("pixel-size")) {
+    if (!number(*v)) throw UsageError("--pixel-size '" + *v + "': expected metres, e.g. 0.25");
+    values["pixel_size_m"] = *v;
+  }
+  if (auto v = args.get("seed")) {
+    if (v->empty() || v->find_first_not_of("0123456789") != std::string::npos) throw UsageError("--seed '" + *v + "': expected a whole number");
+    values["seed"] = *v;
+  }
   SynthOptions options;
   set_and_validate(options, values, errors);
   if (!errors.empty()) throw input_errors(errors);

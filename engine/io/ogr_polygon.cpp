@@ -47,7 +47,7 @@ PolygonWithHoles from_ogr_polygon(const OGRPolygon& p) {
 }
 
 std::vector<PolygonWithHoles> read_polygons(const std::string& path, const std::string& label, std::string* crs_wkt) {
-  if (!std::filesystem::exists(path)) throw InputError(label + " '" + path + "': file not found");
+  if (path.rfind("/vsi", 0) != 0 && !std::filesystem::exists(path)) throw InputError(label + " '" + path + "': file not found");
   GDALDataset* d = static_cast<GDALDataset*>(GDALOpenEx(path.c_str(), GDAL_OF_VECTOR | GDAL_OF_READONLY, nullptr, nullptr, nullptr));
   if (!d) throw InputError(label + " '" + path + "': not a vector file GDAL can read");
   std::vector<PolygonWithHoles> out;

@@ -20,7 +20,8 @@ void DatasetCloser::operator()(GDALDataset* d) const { GDALClose(d); }
 
 Dataset open_raster(const std::string& path, const std::string& key) {
   const std::string name = (key.empty() ? "" : key + ": ") + "'" + path + "'";
-  if (!std::filesystem::exists(path)) throw InputError(name + ": file not found");
+  // (a path of a GDAL virtual file system, /vsizip/ or /vsicurl/, is for GDAL to judge)
+  if (path.rfind("/vsi", 0) != 0 && !std::filesystem::exists(path)) throw InputError(name + ": file not found");
   GDALAllRegister();
   CPLPushErrorHandler(CPLQuietErrorHandler);
   Dataset d(static_cast<GDALDataset*>(GDALOpenEx(path.c_str(), GDAL_OF_RASTER | GDAL_OF_READONLY, nullptr, nullptr, nullptr)));

@@ -38,7 +38,7 @@ Job load_job(const std::string& path, const std::vector<std::string>& overrides)
   // Paths relative to the job file.
   const fs::path base = fs::absolute(path).parent_path();
   auto resolve = [&base](std::string& p) {
-    if (!p.empty() && fs::path(p).is_relative()) p = (base / p).lexically_normal().string();
+    if (!p.empty() && fs::path(p).is_relative() && p.rfind("/vsi", 0) != 0) p = (base / p).lexically_normal().string();
   };
   for (std::string* p : {&job.inputs.segmentation.path, &job.inputs.dsm.path, &job.inputs.dtm.path,
                          &job.inputs.orthophoto.path, &job.output.dir, &job.work_dir})
@@ -56,7 +56,7 @@ Job load_job(const std::string& path, const std::vector<std::string>& overrides)
   for (auto [key, p] : {std::pair{"inputs.segmentation.path", job.inputs.segmentation.path},
                         {"inputs.dsm.path", job.inputs.dsm.path}, {"inputs.dtm.path", job.inputs.dtm.path},
                         {"inputs.orthophoto.path", job.inputs.orthophoto.path}}) {
-    if (!p.empty() && !fs::exists(p)) errors.push_back(std::string(key) + ": '" + p + "': file not found");
+    if (!p.empty() && p.rfind("/vsi", 0) != 0 && !fs::exists(p)) errors.push_back(std::string(key) + ": '" + p + "': file not found");
   }
   if (!errors.empty()) {
     std::string text = "'" + path + "': " + std::to_string(errors.size()) + " problem(s):";

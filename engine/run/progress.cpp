@@ -5,10 +5,12 @@
 
 namespace lodforge {
 
-Progress::Progress(std::size_t tiles_total, bool terminal)
-    : total_(tiles_total), terminal_(terminal), start_(std::chrono::steady_clock::now()), last_(start_) {}
+Progress::Progress(std::size_t tiles_total, Mode mode)
+    : total_(tiles_total), mode_(mode), start_(std::chrono::steady_clock::now()), last_(start_) {}
 
 void Progress::update(std::size_t done, std::size_t buildings) {
+  if (mode_ == Mode::none) return;
+  const bool terminal_ = mode_ == Mode::bar;
   const auto now = std::chrono::steady_clock::now();
   if (done < total_ && now - last_ < std::chrono::milliseconds(terminal_ ? 200 : 2000)) return;
   last_ = now;
@@ -29,7 +31,7 @@ void Progress::update(std::size_t done, std::size_t buildings) {
 }
 
 void Progress::finish() {
-  if (terminal_) std::fprintf(stderr, "\n");
+  if (mode_ == Mode::bar) std::fprintf(stderr, "\n");
 }
 
 }  // namespace lodforge

@@ -7,13 +7,14 @@ namespace lodforge {
 
 class Progress {
  public:
-  Progress(std::size_t tiles_total, bool terminal);
+  enum class Mode { bar, json, none };
+  Progress(std::size_t tiles_total, Mode mode);
   void update(std::size_t tiles_done, std::size_t buildings_done);
   void finish();
 
  private:
   std::size_t total_;
-  bool terminal_;
+  Mode mode_;
   std::chrono::steady_clock::time_point start_, last_;
 };
 
