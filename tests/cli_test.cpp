@@ -148,6 +148,21 @@ TEST_F(Cli, LogsGoToStandardErrorAtTheLevelAskedFor) {
   for (const char* name : {"(git ", "GDAL 3.", "CGAL 5.", "TBB ", "OpenCV 4.", "Ceres "}) EXPECT_NE(r.output.find(name), std::string::npos) << name << r.output;
 }
 
+// Issue 16: bash completion generated from the commands' own option declarations.
+TEST_F(Cli, BashCompletionKnowsEveryCommandsOptions) {
+  const std::string script = path("lodforge.bash");
+  ASSERT_EQ(test::shell("(" + std::string(LODFORGE_BINARY) + " completion bash > " + script + ")").code, 0);
+  const auto complete = [&](const std::string& words, int word) {
+    return test::shell("bash -c 'source " + script + "; COMP_WORDS=(" + words + "); COMP_CWORD=" + std::to_string(word) +
+                       "; _lodforge; echo \"${COMPREPLY[*]}\"'").output;
+  };
+  EXPECT_EQ(complete("lodforge re", 1), "regularize\n");
+  EXPECT_EQ(complete("lodforge run --thr", 2), "--threads\n");
+  EXPECT_EQ(complete("lodforge regularize --building-v", 2), "--building-value\n");
+  EXPECT_EQ(complete("lodforge merge --thr", 2), "\n");  // merge has no --threads
+  EXPECT_EQ(lodforge("completion zsh").code, 2);
+}
+
 // Issue 16: inputs through GDAL's virtual file systems, and GDAL configuration options.
 TEST_F(Cli, GdalVirtualFileSystemsAndConfigOptions) {
   ASSERT_EQ(lodforge("synth --out " + path("city") + " --size-m 120 --seed 3").code, 0);

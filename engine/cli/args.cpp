@@ -86,6 +86,14 @@ Args& Args::positional(const std::string& name, const std::string& meta, const s
 }
 
 void Args::parse(int argc, char** argv, int first) {
+  if (first < argc && std::string(argv[first]) == "--list-options") {
+    std::string names = "-h --help";
+    for (const auto& d : impl_->declared)
+      for (const std::string& n : d.option->get_snames()) names += " -" + n;
+    for (const auto& d : impl_->declared)
+      for (const std::string& n : d.option->get_lnames()) names += " --" + n;
+    throw ListedOptions{names};
+  }
   // An option nobody declared is named, with the nearest declared one if it is close (checked
   // first: CLI11 would hand the value after it to a positional argument and complain of that).
   const auto declared = [&](const std::string& word) {

@@ -12,6 +12,12 @@
 
 namespace lodforge {
 
+// Thrown by Args::parse when asked for the option list (--list-options, used to generate the
+// shell completion): every option the command declares, separated by spaces.
+struct ListedOptions {
+  std::string options;
+};
+
 class Args {
  public:
   Args(std::string command, std::string summary);
