@@ -3,7 +3,8 @@
 # nothing when everything is present.
 #   --tests   also what the integration tests need (scripts/test.sh): Slurm (slurm-wlm) for
 #             tests/slurm/slurm_test.sh (and iproute2's ss to find free ports), python3-yaml for
-#             scripts/slurm/submit.sh's job reading.
+#             scripts/slurm/submit.sh's job reading; buildah and mmdebstrap for
+#             scripts/container-test.sh (the container image built and run, ctest container.image).
 #             Debian's slurmctld and slurmd services do not start without /etc/slurm/slurm.conf
 #             (their units and init scripts check it), and the test starts its own daemons on
 #             other ports with auth/none, so a munge service started by the package is unused.
@@ -21,7 +22,7 @@ packages=(
   libgtest-dev libgmock-dev libbenchmark-dev
   libxml2-utils python3 python3-gdal python3-jsonschema python3-numpy python3-pil
 )
-if [ "$tests" -eq 1 ]; then packages+=(slurm-wlm iproute2 python3-yaml); fi
+if [ "$tests" -eq 1 ]; then packages+=(slurm-wlm iproute2 python3-yaml buildah mmdebstrap); fi
 missing=()
 for p in "${packages[@]}"; do
   dpkg -s "$p" >/dev/null 2>&1 || missing+=("$p")
