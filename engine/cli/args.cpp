@@ -9,9 +9,6 @@
 
 namespace lodforge {
 
-namespace {
-
-// Edits (insertions, deletions, substitutions) from a to b.
 std::size_t edit_distance(const std::string& a, const std::string& b) {
   std::vector<std::size_t> row(b.size() + 1);
   for (std::size_t j = 0; j <= b.size(); ++j) row[j] = j;
@@ -26,8 +23,6 @@ std::size_t edit_distance(const std::string& a, const std::string& b) {
   }
   return row[b.size()];
 }
-
-}  // namespace
 
 struct Args::Impl {
   CLI::App app;

@@ -12,6 +12,9 @@
 
 namespace lodforge {
 
+// Edits (insertions, deletions, substitutions) from a to b: the "did you mean" of commands and options.
+std::size_t edit_distance(const std::string& a, const std::string& b);
+
 // Thrown by Args::parse when asked for the option list (--list-options, used to generate the
 // shell completion): every option the command declares, separated by spaces.
 struct ListedOptions {

@@ -153,19 +153,8 @@ int main(int argc, char** argv) {
   std::string nearest;
   std::size_t best = 3;
   for (const Command& c : commands) {
-    const std::string a = argv[1], b = c.name;
-    std::vector<std::size_t> row(b.size() + 1);
-    for (std::size_t j = 0; j <= b.size(); ++j) row[j] = j;
-    for (std::size_t i = 1; i <= a.size(); ++i) {
-      std::size_t diagonal = row[0];
-      row[0] = i;
-      for (std::size_t j = 1; j <= b.size(); ++j) {
-        const std::size_t up = row[j];
-        row[j] = std::min({row[j] + 1, row[j - 1] + 1, diagonal + (a[i - 1] == b[j - 1] ? 0 : 1)});
-        diagonal = up;
-      }
-    }
-    if (row[b.size()] < best) { best = row[b.size()]; nearest = b; }
+    const std::size_t distance = lodforge::edit_distance(argv[1], c.name);
+    if (distance < best) { best = distance; nearest = c.name; }
   }
   std::cerr << "lodforge: unknown command '" << argv[1] << "'" << (nearest.empty() ? "" : "; did you mean '" + nearest + "'?") << "\n\n";
   usage(std::cerr);
