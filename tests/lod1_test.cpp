@@ -1,5 +1,6 @@
 // Heights, LOD1 shells and the model files (CityGML, CityJSON, OBJ, GeoPackage).
 #include <gtest/gtest.h>
+#include <set>
 
 #include <regex>
 
@@ -229,19 +230,45 @@ TEST_F(ModelFiles, DelftOutputsValidateAgainstTheOfficialSchemasAndEveryShellIsC
     EXPECT_EQ(cj.code, 0) << cj.output;
   }
 
-  // OBJ: one object per building with LOD1, all faces referring to existing vertices.
+  // OBJ: one object per building with LOD1, all faces referring to existing vertices. Each
+  // object's faces share its vertices (issue 17: each point once per object), so that each object
+  // is a closed mesh as mesh tools see it: every edge used once in each direction.
   int objects = 0;
   for (const fs::path& p : files_with(dir / "out" / "tiles", ".obj")) {
     std::ifstream in(p);
     int vertices = 0;
+    std::set<std::string> object_points;
+    std::map<std::pair<int, int>, int> directed;  // this object's edges
+    const auto check_closed = [&](const std::string& where) {
+      for (const auto& [edge, n] : directed) {
+        EXPECT_EQ(n, 1) << where << ": edge " << edge.first << "-" << edge.second << " used " << n << " times";
+        EXPECT_EQ(directed.count({edge.second, edge.first}), 1u) << where << ": edge " << edge.first << "-" << edge.second << " has no twin";
+      }
+      directed.clear();
+    };
+    std::string object;
     for (std::string line; std::getline(in, line);) {
-      if (line.rfind("o ", 0) == 0) ++objects;
-      if (line.rfind("v ", 0) == 0) ++vertices;
+      if (line.rfind("o ", 0) == 0) {
+        check_closed(p.string() + " " + object);
+        object = line;
+        ++objects;
+        object_points.clear();
+      }
+      if (line.rfind("v ", 0) == 0) {
+        ++vertices;
+        EXPECT_TRUE(object_points.insert(line).second) << p << " " << object << ": " << line << " written twice";
+      }
       if (line.rfind("f ", 0) == 0) {
         std::istringstream f(line.substr(2));
-        for (int id; f >> id;) EXPECT_TRUE(id >= 1 && id <= vertices) << p << ": " << line;
+        std::vector<int> ids;
+        for (int id; f >> id;) {
+          EXPECT_TRUE(id >= 1 && id <= vertices) << p << ": " << line;
+          ids.push_back(id);
+        }
+        for (std::size_t k = 0; k < ids.size(); ++k) ++directed[{ids[k], ids[(k + 1) % ids.size()]}];
       }
     }
+    check_closed(p.string() + " " + object);
   }
   EXPECT_EQ(objects, 55);
   // Each OBJ's origin (header) is the one the tile index records for its tile.

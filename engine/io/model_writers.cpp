@@ -10,6 +10,7 @@
 #include <fstream>
 #include <map>
 #include <sstream>
+#include <unordered_map>
 
 #include "geometry/polygon.hpp"
 #include "io/errors.hpp"
@@ -238,6 +239,7 @@ class ObjWriter : public ModelWriter {
     if (!m.has_lod1) return;  // OBJ carries the LOD1 blocks only
     auto& o = file_.out();
     o << "o " << gml_id(m.id) << "\n";
+    object_vertices_.clear();
     for (const Face& f : m.solid.faces) {
       if (f.rings.size() == 1 && f.rings[0].size() <= 4) {
         std::vector<std::size_t> ids;
@@ -272,8 +274,13 @@ class ObjWriter : public ModelWriter {
   void finish() override { file_.commit(); }
 
  private:
+  // A building's faces share its vertices: each point (as written, to the millimetre) once per object.
   std::size_t vertex(const Vec3& p) {
-    file_.out() << "v " << Fixed3{p.x() - origin_.x()} << ' ' << Fixed3{p.y() - origin_.y()} << ' ' << Fixed3{p.z()} << '\n';
+    std::ostringstream line;
+    line << "v " << Fixed3{p.x() - origin_.x()} << ' ' << Fixed3{p.y() - origin_.y()} << ' ' << Fixed3{p.z()} << '\n';
+    const auto [it, added] = object_vertices_.try_emplace(line.str(), count_ + 1);
+    if (!added) return it->second;
+    file_.out() << it->first;
     return ++count_;
   }
   void face(const std::vector<std::size_t>& ids) {
@@ -284,6 +291,7 @@ class ObjWriter : public ModelWriter {
   AtomicTextFile file_;
   Vec2 origin_;
   std::size_t count_ = 0;
+  std::unordered_map<std::string, std::size_t> object_vertices_;  // this object's: line -> index
 };
 
 // GeoPackage / GeoJSON footprints with attributes, for GIS users.
