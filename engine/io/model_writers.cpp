@@ -276,9 +276,14 @@ class ObjWriter : public ModelWriter {
  private:
   // A building's faces share its vertices: each point (as written, to the millimetre) once per object.
   std::size_t vertex(const Vec3& p) {
-    std::ostringstream line;
-    line << "v " << Fixed3{p.x() - origin_.x()} << ' ' << Fixed3{p.y() - origin_.y()} << ' ' << Fixed3{p.z()} << '\n';
-    const auto [it, added] = object_vertices_.try_emplace(line.str(), count_ + 1);
+    char line[128] = "v ";
+    char* at = line + 2;
+    for (const double c : {p.x() - origin_.x(), p.y() - origin_.y(), p.z()}) {
+      at = std::to_chars(at, line + sizeof line - 2, c, std::chars_format::fixed, 3).ptr;
+      *at++ = ' ';
+    }
+    at[-1] = '\n';
+    const auto [it, added] = object_vertices_.try_emplace(std::string(line, at), count_ + 1);
     if (!added) return it->second;
     file_.out() << it->first;
     return ++count_;
