@@ -440,6 +440,59 @@ TEST_F(ModelFiles, DsmOnTheSameGridInAnotherCrsIsRefusedBeforeAnyOutput) {
   EXPECT_TRUE(written.empty()) << written.front();
 }
 
+// Issue 17: CityJSON Text Sequences per tile and merged: one feature per building, the same
+// buildings and coordinates as the CityJSON files, valid against the CityJSONFeature schema.
+TEST_F(ModelFiles, CityJsonSeqHoldsTheSameBuildingsAsCityJsonAndValidates) {
+  const std::string data = test::test_data();
+  std::ofstream(dir / "seq.yaml") << "inputs:\n  segmentation: {path: " << data << "/delft-ahn3-bgt/derived/top_class_50cm.tif}\n"
+                                  << "  dsm: {path: " << data << "/delft-ahn3-bgt/derived/dsm_50cm.tif}\n"
+                                  << "tiling: {tile_size_m: 64}\noutput: {dir: seq_out, formats: [cityjson, cityjsonseq]}\nwork_dir: seq_work\n";
+  Output r = shell(std::string(LODFORGE_BINARY) + " run " + (dir / "seq.yaml").string());
+  ASSERT_EQ(r.code, 0) << r.output;
+  r = shell(std::string(LODFORGE_BINARY) + " merge " + (dir / "seq_out").string());
+  ASSERT_EQ(r.code, 0) << r.output;
+  const fs::path merged = dir / "seq_out" / "merged";
+  ASSERT_TRUE(fs::exists(merged / "lodforge.city.jsonl"));
+  // Every building of the CityJSON, with the same real coordinates (mm), in its feature.
+  const std::string compare = R"py(
+import json, sys
+def points(translate, vertices, o):
+    out = []
+    def walk(b):
+        if isinstance(b, list):
+            for x in b: walk(x)
+        else:
+            v = vertices[b]; out.append(tuple(round(translate[k] * 1000) + v[k] for k in range(3)))
+    for g in o["geometry"]: walk(g["boundaries"])
+    return sorted(out)
+city = json.load(open(sys.argv[1]))
+lines = open(sys.argv[2]).read().splitlines()
+head = json.loads(lines[0])
+assert head["type"] == "CityJSON" and head["CityObjects"] == {} and head["vertices"] == []
+seq = {}
+for line in lines[1:]:
+    f = json.loads(line)
+    assert f["type"] == "CityJSONFeature" and list(f["CityObjects"]) == [f["id"]], f["id"]
+    seq[f["id"]] = points(head["transform"]["translate"], f["vertices"], f["CityObjects"][f["id"]])
+whole = {i: points(city["transform"]["translate"], city["vertices"], o) for i, o in city["CityObjects"].items()}
+assert sorted(seq) == sorted(whole), (len(seq), len(whole))
+for i in whole: assert seq[i] == whole[i], i
+print("same", len(seq))
+)py";
+  std::ofstream(dir / "compare.py") << compare;
+  r = shell("/usr/bin/python3 " + (dir / "compare.py").string() + " " + (merged / "lodforge.city.json").string() + " " +
+            (merged / "lodforge.city.jsonl").string());
+  EXPECT_EQ(r.code, 0) << r.output;
+  EXPECT_NE(r.output.find("same 55"), std::string::npos) << r.output;
+  const std::string schemas = test::schemas();
+  if (schemas.empty()) GTEST_SKIP() << test::kNoSchemas;
+  std::string files = " " + (merged / "lodforge.city.jsonl").string();
+  for (const auto& e : fs::directory_iterator(dir / "seq_out" / "tiles"))
+    if (e.path().string().size() > 6 && e.path().string().substr(e.path().string().size() - 6) == ".jsonl") files += " " + e.path().string();
+  r = shell("/usr/bin/python3 " + std::string(LODFORGE_SOURCE_DIR) + "/scripts/validate/cityjsonseq.py " + schemas + "/cityjson2-schemas" + files);
+  EXPECT_EQ(r.code, 0) << r.output;
+}
+
 TEST_F(ModelFiles, MergedTilesEqualOneTileAndValidate) {
   const std::string data = test::test_data();
   auto job = [&](const std::string& name, double tile) {

@@ -1,5 +1,6 @@
 // lodforge merge OUT_DIR: combines a run's per-tile files into one file per format (and the
 // shards' tile indexes into one), streaming, in tile order.
+#include <array>
 #include <cerrno>
 #include <csignal>
 #include <filesystem>
@@ -8,6 +9,7 @@
 #include <iostream>
 #include <map>
 #include <ogrsf_frmts.h>
+#include <nlohmann/json.hpp>
 #include <regex>
 #include <spdlog/spdlog.h>
 #include <sstream>
@@ -167,6 +169,50 @@ void merge_cityjson(const std::vector<fs::path>& files, const fs::path& target) 
   for (std::size_t i = 0; i < vertices.size(); ++i)
     o.out() << (i ? ", " : "") << (i % 4 == 0 ? "\n  " : "") << '[' << vertices[i][0] << ", " << vertices[i][1] << ", " << vertices[i][2] << ']';
   o.out() << "\n ]\n}\n";
+  o.commit();
+}
+
+// CityJSONSeq: the first tile's first line (transform, metadata), then every tile's features,
+// each read as JSON and its vertices moved onto the first tile's transform (exact integers).
+void merge_cityjsonseq(const std::vector<fs::path>& files, const fs::path& target) {
+  AtomicTextFile o(target);
+  std::array<long long, 2> first_translate{};
+  for (std::size_t k = 0; k < files.size(); ++k) {
+    std::ifstream in(files[k]);
+    std::string line;
+    nlohmann::json header;
+    try {
+      if (!std::getline(in, line)) throw std::runtime_error("empty");
+      header = nlohmann::json::parse(line);
+      if (header.at("type") != "CityJSON" || header.at("transform").at("scale") != nlohmann::json::array({0.001, 0.001, 0.001}))
+        throw std::runtime_error("not a lodforge CityJSONSeq header");
+    } catch (const std::exception& e) {
+      throw InputError("'" + files[k].string() + "': line 1: not a lodforge CityJSONSeq tile (" + e.what() + ")");
+    }
+    const auto& translate = header["transform"]["translate"];
+    const std::array<long long, 2> here{std::llround(translate.at(0).get<double>() * 1000), std::llround(translate.at(1).get<double>() * 1000)};
+    if (k == 0) {
+      first_translate = here;
+      header["metadata"]["title"] = "lodforge, merged from " + std::to_string(files.size()) + " tiles";
+      o.out() << header.dump() << '\n';
+    }
+    const long long dx = here[0] - first_translate[0], dy = here[1] - first_translate[1];
+    for (std::size_t number = 2; std::getline(in, line); ++number) {
+      if (line.empty()) continue;
+      nlohmann::json feature;
+      try {
+        feature = nlohmann::json::parse(line);
+        if (feature.at("type") != "CityJSONFeature") throw std::runtime_error("not a CityJSONFeature");
+        for (auto& v : feature.at("vertices")) {
+          v.at(0) = v.at(0).get<long long>() + dx;
+          v.at(1) = v.at(1).get<long long>() + dy;
+        }
+      } catch (const std::exception& e) {
+        throw InputError("'" + files[k].string() + "': line " + std::to_string(number) + ": " + e.what());
+      }
+      o.out() << feature.dump() << '\n';
+    }
+  }
   o.commit();
 }
 
@@ -430,14 +476,14 @@ int run_merge(int argc, char** argv) {
   if (!args.has("dir")) throw UsageError("give the run's output directory: lodforge merge OUT_DIR");
   const fs::path dir = *args.get("dir");
   if (!fs::is_directory(dir / "tiles")) throw InputError("'" + dir.string() + "': no tiles/ directory; is it a lodforge run's output.dir?");
-  std::vector<std::string> formats = {"citygml", "cityjson", "obj", "gpkg", "geojson"};
+  std::vector<std::string> formats = {"citygml", "cityjson", "cityjsonseq", "obj", "gpkg", "geojson"};
   if (auto f = args.get("formats")) {
     formats.clear();
     std::stringstream s(*f);
     for (std::string x; std::getline(s, x, ',');) formats.push_back(x);
   }
   for (const std::string& format : formats)
-    if (format != "citygml" && format != "cityjson" && format != "obj" && format != "gpkg" && format != "geojson")
+    if (format != "citygml" && format != "cityjson" && format != "cityjsonseq" && format != "obj" && format != "gpkg" && format != "geojson")
       throw InputError("--formats: unknown format '" + format + "'");
   merge_indexes(dir);
   merge_reports(dir);
@@ -457,6 +503,7 @@ int run_merge(int argc, char** argv) {
     const fs::path target = dir / "merged" / ("lodforge" + extension);
     if (format == "citygml") merge_citygml(files, target);
     else if (format == "cityjson") merge_cityjson(files, target);
+    else if (format == "cityjsonseq") merge_cityjsonseq(files, target);
     else if (format == "obj") merge_obj(files, target);
     else if (format == "gpkg") merge_ogr(files, target, "GPKG");
     else if (format == "geojson") merge_ogr(files, target, "GeoJSON");

@@ -24,6 +24,7 @@ namespace fs = std::filesystem;
 std::string extension_of(const std::string& format) {
   if (format == "citygml") return ".gml";
   if (format == "cityjson") return ".city.json";
+  if (format == "cityjsonseq") return ".city.jsonl";
   if (format == "obj") return ".obj";
   if (format == "gpkg") return ".gpkg";
   return ".geojson";
@@ -147,83 +148,146 @@ class CityGmlWriter : public ModelWriter {
 };
 
 // CityJSON 2.0: integer vertices with a transform (mm), Solid LOD1 and MultiSurface LOD0.
-class CityJsonWriter : public ModelWriter {
- public:
-  CityJsonWriter(const std::string& path, const WriterContext& c) : file_(path), origin_(c.origin) {
-    three_decimals(file_.out());
-    auto& o = file_.out();
-    o << "{\"type\": \"CityJSON\", \"version\": \"2.0\",\n \"transform\": {\"scale\": [0.001, 0.001, 0.001], \"translate\": ["
-      << origin_.x() << ", " << origin_.y() << ", 0.0]},\n \"metadata\": {\"title\": \"lodforge tile " << c.tile << "\"";
-    if (!c.epsg.empty()) o << ", \"referenceSystem\": \"https://www.opengis.net/def/crs/EPSG/0/" << c.epsg.substr(5) << "\"";
-    o << "},\n \"CityObjects\": {";
+// JSON string contents: quotes, backslashes and control characters escaped.
+std::string json_text(const std::string& s) {
+  std::string out;
+  for (const char c : s) {
+    if (c == '"' || c == '\\') { out += '\\'; out += c; }
+    else if (c == '\n') out += "\\n";
+    else if (c == '\t') out += "\\t";
+    else if (static_cast<unsigned char>(c) < 0x20) {
+      char buffer[8];
+      std::snprintf(buffer, sizeof buffer, "\\u%04x", static_cast<unsigned>(static_cast<unsigned char>(c)));
+      out += buffer;
+    } else out += c;
   }
-  void add(const BuildingModel& m) override {
-    auto& o = file_.out();
-    o << (first_ ? "\n" : ",\n") << "  \"" << gml_id(m.id) << "\": {\"type\": \"Building\", \"attributes\": {\"status\": \""
-      << m.status << "\", \"regularizer\": \"" << m.regularizer << "\", \"tile\": \"" << m.tile << "\"";
-    first_ = false;
-    if (!m.stage.empty()) o << ", \"failed_stage\": \"" << json(m.stage) << "\"";
-    if (!m.reason.empty()) o << ", \"reason\": \"" << json(m.reason) << "\"";
-    if (m.has_lod1) o << ", \"measuredHeight\": " << (m.roof - m.ground) << ", \"ground_height\": " << m.ground << ", \"roof_height\": " << m.roof;
-    o << "}, \"geometry\": [";
-    const double z = m.has_lod1 ? m.ground : 0.0;
-    o << "{\"type\": \"MultiSurface\", \"lod\": \"0\", \"boundaries\": [[";
-    ring(m.footprint.outer, z);
-    for (const Ring& h : m.footprint.holes) { o << ", "; ring(h, z); }
-    o << "]]}";
-    if (m.has_lod1) {
-      o << ", {\"type\": \"Solid\", \"lod\": \"1\", \"boundaries\": [[";
-      for (std::size_t f = 0; f < m.solid.faces.size(); ++f) {
-        o << (f ? ", [" : "[");
-        for (std::size_t r = 0; r < m.solid.faces[f].rings.size(); ++r) {
-          o << (r ? ", " : "");
-          ring3(m.solid.faces[f].rings[r]);
-        }
-        o << "]";
-      }
-      o << "]]}";
-    }
-    o << "]}";
-  }
-  void finish() override {
-    auto& o = file_.out();
-    o << "\n },\n \"vertices\": [";
-    for (std::size_t i = 0; i < vertices_.size(); ++i) {
-      const auto& v = vertices_[i];
-      o << (i ? ", " : "") << (i % 4 == 0 ? "\n  " : "") << '[' << v[0] << ", " << v[1] << ", " << v[2] << ']';
-    }
-    o << "\n ]\n}\n";
-    file_.commit();
-  }
+  return out;
+}
 
- private:
-  static std::string json(const std::string& s) {
-    std::string out;
-    for (char c : s) { if (c == '"' || c == '\\') out += '\\'; out += c; }
-    return out;
-  }
+// CityJSON's vertices of one file or one feature: integer millimetres from the origin, each once.
+class CityJsonVertices {
+ public:
+  explicit CityJsonVertices(Vec2 origin) : origin_(origin) {}
   std::size_t index(const Vec3& p) {
     const std::array<long long, 3> q{std::llround((p.x() - origin_.x()) * 1000), std::llround((p.y() - origin_.y()) * 1000), std::llround(p.z() * 1000)};
     auto [it, inserted] = lookup_.try_emplace(q, vertices_.size());
     if (inserted) vertices_.push_back(q);
     return it->second;
   }
-  void ring3(const Ring3& r) {
-    auto& o = file_.out();
-    o << '[';
-    for (std::size_t i = 0; i < r.size(); ++i) o << (i ? ", " : "") << index(r[i]);
-    o << ']';
+  // The "vertices" array's members; `wrap`: a line break every four.
+  void write(std::ostream& o, bool wrap) const {
+    for (std::size_t i = 0; i < vertices_.size(); ++i) {
+      const auto& v = vertices_[i];
+      o << (i ? (wrap ? ", " : ",") : "") << (wrap && i % 4 == 0 ? "\n  " : "") << '[' << v[0] << ',' << (wrap ? " " : "") << v[1] << ','
+        << (wrap ? " " : "") << v[2] << ']';
+    }
   }
-  void ring(const Ring& r, double z) {
+
+ private:
+  Vec2 origin_;
+  std::vector<std::array<long long, 3>> vertices_;
+  std::map<std::array<long long, 3>, std::size_t> lookup_;
+};
+
+// The CityJSON object of one building ({"type": "Building", ...}), its vertices indexed in `v`.
+void write_city_object(std::ostream& o, const BuildingModel& m, CityJsonVertices& v) {
+  const auto ring3 = [&](const Ring3& r) {
+    o << '[';
+    for (std::size_t i = 0; i < r.size(); ++i) o << (i ? ", " : "") << v.index(r[i]);
+    o << ']';
+  };
+  const auto ring = [&](const Ring& r, double z) {
     Ring3 lifted;
     for (const Vec2& p : r) lifted.emplace_back(p.x(), p.y(), z);
     ring3(lifted);
+  };
+  o << "{\"type\": \"Building\", \"attributes\": {\"status\": \"" << m.status << "\", \"regularizer\": \"" << m.regularizer
+    << "\", \"tile\": \"" << m.tile << "\"";
+  if (!m.stage.empty()) o << ", \"failed_stage\": \"" << json_text(m.stage) << "\"";
+  if (!m.reason.empty()) o << ", \"reason\": \"" << json_text(m.reason) << "\"";
+  if (m.has_lod1) o << ", \"measuredHeight\": " << (m.roof - m.ground) << ", \"ground_height\": " << m.ground << ", \"roof_height\": " << m.roof;
+  o << "}, \"geometry\": [";
+  const double z = m.has_lod1 ? m.ground : 0.0;
+  o << "{\"type\": \"MultiSurface\", \"lod\": \"0\", \"boundaries\": [[";
+  ring(m.footprint.outer, z);
+  for (const Ring& h : m.footprint.holes) { o << ", "; ring(h, z); }
+  o << "]]}";
+  if (m.has_lod1) {
+    o << ", {\"type\": \"Solid\", \"lod\": \"1\", \"boundaries\": [[";
+    for (std::size_t f = 0; f < m.solid.faces.size(); ++f) {
+      o << (f ? ", [" : "[");
+      for (std::size_t r = 0; r < m.solid.faces[f].rings.size(); ++r) {
+        o << (r ? ", " : "");
+        ring3(m.solid.faces[f].rings[r]);
+      }
+      o << "]";
+    }
+    o << "]]}";
   }
+  o << "]}";
+}
+
+// What a CityJSON file (or a CityJSONSeq's first line) starts with: type, version, transform,
+// metadata (without the closing brace of the object).
+void write_cityjson_header(std::ostream& o, const WriterContext& c, const char* separator) {
+  o << "{\"type\": \"CityJSON\", \"version\": \"2.0\"," << separator << "\"transform\": {\"scale\": [0.001, 0.001, 0.001], \"translate\": ["
+    << c.origin.x() << ", " << c.origin.y() << ", 0.0]}," << separator << "\"metadata\": {\"title\": \"lodforge tile " << c.tile << "\"";
+  if (!c.epsg.empty()) o << ", \"referenceSystem\": \"https://www.opengis.net/def/crs/EPSG/0/" << c.epsg.substr(5) << "\"";
+  o << "}";
+}
+
+class CityJsonWriter : public ModelWriter {
+ public:
+  CityJsonWriter(const std::string& path, const WriterContext& c) : file_(path), vertices_(c.origin) {
+    three_decimals(file_.out());
+    write_cityjson_header(file_.out(), c, "\n ");
+    file_.out() << ",\n \"CityObjects\": {";
+  }
+  void add(const BuildingModel& m) override {
+    auto& o = file_.out();
+    o << (first_ ? "\n" : ",\n") << "  \"" << gml_id(m.id) << "\": ";
+    first_ = false;
+    write_city_object(o, m, vertices_);
+  }
+  void finish() override {
+    auto& o = file_.out();
+    o << "\n },\n \"vertices\": [";
+    vertices_.write(o, true);
+    o << "\n ]\n}\n";
+    file_.commit();
+  }
+
+ private:
+  AtomicTextFile file_;
+  bool first_ = true;
+  CityJsonVertices vertices_;
+};
+
+// CityJSON Text Sequences (CityJSONSeq, .city.jsonl), the streaming form 3DBAG publishes: a
+// first line with the shared transform and metadata, then one CityJSONFeature per building
+// with its own vertices (indices from 0), on one line each.
+class CityJsonSeqWriter : public ModelWriter {
+ public:
+  CityJsonSeqWriter(const std::string& path, const WriterContext& c) : file_(path), origin_(c.origin) {
+    three_decimals(file_.out());
+    write_cityjson_header(file_.out(), c, " ");
+    file_.out() << ", \"CityObjects\": {}, \"vertices\": []}\n";
+  }
+  void add(const BuildingModel& m) override {
+    auto& o = file_.out();
+    CityJsonVertices vertices(origin_);
+    const std::string id = gml_id(m.id);
+    o << "{\"type\": \"CityJSONFeature\", \"id\": \"" << id << "\", \"CityObjects\": {\"" << id << "\": ";
+    write_city_object(o, m, vertices);
+    o << "}, \"vertices\": [";
+    vertices.write(o, false);
+    o << "]}\n";
+  }
+  void finish() override { file_.commit(); }
+
+ private:
   AtomicTextFile file_;
   Vec2 origin_;
-  bool first_ = true;
-  std::vector<std::array<long long, 3>> vertices_;
-  std::map<std::array<long long, 3>, std::size_t> lookup_;
 };
 
 // Wavefront OBJ: one object per building, coordinates relative to the tile origin so that single
@@ -335,6 +399,7 @@ class FootprintModelWriter : public ModelWriter {
 std::unique_ptr<ModelWriter> make_model_writer(const std::string& format, const std::string& path, const WriterContext& context) {
   if (format == "citygml") return std::make_unique<CityGmlWriter>(path, context);
   if (format == "cityjson") return std::make_unique<CityJsonWriter>(path, context);
+  if (format == "cityjsonseq") return std::make_unique<CityJsonSeqWriter>(path, context);
   if (format == "obj") return std::make_unique<ObjWriter>(path, context);
   return std::make_unique<FootprintModelWriter>(path, context);
 }

@@ -68,7 +68,7 @@ struct OutputOptions {
   void visit(V& v) {
     v("dir", dir, "output directory: one file per tile and format, the tile index and the run report");
     v("quicklook", quicklook, "a PNG per tile for visual checks: LOD0 outlines over the orthophoto, or over a hillshade of the DSM (about a third of a run's time at 0.25 m)");
-    v("formats", formats, "output formats, one file per tile each: citygml (2.0), cityjson (2.0), obj, gpkg, geojson", Check::one_of({"citygml", "cityjson", "obj", "gpkg", "geojson"}));
+    v("formats", formats, "output formats, one file per tile each: citygml (2.0), cityjson (2.0), cityjsonseq (CityJSON Text Sequences, .city.jsonl), obj, gpkg, geojson", Check::one_of({"citygml", "cityjson", "cityjsonseq", "obj", "gpkg", "geojson"}));
   }
 };
 
