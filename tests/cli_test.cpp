@@ -148,6 +148,24 @@ TEST_F(Cli, LogsGoToStandardErrorAtTheLevelAskedFor) {
   for (const char* name : {"(git ", "GDAL 3.", "CGAL 5.", "TBB ", "OpenCV 4.", "Ceres "}) EXPECT_NE(r.output.find(name), std::string::npos) << name << r.output;
 }
 
+// Issue 17: a building modeled as asked has no stage or reason: NULL in the GeoPackage, not ''.
+TEST_F(Cli, EmptyStageAndReasonAreNull) {
+  ASSERT_EQ(lodforge("synth --out " + path("city") + " --size-m 120 --seed 3").code, 0);
+  ASSERT_EQ(lodforge("regularize --mask " + path("city/seg_class.tif") + " --out " + path("r.gpkg")).code, 0);
+  GDALAllRegister();
+  GDALDataset* d = static_cast<GDALDataset*>(GDALOpenEx(path("r.gpkg").c_str(), GDAL_OF_VECTOR, nullptr, nullptr, nullptr));
+  ASSERT_NE(d, nullptr);
+  int ok = 0;
+  for (auto& f : *d->GetLayer(0)) {
+    if (std::string(f->GetFieldAsString("status")) != "ok") continue;
+    ++ok;
+    EXPECT_TRUE(f->IsFieldNull(f->GetFieldIndex("stage"))) << f->GetFID();
+    EXPECT_TRUE(f->IsFieldNull(f->GetFieldIndex("reason"))) << f->GetFID();
+  }
+  GDALClose(d);
+  EXPECT_GT(ok, 0);
+}
+
 // Issue 16: bash completion generated from the commands' own option declarations.
 TEST_F(Cli, BashCompletionKnowsEveryCommandsOptions) {
   const std::string script = path("lodforge.bash");

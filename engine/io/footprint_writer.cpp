@@ -134,8 +134,11 @@ void FootprintFileWriter::add(const FootprintRecord& r) {
   feature.SetField("id", static_cast<GIntBig>(r.id));
   if (layer.write_status) {
     feature.SetField("status", r.status.c_str());
-    feature.SetField("stage", r.failed_stage.c_str());
-    feature.SetField("reason", r.reason.c_str());
+    // No stage or reason (a building modeled as asked): NULL, not an empty text.
+    for (const auto& [field, text] : {std::pair{"stage", &r.failed_stage}, std::pair{"reason", &r.reason}}) {
+      if (text->empty()) feature.SetFieldNull(feature.GetFieldIndex(field));
+      else feature.SetField(field, text->c_str());
+    }
     feature.SetField("regularizer", r.regularizer.c_str());
   }
   if (!layer.kind_field.empty()) feature.SetField(layer.kind_field.c_str(), r.kind.c_str());
