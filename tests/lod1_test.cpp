@@ -531,6 +531,10 @@ TEST_F(ModelFiles, MergedTilesEqualOneTileAndValidate) {
   EXPECT_EQ(buildings(gml), 55u);
   EXPECT_EQ(buildings(gml), buildings(whole));
   EXPECT_EQ(gml.find("<?xml"), gml.rfind("<?xml"));  // one header
+  // The merged files name the run, not their first tile.
+  EXPECT_NE(gml.find("<gml:name>lodforge, merged from "), std::string::npos);
+  EXPECT_EQ(gml.find("<gml:name>lodforge tile "), std::string::npos);
+  EXPECT_NE(slurp_file(merged / "lodforge.city.json").find("\"title\": \"lodforge, merged from "), std::string::npos);
   if (schemas.empty()) GTEST_SKIP() << test::kNoSchemas;  // (everything above was checked)
 }
 

@@ -38,6 +38,8 @@ void merge_citygml(const std::vector<fs::path>& files, const fs::path& target) {
     while (std::getline(in, line)) {
       if (line == "</core:CityModel>") break;
       if (line.rfind("  <core:cityObjectMember>", 0) == 0) body = true;
+      if (!body && k == 0 && line.rfind("  <gml:name>lodforge tile ", 0) == 0)  // the merged file is the run's, not a tile's
+        line = "  <gml:name>lodforge, merged from " + std::to_string(files.size()) + " tiles</gml:name>";
       if (body || k == 0) o.out() << line << '\n';
     }
   }
@@ -115,7 +117,9 @@ void merge_cityjson(const std::vector<fs::path>& files, const fs::path& target) 
       ox = tx;
       oy = ty;
       const std::size_t objects = text.find("\"CityObjects\": {");
-      o.out() << text.substr(0, objects) << "\"CityObjects\": {";
+      const std::string merged_title = "\"title\": \"lodforge, merged from " + std::to_string(files.size()) + " tiles\"";
+      o.out() << std::regex_replace(text.substr(0, objects), std::regex(R"re("title": "lodforge tile [^"]*")re"), merged_title)
+              << "\"CityObjects\": {";
     }
     // This tile's vertices, moved onto the first tile's translate.
     std::vector<std::size_t> remap;
