@@ -11,6 +11,7 @@
 #include <fstream>
 #include <gdal_priv.h>
 #include <map>
+#include <nlohmann/json.hpp>
 #include <ogrsf_frmts.h>
 #include <sstream>
 #include <sys/file.h>
@@ -676,6 +677,25 @@ TEST_F(Rerun, MergeRefusesShardsOfDifferentRuns) {
   EXPECT_EQ(r.code, 1) << r.output;
   EXPECT_NE(r.output.find("from a run with other inputs or options"), std::string::npos) << r.output;
   EXPECT_FALSE(fs::exists(dir / "out" / "merged"));
+}
+
+// Issue 17: the tile index's rings are counter-clockwise (RFC 7946 exterior rings), and the index
+// reads as JSON (a parser, not patterns) with every tile's outputs and fingerprints.
+TEST_F(Rerun, TileIndexRingsAreCounterClockwise) {
+  ASSERT_EQ(lodforge("run " + write_job("gpkg").string()).code, 0);
+  const nlohmann::json index = nlohmann::json::parse(slurp(dir / "out" / "tile_index.geojson"));
+  ASSERT_EQ(index.at("type"), "FeatureCollection");
+  ASSERT_EQ(index.at("features").size(), 16u);
+  for (const auto& feature : index.at("features")) {
+    const auto& ring = feature.at("geometry").at("coordinates").at(0);
+    ASSERT_EQ(ring.size(), 5u);
+    EXPECT_EQ(ring.front(), ring.back());
+    double twice_area = 0;
+    for (std::size_t i = 0; i + 1 < ring.size(); ++i)
+      twice_area += ring[i][0].get<double>() * ring[i + 1][1].get<double>() - ring[i + 1][0].get<double>() * ring[i][1].get<double>();
+    EXPECT_GT(twice_area, 0) << feature.at("properties").at("tile");
+    EXPECT_EQ(feature.at("properties").at("outputs").size(), feature.at("properties").at("fingerprints").size());
+  }
 }
 
 }  // namespace

@@ -1,6 +1,7 @@
 #include "run/run_report.hpp"
 
 #include <algorithm>
+#include <array>
 #include <filesystem>
 #include <fstream>
 #include <spdlog/spdlog.h>
@@ -91,9 +92,12 @@ void record_tile(Totals& totals, const RunPlan& plan, const TileResult& result, 
   for (std::size_t i = 0; i < outputs.size(); ++i) feature << (i ? ", " : "") << '"' << outputs[i].first << '"';
   feature << "], \"fingerprints\": [";
   for (std::size_t i = 0; i < outputs.size(); ++i) feature << (i ? ", " : "") << '"' << outputs[i].second << '"';
-  feature << "]}, \"geometry\": {\"type\": \"Polygon\", \"coordinates\": [[[" << a.x() << ", " << a.y() << "], [" << b.x()
-          << ", " << a.y() << "], [" << b.x() << ", " << b.y() << "], [" << a.x() << ", " << b.y() << "], [" << a.x()
-          << ", " << a.y() << "]]]}}";
+  // The tile's extent, counter-clockwise as RFC 7946 wants an exterior ring.
+  std::array<Vec2, 4> corners{a, Vec2(b.x(), a.y()), b, Vec2(a.x(), b.y())};
+  if ((b.x() - a.x()) * (b.y() - a.y()) < 0) std::swap(corners[1], corners[3]);  // (signed area of that order < 0)
+  feature << "]}, \"geometry\": {\"type\": \"Polygon\", \"coordinates\": [[";
+  for (int k = 0; k <= 4; ++k) feature << (k ? ", [" : "[") << corners[k % 4].x() << ", " << corners[k % 4].y() << "]";
+  feature << "]]}}";
   totals.index_features.emplace_back(r->tile, feature.str());
   std::ostringstream tile_json;
   tile_json << "{\"tile\": \"" << r->name << "\", \"buildings\": " << count << ", \"skipped\": " << (r->skipped ? "true" : "false")
