@@ -531,6 +531,29 @@ TEST_F(ModelFiles, MergedTilesEqualOneTileAndValidate) {
   EXPECT_EQ(buildings(gml), 55u);
   EXPECT_EQ(buildings(gml), buildings(whole));
   EXPECT_EQ(gml.find("<?xml"), gml.rfind("<?xml"));  // one header
+  // The merged GeoPackage has the LOD1 blocks beside the footprints (issue 17): a MultiPolygon Z
+  // per building with LOD1, its faces at its ground and roof heights.
+  {
+    GDALAllRegister();
+    GDALDataset* d = static_cast<GDALDataset*>(GDALOpenEx((merged / "lodforge.gpkg").c_str(), GDAL_OF_VECTOR, nullptr, nullptr, nullptr));
+    ASSERT_NE(d, nullptr);
+    OGRLayer* blocks = d->GetLayerByName("lod1");
+    ASSERT_NE(blocks, nullptr);
+    EXPECT_EQ(blocks->GetGeomType(), wkbMultiPolygon25D);
+    long n = 0;
+    for (auto& f : *blocks) {
+      ++n;
+      const double ground = f->GetFieldAsDouble("ground_height"), roof = f->GetFieldAsDouble("roof_height");
+      const auto* faces = f->GetGeometryRef()->toMultiPolygon();
+      EXPECT_GE(faces->getNumGeometries(), 5);  // bottom, top, three walls at least
+      OGREnvelope3D box;
+      faces->getEnvelope(&box);
+      EXPECT_NEAR(box.MinZ, ground, 1e-6);
+      EXPECT_NEAR(box.MaxZ, roof, 1e-6);
+    }
+    EXPECT_EQ(n, 55);
+    GDALClose(d);
+  }
   // The merged files name the run, not their first tile.
   EXPECT_NE(gml.find("<gml:name>lodforge, merged from "), std::string::npos);
   EXPECT_EQ(gml.find("<gml:name>lodforge tile "), std::string::npos);

@@ -8,6 +8,7 @@
 #include <gdal_priv.h>
 #include <iostream>
 #include <map>
+#include <memory>
 #include <ogrsf_frmts.h>
 #include <nlohmann/json.hpp>
 #include <regex>
@@ -240,47 +241,41 @@ void merge_ogr(const std::vector<fs::path>& files, const fs::path& target, const
 }
 
 void merge_ogr_into(const std::vector<fs::path>& files, const fs::path& target, const fs::path& temp, const std::string& driver_name) {
-  GDALDataset* out = GetGDALDriverManager()->GetDriverByName(driver_name.c_str())->Create(temp.c_str(), 0, 0, 0, GDT_Unknown, nullptr);
+  // Every layer of the tiles (footprints, and lod1 in a GeoPackage), by name, in the first tile's
+  // order; each tile's features appended to its layer. (The caller removes temp on any error.)
+  using Dataset = std::unique_ptr<GDALDataset, void (*)(GDALDataset*)>;
+  const auto close = [](GDALDataset* d) { if (d) GDALClose(d); };
+  Dataset out(GetGDALDriverManager()->GetDriverByName(driver_name.c_str())->Create(temp.c_str(), 0, 0, 0, GDT_Unknown, nullptr), close);
   if (!out) throw InputError("'" + target.string() + "': cannot create");
-  OGRLayer* layer = nullptr;
+  std::map<std::string, OGRLayer*> layers;
   for (const fs::path& f : files) {
-    GDALDataset* in = static_cast<GDALDataset*>(GDALOpenEx(f.c_str(), GDAL_OF_VECTOR, nullptr, nullptr, nullptr));
-    if (!in) { GDALClose(out); throw InputError("'" + f.string() + "': cannot read"); }
-    OGRLayer* source = in->GetLayer(0);
-    if (!layer) {
-      layer = out->CreateLayer("footprints", source->GetSpatialRef(), wkbPolygon, nullptr);
-      if (!layer) { GDALClose(in); GDALClose(out); fs::remove(temp); throw InputError("'" + target.string() + "': cannot create the layer"); }
-      for (int i = 0; i < source->GetLayerDefn()->GetFieldCount(); ++i)
-        if (layer->CreateField(source->GetLayerDefn()->GetFieldDefn(i)) != OGRERR_NONE) {
-          GDALClose(in);
-          GDALClose(out);
-          fs::remove(temp);
-          throw InputError("'" + target.string() + "': cannot create a field");
-        }
-    }
+    Dataset in(static_cast<GDALDataset*>(GDALOpenEx(f.c_str(), GDAL_OF_VECTOR, nullptr, nullptr, nullptr)), close);
+    if (!in) throw InputError("'" + f.string() + "': cannot read");
     const bool transaction = out->StartTransaction() == OGRERR_NONE;
-    for (auto& feature : *source) {
-      OGRFeature copy(layer->GetLayerDefn());
-      copy.SetFrom(feature.get());
-      copy.SetFID(OGRNullFID);
-      if (layer->CreateFeature(&copy) != OGRERR_NONE) {
-        GDALClose(in);
-        GDALClose(out);
-        fs::remove(temp);
-        throw InputError("'" + target.string() + "': cannot write a feature: " + CPLGetLastErrorMsg());
+    for (int l = 0; l < in->GetLayerCount(); ++l) {
+      OGRLayer* source = in->GetLayer(l);
+      OGRLayer*& layer = layers[source->GetName()];
+      if (!layer) {
+        layer = out->CreateLayer(source->GetName(), source->GetSpatialRef(), source->GetGeomType(), nullptr);
+        if (!layer) throw InputError("'" + target.string() + "': cannot create the layer " + source->GetName());
+        for (int i = 0; i < source->GetLayerDefn()->GetFieldCount(); ++i)
+          if (layer->CreateField(source->GetLayerDefn()->GetFieldDefn(i)) != OGRERR_NONE)
+            throw InputError("'" + target.string() + "': cannot create a field");
+      }
+      for (auto& feature : *source) {
+        OGRFeature copy(layer->GetLayerDefn());
+        copy.SetFrom(feature.get());
+        copy.SetFID(OGRNullFID);
+        if (layer->CreateFeature(&copy) != OGRERR_NONE)
+          throw InputError("'" + target.string() + "': cannot write a feature: " + CPLGetLastErrorMsg());
       }
     }
-    const bool committed = !transaction || out->CommitTransaction() == OGRERR_NONE;
-    GDALClose(in);
-    if (!committed) { GDALClose(out); fs::remove(temp); throw InputError("'" + target.string() + "': cannot commit"); }
+    if (transaction && out->CommitTransaction() != OGRERR_NONE) throw InputError("'" + target.string() + "': cannot commit");
   }
   CPLErrorReset();
   out->FlushCache(true);
-  GDALClose(out);
-  if (CPLGetLastErrorType() == CE_Failure) {
-    fs::remove(temp);
-    throw InputError("'" + target.string() + "': writing failed: " + CPLGetLastErrorMsg());
-  }
+  out.reset();
+  if (CPLGetLastErrorType() == CE_Failure) throw InputError("'" + target.string() + "': writing failed: " + CPLGetLastErrorMsg());
   fs::rename(temp, target);
 }
 

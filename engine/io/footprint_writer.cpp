@@ -40,6 +40,7 @@ struct FootprintFileWriter::Impl {
   fs::path final_path, temp;
   GDALDataset* dataset = nullptr;
   OGRLayer* ogr_layer = nullptr;
+  OGRLayer* lod1_layer = nullptr;  // when layer.write_lod1 (GeoPackage only)
   bool transaction = false;
 
   [[noreturn]] void fail(const std::string& what) {
@@ -116,6 +117,14 @@ FootprintFileWriter::FootprintFileWriter(const std::string& path, const Footprin
     }
     field("vertex_count", OFTInteger);
     field("area_m2", OFTReal);
+    if (layer.write_lod1 && driver_name == "GPKG") {
+      impl_->lod1_layer = impl_->dataset->CreateLayer("lod1", srs_ptr, wkbMultiPolygon25D, nullptr);
+      if (!impl_->lod1_layer) impl_->fail("cannot create layer lod1");
+      for (const auto& [name, type] : {std::pair{"id", OFTInteger64}, std::pair{"ground_height", OFTReal}, std::pair{"roof_height", OFTReal}}) {
+        OGRFieldDefn def(name, type);
+        if (impl_->lod1_layer->CreateField(&def) != OGRERR_NONE) impl_->fail(std::string("cannot create field lod1.") + name);
+      }
+    }
     impl_->transaction = impl_->dataset->StartTransaction() == OGRERR_NONE;  // GeoPackage yes, GeoJSON no
   } catch (...) {
     delete impl_;
@@ -155,6 +164,25 @@ void FootprintFileWriter::add(const FootprintRecord& r) {
   feature.SetField("area_m2", area(r.polygon));
   feature.SetGeometry(to_ogr_polygon(r.polygon).get());
   if (impl_->ogr_layer->CreateFeature(&feature) != OGRERR_NONE) impl_->fail("cannot write feature " + std::to_string(r.id));
+  if (impl_->lod1_layer && !r.lod1_faces.empty()) {
+    OGRFeature block(impl_->lod1_layer->GetLayerDefn());
+    block.SetField("id", static_cast<GIntBig>(r.id));
+    block.SetField("ground_height", r.ground_height);
+    block.SetField("roof_height", r.roof_height);
+    OGRMultiPolygon faces;
+    for (const Face& f : r.lod1_faces) {
+      OGRPolygon polygon;
+      for (const Ring3& ring : f.rings) {
+        OGRLinearRing linear;
+        for (const Vec3& p : ring) linear.addPoint(p.x(), p.y(), p.z());
+        linear.closeRings();
+        polygon.addRing(&linear);
+      }
+      faces.addGeometry(&polygon);
+    }
+    block.SetGeometry(&faces);
+    if (impl_->lod1_layer->CreateFeature(&block) != OGRERR_NONE) impl_->fail("cannot write the LOD1 block of " + std::to_string(r.id));
+  }
 }
 
 void FootprintFileWriter::finish() {

@@ -6,6 +6,7 @@
 #include <vector>
 
 #include "geometry/types.hpp"
+#include "lod1/solid.hpp"
 
 namespace lodforge {
 
@@ -17,6 +18,7 @@ struct FootprintRecord {
   std::string kind;              // synthetic truth: the shape; run outputs: the tile
   bool has_heights = true;       // false: the heights are written as null
   double roof_height = 0, ground_height = 0;  // written when write_heights
+  std::vector<Face> lod1_faces;  // the LOD1 block's faces, when write_lod1 and it has one
 };
 
 struct FootprintLayer {
@@ -25,6 +27,7 @@ struct FootprintLayer {
   bool write_status = true;   // status, stage, reason, regularizer
   bool write_heights = false; // roof_height, ground_height
   std::string kind_field;     // name of the field holding `kind` ("kind", "tile"); empty: none
+  bool write_lod1 = false;    // a GeoPackage also gets a layer "lod1": each block's faces as a MultiPolygon Z
 };
 
 // Checks up front that path can be written (directory exists and is writable, extension known).

@@ -379,6 +379,7 @@ class FootprintModelWriter : public ModelWriter {
     r.has_heights = m.has_lod1;
     r.roof_height = m.roof;
     r.ground_height = m.ground;
+    if (m.has_lod1) r.lod1_faces = m.solid.faces;
     file_.add(r);
   }
   void finish() override { file_.finish(); }
@@ -389,6 +390,7 @@ class FootprintModelWriter : public ModelWriter {
     layer.crs_wkt = c.crs_wkt;
     layer.write_heights = true;
     layer.kind_field = "tile";
+    layer.write_lod1 = true;  // (GeoPackage only)
     return layer;
   }
   FootprintFileWriter file_;
