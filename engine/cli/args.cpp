@@ -1,6 +1,8 @@
 #include "cli/args.hpp"
 
 #include <CLI/CLI.hpp>
+#include <cpl_conv.h>
+#include <spdlog/spdlog.h>
 #include <algorithm>
 #include <cctype>
 #include <list>
@@ -40,11 +42,11 @@ Args::Args(std::string command, std::string summary)
     : impl_(std::make_unique<Impl>(std::move(summary), "lodforge " + command)), command_(std::move(command)) {
   impl_->app.get_formatter()->column_width(32);
   impl_->app.footer("exit codes: 0 done, 1 error in the input or the run, 2 usage error");
-  // Every command's logging options (applied by main before the command runs).
+  // Every command's logging options (applied by parse).
   value("log-level", "LEVEL", "trace, debug, info (default), warn or error; also LODFORGE_LOG_LEVEL");
   flag("quiet", "warnings and errors only, no progress", "q");
   flag("verbose", "debug messages too", "v");
-  {  // GDAL configuration options, as GDAL's utilities take them (applied by main)
+  {  // GDAL configuration options, as GDAL's utilities take them (applied by parse)
     std::vector<std::string>& values = impl_->storage.emplace_back();
     CLI::Option* o = impl_->app.add_option("--config", values, "a GDAL configuration option, e.g. --config GDAL_CACHEMAX 512 (repeatable)");
     o->type_name("KEY VALUE")->expected(2)->multi_option_policy(CLI::MultiOptionPolicy::TakeAll);
@@ -91,20 +93,15 @@ void Args::parse(int argc, char** argv, int first) {
   }
   // An option nobody declared is named, with the nearest declared one if it is close (checked
   // first: CLI11 would hand the value after it to a positional argument and complain of that).
-  const auto declared = [&](const std::string& word) {
-    if (word == "-h" || word == "--help") return true;
-    for (const auto& d : impl_->declared)
-      if (d.option->check_name(word)) return true;
-    return false;
-  };
   for (int i = first; i < argc; ++i) {
     const std::string argument = argv[i];
     const bool option = argument.rfind("--", 0) == 0 || (argument.size() == 2 && argument[0] == '-' && std::isalpha(static_cast<unsigned char>(argument[1])));
     if (!option) continue;
     const std::string word = argument.substr(0, argument.find('='));
-    if (declared(word)) {
-      const auto it = std::find_if(impl_->declared.begin(), impl_->declared.end(), [&](const auto& d) { return d.option->check_name(word); });
-      if (it != impl_->declared.end() && it->values && word == argument) i += it->name == "config" ? 2 : 1;  // its values, whatever they look like
+    if (word == "-h" || word == "--help") continue;
+    const auto it = std::find_if(impl_->declared.begin(), impl_->declared.end(), [&](const auto& d) { return d.option->check_name(word); });
+    if (it != impl_->declared.end()) {
+      if (word == argument) i += it->option->get_items_expected_min();  // its values, whatever they look like
       continue;
     }
     std::string suggestion;
@@ -131,6 +128,18 @@ void Args::parse(int argc, char** argv, int first) {
     if (d.option->count() == 0) continue;
     values_[d.name] = d.values ? *d.values : std::vector<std::string>{"true"};
   }
+  // Every command's logging and GDAL options take effect here, before the command's work.
+  if (auto level = has("quiet") ? std::optional<std::string>("warn") : has("verbose") ? std::optional<std::string>("debug") : get("log-level"))
+    set_log_level(*level);
+  const std::vector<std::string> config = all("config");
+  for (std::size_t k = 0; k + 1 < config.size(); k += 2) CPLSetConfigOption(config[k].c_str(), config[k + 1].c_str());
+}
+
+void set_log_level(const std::string& level) {
+  static const std::vector<std::string> levels{"trace", "debug", "info", "warn", "error"};
+  if (std::find(levels.begin(), levels.end(), level) == levels.end())
+    throw UsageError("log level '" + level + "': must be one of trace, debug, info, warn, error");
+  spdlog::set_level(spdlog::level::from_str(level));
 }
 
 std::optional<std::string> Args::get(const std::string& name) const {

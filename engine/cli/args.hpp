@@ -15,6 +15,9 @@ namespace lodforge {
 // Edits (insertions, deletions, substitutions) from a to b: the "did you mean" of commands and options.
 std::size_t edit_distance(const std::string& a, const std::string& b);
 
+// Sets the level of the logs (trace, debug, info, warn, error); throws UsageError for another word.
+void set_log_level(const std::string& level);
+
 // Thrown by Args::parse when asked for the option list (--list-options, used to generate the
 // shell completion): every option the command declares, separated by spaces.
 struct ListedOptions {
@@ -35,7 +38,8 @@ class Args {
   // A positional argument (the job file, the output directory), optional for the parser: the
   // command says when it is missing.
   Args& positional(const std::string& name, const std::string& meta, const std::string& help);
-  // Parses argv[first..]; throws UsageError. "-h"/"--help" sets has("help").
+  // Parses argv[first..]; throws UsageError. "-h"/"--help" sets has("help"). Applies the options
+  // every command has: -q, -v, --log-level (the logs' level) and --config KEY VALUE (GDAL's).
   void parse(int argc, char** argv, int first);
   bool has(const std::string& name) const { return values_.count(name) > 0; }
   std::optional<std::string> get(const std::string& name) const;

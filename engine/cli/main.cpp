@@ -87,24 +87,17 @@ int main(int argc, char** argv) {
   mallopt(M_MMAP_THRESHOLD, 32 * 1024 * 1024);
   mallopt(M_TRIM_THRESHOLD, 64 * 1024 * 1024);
   // Logs go to standard error (standard output is for data a command prints); their level from
-  // LODFORGE_LOG_LEVEL, then --log-level, -q (warnings and errors) or -v (debug) of any command.
+  // LODFORGE_LOG_LEVEL, then the command's -q, -v or --log-level (Args::parse).
   spdlog::set_default_logger(spdlog::stderr_color_mt("lodforge"));
   spdlog::set_pattern("[%H:%M:%S] [%^%l%$] %v");
-  std::string level = std::getenv("LODFORGE_LOG_LEVEL") ? std::getenv("LODFORGE_LOG_LEVEL") : "info";
-  for (int i = 2; i < argc; ++i) {
-    const std::string a = argv[i];
-    if (a == "-q" || a == "--quiet") level = "warn";
-    else if (a == "-v" || a == "--verbose") level = "debug";
-    else if (a == "--log-level" && i + 1 < argc) level = argv[i + 1];
-    else if (a.rfind("--log-level=", 0) == 0) level = a.substr(12);
-    else if (a == "--config" && i + 2 < argc) CPLSetConfigOption(argv[i + 1], argv[i + 2]);  // as GDAL's utilities
+  if (const char* level = std::getenv("LODFORGE_LOG_LEVEL")) {
+    try {
+      lodforge::set_log_level(level);
+    } catch (const lodforge::UsageError& e) {
+      std::cerr << "lodforge: usage error: LODFORGE_LOG_LEVEL: " << e.what() << '\n';
+      return 2;
+    }
   }
-  static const std::vector<std::string> levels{"trace", "debug", "info", "warn", "error"};
-  if (std::find(levels.begin(), levels.end(), level) == levels.end()) {
-    std::cerr << "lodforge: usage error: log level '" << level << "': must be one of trace, debug, info, warn, error\n";
-    return 2;
-  }
-  spdlog::set_level(spdlog::level::from_str(level));
   GDALAllRegister();  // once, before any worker thread opens a dataset
   if (argc < 2 || !std::strcmp(argv[1], "--help") || !std::strcmp(argv[1], "-h") || !std::strcmp(argv[1], "help")) {
     usage(argc < 2 ? std::cerr : std::cout);

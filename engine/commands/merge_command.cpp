@@ -1,8 +1,7 @@
 // lodforge merge OUT_DIR: combines a run's per-tile files into one file per format (and the
 // shards' tile indexes into one), streaming, in tile order.
+#include <algorithm>
 #include <array>
-#include <cerrno>
-#include <csignal>
 #include <filesystem>
 #include <fstream>
 #include <gdal_priv.h>
@@ -22,6 +21,7 @@
 #include "io/errors.hpp"
 #include "io/model_writers.hpp"
 #include "run/checkpoint.hpp"
+#include "run/run_report.hpp"
 
 namespace lodforge {
 
@@ -308,19 +308,18 @@ void merge_indexes(const fs::path& dir) {
   if (parts.empty()) return;
   std::vector<std::pair<std::string, std::string>> features;  // (tile name, feature)
   std::string header, first_key;
-  const std::regex tile(R"re("tile": "([^"]+)")re"), key(R"re("run_key": "([0-9a-f]+)")re");
+  const std::regex tile(R"re("tile": "([^"]+)")re");
   for (const fs::path& p : parts) {
+    // Shards of one run: the same inputs, options and tiling (the run key), else not one result.
+    const std::string run_key = read_tile_index(p).value_or(TileIndex{}).run_key;
+    if (p == parts.front()) first_key = run_key;
+    else if (run_key != first_key)
+      throw InputError("'" + p.string() + "': from a run with other inputs or options (run key " + run_key + ") than '" +
+                       parts.front().string() + "' (" + first_key + "); rerun the shards with one job");
     std::ifstream in(p);
     std::string line;
     std::getline(in, line);
     header = line;
-    // Shards of one run: the same inputs, options and tiling (the run key), else not one result.
-    std::smatch m;
-    const std::string run_key = std::regex_search(line, m, key) ? std::string(m[1]) : "none";
-    if (first_key.empty()) first_key = run_key;
-    else if (run_key != first_key)
-      throw InputError("'" + p.string() + "': from a run with other inputs or options (run key " + run_key + ") than '" +
-                       parts.front().string() + "' (" + first_key + "); rerun the shards with one job");
     while (std::getline(in, line)) {
       std::smatch m;
       if (line.rfind("{\"type\": \"Feature\"", 0) != 0 || !std::regex_search(line, m, tile)) continue;
@@ -411,23 +410,10 @@ void merge_reports(const fs::path& dir) {
 // The files the tile index lists (the run's own, not whatever else is in tiles/), in tile order,
 // with the fingerprint each had when the run wrote it.
 std::vector<std::pair<fs::path, std::string>> indexed_outputs(const fs::path& dir) {
-  std::ifstream in(dir / "tile_index.geojson");
-  if (!in) throw InputError("'" + dir.string() + "': no tile_index.geojson; is it a lodforge run's output.dir (a finished one)?");
+  const std::optional<TileIndex> index = read_tile_index(dir / "tile_index.geojson");
+  if (!index) throw InputError("'" + dir.string() + "': no tile_index.geojson; is it a lodforge run's output.dir (a finished one)?");
   std::vector<std::pair<fs::path, std::string>> out;
-  const std::regex quoted(R"re("([^"]+)")re");
-  const auto list_after = [](const std::string& line, const std::string& name) {
-    const std::size_t at = line.find("\"" + name + "\": [");
-    if (at == std::string::npos) return std::string();
-    const std::size_t open = line.find('[', at);
-    return line.substr(open, line.find(']', open) - open);
-  };
-  for (std::string line; std::getline(in, line);) {
-    const std::string files = list_after(line, "outputs"), fingerprints = list_after(line, "fingerprints");
-    std::vector<std::string> f, p;
-    for (std::sregex_iterator it(files.begin(), files.end(), quoted), stop; it != stop; ++it) f.push_back((*it)[1]);
-    for (std::sregex_iterator it(fingerprints.begin(), fingerprints.end(), quoted), stop; it != stop; ++it) p.push_back((*it)[1]);
-    for (std::size_t i = 0; i < f.size(); ++i) out.emplace_back(dir / f[i], i < p.size() ? p[i] : std::string());
-  }
+  for (const auto& [file, fingerprint] : index->outputs) out.emplace_back(dir / file, fingerprint);
   return out;
 }
 
@@ -449,20 +435,6 @@ void verify_outputs(const fs::path& dir, const std::vector<std::pair<fs::path, s
   throw InputError(text);
 }
 
-// Temporary files of merges that were killed (their writer gone): never complete, removed.
-void remove_stale_partials(const fs::path& merged) {
-  std::error_code ec;
-  for (const auto& e : fs::directory_iterator(merged, ec)) {
-    const std::string name = e.path().filename().string();
-    const std::size_t at = name.find(".partial");
-    if (at == std::string::npos || name.rfind("lodforge.", 0) != 0) continue;
-    const std::size_t digits = name.find_first_of("0123456789", at);
-    const pid_t writer = digits == at + 9 ? pid_t(std::atol(name.c_str() + digits)) : 0;
-    if (writer > 0 && writer != getpid() && (kill(writer, 0) == 0 || errno != ESRCH)) continue;  // another merge at work
-    fs::remove(e.path(), ec);
-  }
-}
-
 }  // namespace
 
 int run_merge(int argc, char** argv) {
@@ -475,21 +447,21 @@ int run_merge(int argc, char** argv) {
   if (!args.has("dir")) throw UsageError("give the run's output directory: lodforge merge OUT_DIR");
   const fs::path dir = *args.get("dir");
   if (!fs::is_directory(dir / "tiles")) throw InputError("'" + dir.string() + "': no tiles/ directory; is it a lodforge run's output.dir?");
-  std::vector<std::string> formats = {"citygml", "cityjson", "cityjsonseq", "obj", "gpkg", "geojson"};
+  std::vector<std::string> formats = model_formats();
   if (auto f = args.get("formats")) {
     formats.clear();
     std::stringstream s(*f);
     for (std::string x; std::getline(s, x, ',');) formats.push_back(x);
   }
   for (const std::string& format : formats)
-    if (format != "citygml" && format != "cityjson" && format != "cityjsonseq" && format != "obj" && format != "gpkg" && format != "geojson")
+    if (std::find(model_formats().begin(), model_formats().end(), format) == model_formats().end())
       throw InputError("--formats: unknown format '" + format + "'");
   merge_indexes(dir);
   merge_reports(dir);
   const auto outputs = indexed_outputs(dir);
   verify_outputs(dir, outputs);
   fs::create_directories(dir / "merged");
-  remove_stale_partials(dir / "merged");
+  remove_stale_temporaries(dir / "merged", 0);  // of merges that were killed
   for (const std::string& format : formats) {
     const std::string extension = extension_of(format);
     std::vector<fs::path> files;

@@ -1,7 +1,5 @@
 // lodforge run JOB.yaml: the tiled batch engine.
 #include <atomic>
-#include <cerrno>
-#include <csignal>
 #include <chrono>
 #include <filesystem>
 #include <tuple>
@@ -12,7 +10,6 @@
 #include <map>
 #include <mutex>
 #include <spdlog/spdlog.h>
-#include <regex>
 #include <set>
 #include <sstream>
 #include <sys/stat.h>
@@ -26,6 +23,7 @@
 #include "commands/commands.hpp"
 #include "common/option_visitors.hpp"
 #include "geometry/polygon.hpp"
+#include "io/atomic_file.hpp"
 #include "io/errors.hpp"
 #include "io/footprint_writer.hpp"
 #include "io/height_reader.hpp"
@@ -175,21 +173,13 @@ int run_job(int argc, char** argv) {
   if (ec || access(out_dir.c_str(), W_OK) != 0) throw InputError("output.dir '" + out_dir.string() + "': cannot create or write");
   const CheckpointStore store(job.work_dir);
   // One run (or one run per shard) at a time in a work directory.
-  const WorkDirLock lock(job.work_dir, shard.count > 1 ? "lodforge.shard-" + std::to_string(shard.index) + "-of-" +
-                                                             std::to_string(shard.count) + ".lock"
-                                                       : std::string("lodforge.lock"));
+  const WorkDirLock lock(job.work_dir, "lodforge" + shard_suffix(shard.index, shard.count) + ".lock");
   // Checkpoints half-written by killed runs (10 minutes old, their writer gone) are cleaned.
   if (const int stale = remove_stale_temporaries(job.work_dir, 600))
     spdlog::info("work_dir {}: removed {} temporary file(s) left by killed runs", job.work_dir, stale);
   // A killed run may have left temporary files (named .partial-PID); they never look complete,
   // but go once their writer is gone. Another shard's files in progress stay.
-  for (const auto& entry : fs::directory_iterator(out_dir / "tiles")) {
-    const std::string name = entry.path().filename().string();
-    const auto at = name.find(".partial-");
-    if (at == std::string::npos) continue;
-    const pid_t writer = pid_t(std::atol(name.c_str() + at + 9));
-    if (writer <= 0 || (kill(writer, 0) != 0 && errno == ESRCH)) fs::remove(entry.path(), ec);
-  }
+  remove_stale_temporaries(out_dir / "tiles", 0);
 
   // (Its CRS is read, and needed, only when some raster is on another grid and is resampled.)
   const GridSpec grid_spec{seg.size, seg.transform, seg.crs_wkt};
@@ -235,28 +225,15 @@ int run_job(int argc, char** argv) {
   // report, so that `merge` cannot take a mix of old and new tiles from an interrupted rerun.
   const std::string run_key = hex(job_key);
   std::set<std::string> indexed_outputs;
-  {
-    const std::string suffix = shard.count > 1 ? ".shard-" + std::to_string(shard.index) + "-of-" + std::to_string(shard.count) : "";
-    std::set<std::string> suffixes{"", suffix};
-    for (const std::string& sfx : suffixes) {
-      const fs::path index = out_dir / ("tile_index" + sfx + ".geojson");
-      std::ifstream in(index);
-      if (!in) continue;
-      std::stringstream buffer;
-      buffer << in.rdbuf();
-      const std::string text = buffer.str();
-      static const std::regex listed(R"re("outputs": \[([^\]]*)\])re"), quoted(R"re("([^"]+)")re"), key(R"re("run_key": "([0-9a-f]+)")re");
-      for (std::sregex_iterator it(text.begin(), text.end(), listed), stop; it != stop; ++it) {
-        const std::string list = (*it)[1];
-        for (std::sregex_iterator q(list.begin(), list.end(), quoted); q != stop; ++q) indexed_outputs.insert((*q)[1]);
-      }
-      std::smatch m;
-      if (std::regex_search(text, m, key) && m[1] == run_key) continue;
-      in.close();
-      fs::remove(index, ec);
-      fs::remove(out_dir / ("report" + sfx + ".json"), ec);
-      spdlog::info("{}: from a run with other inputs or options; removed with its report (this run writes new ones)", index.string());
-    }
+  for (const std::string& suffix : std::set<std::string>{"", shard_suffix(shard.index, shard.count)}) {
+    const fs::path index_path = out_dir / ("tile_index" + suffix + ".geojson");
+    const std::optional<TileIndex> index = read_tile_index(index_path);
+    if (!index) continue;
+    for (const auto& output : index->outputs) indexed_outputs.insert(output.first);
+    if (index->run_key == run_key) continue;
+    fs::remove(index_path, ec);
+    fs::remove(out_dir / ("report" + suffix + ".json"), ec);
+    spdlog::info("{}: from a run with other inputs or options; removed with its report (this run writes new ones)", index_path.string());
   }
   // Nothing that is not lodforge's is replaced: a file at a tile's output name that no index or
   // done marker lists is the user's, and stops the run before any work.
@@ -265,15 +242,14 @@ int run_job(int argc, char** argv) {
     for (const std::string& format : job.output.formats) extensions.push_back(extension_of(format));
     extensions.push_back(".png");
     for (int t : tiles) {
-      std::optional<std::set<std::string>> own;  // the tile's last done marker's files, read when needed
+      std::optional<std::set<std::string>> own;  // the tile's files lodforge wrote, read when needed
       for (const std::string& extension : extensions) {
         const std::string relative = "tiles/" + grid.name(t) + extension;
         const fs::path file = out_dir / relative;
         if (!fs::exists(fs::symlink_status(file, ec))) continue;
         if (!fs::is_regular_file(fs::symlink_status(file, ec)))
           throw InputError("output.dir: '" + file.string() + "' is in the way of a tile's output and is not a regular file; move it away");
-        if (indexed_outputs.count(relative)) continue;
-        if (!own) own = store.own_files(grid.name(t));
+        if (!own) own = replaceable_files(store, &indexed_outputs, grid.name(t));
         if (!own->count(relative))
           throw InputError("output.dir: '" + file.string() + "' exists and lodforge did not write it (no tile index or work_dir " +
                            "lists it); move it away or give another output.dir");

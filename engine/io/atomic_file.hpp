@@ -27,6 +27,12 @@ class AtomicTextFile {
 // (N KB free)"; else empty. Appended to write errors, so that a full disk reads as one.
 std::string disk_full_note(const std::filesystem::path& path);
 
+// Removes the temporary files lodforge's writers leave when killed (NAME.tmp-PID..., NAME.partial-PID...,
+// the PID followed by the end of the name or a dot) whose writer is gone: no process PID on this
+// machine, and untouched for min_age_seconds (a writer on another machine sharing the directory
+// holds its temporary file for seconds, not minutes). Returns how many.
+int remove_stale_temporaries(const std::filesystem::path& directory, double min_age_seconds);
+
 // The whole text at once.
 void write_text_atomically(const std::filesystem::path& path, const std::string& text);
 

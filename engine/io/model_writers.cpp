@@ -21,6 +21,11 @@ namespace lodforge {
 
 namespace fs = std::filesystem;
 
+const std::vector<std::string>& model_formats() {
+  static const std::vector<std::string> formats{"citygml", "cityjson", "cityjsonseq", "obj", "gpkg", "geojson"};
+  return formats;
+}
+
 std::string extension_of(const std::string& format) {
   if (format == "citygml") return ".gml";
   if (format == "cityjson") return ".city.json";

@@ -37,6 +37,8 @@ class ModelWriter {
 
 // format: citygml, cityjson, obj, gpkg, geojson. The file extension follows the format.
 std::unique_ptr<ModelWriter> make_model_writer(const std::string& format, const std::string& path, const WriterContext& context);
+// Every output format by name (output.formats), in the order merge writes them.
+const std::vector<std::string>& model_formats();
 std::string extension_of(const std::string& format);  // ".gml", ".city.json", ".obj", ".gpkg", ".geojson"
 
 }  // namespace lodforge

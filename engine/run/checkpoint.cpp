@@ -5,7 +5,6 @@
 #include <fstream>
 #include <sstream>
 #include <cerrno>
-#include <csignal>
 #include <fcntl.h>
 #include <sys/file.h>
 #include <unistd.h>
@@ -346,28 +345,6 @@ WorkDirLock::WorkDirLock(const std::string& directory, const std::string& name) 
 
 WorkDirLock::~WorkDirLock() {
   if (fd_ >= 0) close(fd_);  // releases the lock (the file stays: removing it would race a new holder)
-}
-
-int remove_stale_temporaries(const std::string& directory, double min_age_seconds) {
-  int removed = 0;
-  std::error_code ec;
-  const auto now = fs::file_time_type::clock::now();
-  for (const auto& entry : fs::directory_iterator(directory, ec)) {
-    const std::string name = entry.path().filename().string();
-    std::size_t at = name.rfind(".tmp-");
-    std::size_t skip = 5;
-    if (at == std::string::npos) { at = name.rfind(".partial-"); skip = 9; }
-    if (at == std::string::npos) continue;
-    const std::string digits = name.substr(at + skip);
-    if (digits.empty() || digits.find_first_not_of("0123456789") != std::string::npos || digits.size() > 9) continue;
-    const pid_t writer = pid_t(std::stol(digits));
-    if (writer == getpid() || kill(writer, 0) == 0 || errno != ESRCH) continue;  // alive (or not ours to judge)
-    std::error_code time_error;
-    const auto written = fs::last_write_time(entry.path(), time_error);
-    if (time_error || std::chrono::duration<double>(now - written).count() < min_age_seconds) continue;
-    if (fs::remove(entry.path(), time_error)) ++removed;
-  }
-  return removed;
 }
 
 }  // namespace lodforge

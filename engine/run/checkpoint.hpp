@@ -75,9 +75,5 @@ class WorkDirLock {
   int fd_ = -1;
 };
 
-// Removes the temporary files (NAME.tmp-PID, NAME.partial-PID) of writers that are gone: no
-// process PID on this machine and untouched for min_age_seconds (a writer on another machine of
-// a shared work directory holds its temporary file for seconds, not minutes). Returns how many.
-int remove_stale_temporaries(const std::string& directory, double min_age_seconds);
 
 }  // namespace lodforge

@@ -4,6 +4,7 @@
 #include <array>
 #include <filesystem>
 #include <fstream>
+#include <nlohmann/json.hpp>
 #include <spdlog/spdlog.h>
 #include <sstream>
 
@@ -105,6 +106,30 @@ void record_tile(Totals& totals, const RunPlan& plan, const TileResult& result, 
   totals.tile_json.emplace_back(r->tile, tile_json.str());
 }
 
+std::string shard_suffix(int shard_index, int shard_count) {
+  return shard_count > 1 ? ".shard-" + std::to_string(shard_index) + "-of-" + std::to_string(shard_count) : "";
+}
+
+std::optional<TileIndex> read_tile_index(const fs::path& path) {
+  std::ifstream in(path);
+  if (!in) return std::nullopt;
+  TileIndex index;
+  try {
+    const nlohmann::json json = nlohmann::json::parse(in);
+    index.run_key = json.value("run_key", "");
+    for (const auto& feature : json.at("features")) {
+      const auto& properties = feature.at("properties");
+      const auto& files = properties.at("outputs");
+      const nlohmann::json fingerprints = properties.value("fingerprints", nlohmann::json::array());
+      for (std::size_t i = 0; i < files.size(); ++i)
+        index.outputs.emplace_back(files[i].get<std::string>(), i < fingerprints.size() ? fingerprints[i].get<std::string>() : "");
+    }
+  } catch (const std::exception& e) {
+    throw InputError("'" + path.string() + "': not a lodforge tile index: " + e.what());
+  }
+  return index;
+}
+
 void write_index_and_report(const Totals& totals, const RunPlan& plan, const std::string& job_path, int shard_index,
                             int shard_count, std::size_t tiles_count, double elapsed) {
   const Job& job = plan.job;
@@ -114,7 +139,7 @@ void write_index_and_report(const Totals& totals, const RunPlan& plan, const std
   struct { int index, count; } shard{shard_index, shard_count};
   struct { std::size_t n; std::size_t size() const { return n; } } tiles{tiles_count};
   // The tile index and the run report (one per shard when sharded).
-  const std::string suffix = shard.count > 1 ? ".shard-" + std::to_string(shard.index) + "-of-" + std::to_string(shard.count) : "";
+  const std::string suffix = shard_suffix(shard.index, shard.count);
   std::ostringstream index;
   index << "{\"type\": \"FeatureCollection\", \"name\": \"tile_index\", \"run_key\": \"" << hex(plan.job_key) << "\"";
   if (const std::string crs = plan.crs.epsg(); !crs.empty())

@@ -1,6 +1,8 @@
 // The run's accounting: totals over tiles, the tile index and the report (JSON and a summary).
 #pragma once
 #include <cstddef>
+#include <filesystem>
+#include <optional>
 #include <string>
 #include <utility>
 #include <vector>
@@ -23,6 +25,19 @@ struct Totals {
 
 // Adds a finished (or resumed) tile to the totals and the index.
 void record_tile(Totals& totals, const RunPlan& plan, const TileResult& result, const TileOutputs& outputs);
+
+// ".shard-K-of-N" for shard K of a run in N shards, empty for a whole run: the suffix of its tile
+// index, run report and work_dir lock.
+std::string shard_suffix(int shard_index, int shard_count);
+
+// What a tile index says: the run key, and every output file (relative to the output directory)
+// with its fingerprint (empty in an index of an older lodforge), in tile order.
+struct TileIndex {
+  std::string run_key;
+  TileOutputs outputs;
+};
+// Reads a tile index as JSON; nullopt when there is no such file; InputError when it is not one.
+std::optional<TileIndex> read_tile_index(const std::filesystem::path& path);
 
 // Writes tile_index[.shard-K-of-N].geojson and report[...].json; logs the summary.
 void write_index_and_report(const Totals& totals, const RunPlan& plan, const std::string& job_path, int shard_index,

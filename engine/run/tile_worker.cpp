@@ -1,5 +1,6 @@
 #include "run/tile_worker.hpp"
 
+#include <algorithm>
 #include <map>
 #include <set>
 #include <mutex>
@@ -56,15 +57,7 @@ std::vector<BuildingOutput> regularize_tile(const TileBuildings& tile, const Job
     o.id = std::int64_t(b.first_row) * raster_width + b.first_col;
     o.first_row = b.first_row;
     o.first_col = b.first_col;
-    BuildingResult r;
-    try {
-      r = regularize_with(job.regularizer, b.rings, pixel_size, job.stages.core);
-    } catch (const std::exception& e) {  // one building's failure is its own, never the run's
-      r.ok = false;
-      r.failed_stage = "internal";
-      r.reason = e.what();
-      r.footprint = fallback_footprint(b.rings, job.stages.core.fallback.tolerance_m);
-    }
+    BuildingResult r = regularize_with(job.regularizer, b.rings, pixel_size, job.stages.core);
     o.footprint = std::move(r.footprint);
     o.ok = r.ok;
     o.stage = r.failed_stage;
@@ -232,6 +225,14 @@ const HeightWindowReader& ReaderPool::heights(const std::string& path) {
   return *slot;
 }
 
+std::set<std::string> replaceable_files(const CheckpointStore& store, const std::set<std::string>* indexed, const std::string& tile) {
+  std::set<std::string> files = store.own_files(tile);
+  const std::string prefix = "tiles/" + tile + ".";
+  if (indexed)
+    for (auto it = indexed->lower_bound(prefix); it != indexed->end() && it->rfind(prefix, 0) == 0; ++it) files.insert(*it);
+  return files;
+}
+
 std::shared_ptr<TileResult> process_tile(const RunPlan& plan, int tile) {
   const Job& job = plan.job;
   const TileGrid& grid = plan.grid;
@@ -245,16 +246,17 @@ std::shared_ptr<TileResult> process_tile(const RunPlan& plan, int tile) {
   const std::uint64_t done_key = fnv1a(r->name, plan.job_key);
   if (auto summary = store.done_summary(r->name, done_key)) {
     // Complete, if its files are still those it wrote; else made again (from its checkpoints).
-    std::string changed;
-    for (const auto& [relative, fingerprint] : summary_outputs(*summary))
-      if (changed.empty() && file_fingerprint((plan.out_dir / relative).string()) != fingerprint) changed = relative;
-    if (changed.empty()) {
+    const TileOutputs outputs = summary_outputs(*summary);
+    const auto changed = std::find_if(outputs.begin(), outputs.end(), [&](const auto& output) {
+      return file_fingerprint((plan.out_dir / output.first).string()) != output.second;
+    });
+    if (changed == outputs.end()) {
       r->skipped = true;
       r->summary = *summary;
       plan.readers->finished_reading(tile);
       return r;
     }
-    spdlog::warn("tile {}: {} is missing or changed since it was written; the tile is written again", r->name, changed);
+    spdlog::warn("tile {}: {} is missing or changed since it was written; the tile is written again", r->name, changed->first);
   }
   std::uint64_t contour_key = 0;
   std::optional<TileBuildings> contours;
@@ -304,13 +306,7 @@ std::shared_ptr<TileResult> process_tile(const RunPlan& plan, int tile) {
         }
         const auto started = Clock::now();  // (reads excluded, as for every stage)
         Heights& h = (*heights)[i];
-        try {
-          h = building_heights(footprint, dsm, dtm ? &*dtm : nullptr, job.stages.heights);
-        } catch (const std::exception& e) {  // the building keeps its LOD0, with the reason
-          h = Heights{};
-          h.ok = false;
-          h.reason = std::string("internal: ") + e.what();
-        }
+        h = building_heights(footprint, dsm, dtm ? &*dtm : nullptr, job.stages.heights);
         // The block must be a valid shell to count as LOD1; decided here so that the report,
         // the summary and every file agree.
         if (h.ok) {
@@ -358,52 +354,40 @@ TileOutputs write_tile_outputs(const RunPlan& plan, TileResult& result) {
   if (r->skipped) return summary_outputs(r->summary);
   const cv::Rect tile_rect = grid.rect(r->tile);
   // Files of this tile from an earlier run with other options (another format, no buildings any
-  // more) must not outlive it: those its last done marker or an earlier tile index lists, and
-  // only those (whatever else is in tiles/ is not lodforge's).
-  {
-    std::set<std::string> earlier = store.own_files(r->name);
-    if (plan.indexed_outputs)
-      for (auto it = plan.indexed_outputs->lower_bound("tiles/" + r->name + "."); it != plan.indexed_outputs->end() && it->rfind("tiles/" + r->name + ".", 0) == 0; ++it)
-        earlier.insert(*it);
-    for (const std::string& relative : earlier) {
-      std::error_code ec;
-      if (fs::is_regular_file(out_dir / relative, ec)) fs::remove(out_dir / relative, ec);
-    }
+  // more) must not outlive it: those lodforge can show it wrote, and only those (whatever else
+  // is in tiles/ is not lodforge's).
+  for (const std::string& relative : replaceable_files(store, plan.indexed_outputs, r->name)) {
+    std::error_code ec;
+    if (fs::is_regular_file(out_dir / relative, ec)) fs::remove(out_dir / relative, ec);
   }
-  WriterContext context{crs_wkt, plan.crs.epsg(), r->name, plan.transform.to_map(tile_rect.x, tile_rect.y + tile_rect.height)};
-  std::vector<std::string> written;  // relative to out_dir
-  {
-    // What is about to be written is recorded first: a run killed before this tile is marked done
-    // leaves files that are provably lodforge's (the next run replaces them, nothing else).
-    std::vector<std::string> intent;
-    if (!r->buildings.empty())
-      for (const std::string& format : job.output.formats) intent.push_back("tiles/" + r->name + extension_of(format));
-    if (!r->quicklook_background.empty()) intent.push_back("tiles/" + r->name + ".png");
-    store.record_intent(r->name, intent);
-  }
+  // The files about to be written (relative to out_dir), recorded first: a run killed before this
+  // tile is marked done leaves files that are provably lodforge's (the next run replaces them).
+  const std::vector<std::string>& formats = job.output.formats;
+  std::vector<std::string> planned;
+  if (!r->buildings.empty())
+    for (const std::string& format : formats) planned.push_back("tiles/" + r->name + extension_of(format));
+  if (!r->quicklook_background.empty()) planned.push_back("tiles/" + r->name + ".png");
+  store.record_intent(r->name, planned);
   if (!r->buildings.empty()) {
-    const std::vector<std::string>& formats = job.output.formats;
-    {
-      // The formats are written side by side (each its own file); a thread with no tile left to
-      // take helps the last ones. An error in any is rethrown here, after all have stopped.
-      // The models (LOD1 solids included) are made once for all the formats.
-      const auto modeling = Clock::now();
-      std::vector<BuildingModel> models;
-      models.reserve(r->buildings.size());
-      for (std::size_t i = 0; i < r->buildings.size(); ++i)
-        models.push_back(model_of(r->buildings[i], r->heights.empty() ? nullptr : &r->heights[i], r->name, job));
-      r->write_seconds += seconds_since(modeling);
-      std::vector<double> seconds(formats.size());
-      within_tile([&] { tbb::parallel_for(std::size_t(0), formats.size(), [&](std::size_t f) {
-        const auto started = Clock::now();
-        const auto writer = make_model_writer(formats[f], (out_dir / ("tiles/" + r->name + extension_of(formats[f]))).string(), context);
-        for (const BuildingModel& m : models) writer->add(m);
-        writer->finish();
-        seconds[f] = seconds_since(started);
-      }); });
-      for (double s : seconds) r->write_seconds += s;
-    }
-    for (const std::string& format : formats) written.push_back("tiles/" + r->name + extension_of(format));
+    // The formats are written side by side (each its own file); a thread with no tile left to
+    // take helps the last ones. An error in any is rethrown here, after all have stopped.
+    // The models (LOD1 solids included) are made once for all the formats.
+    const auto modeling = Clock::now();
+    std::vector<BuildingModel> models;
+    models.reserve(r->buildings.size());
+    for (std::size_t i = 0; i < r->buildings.size(); ++i)
+      models.push_back(model_of(r->buildings[i], r->heights.empty() ? nullptr : &r->heights[i], r->name, job));
+    r->write_seconds += seconds_since(modeling);
+    const WriterContext context{crs_wkt, plan.crs.epsg(), r->name, plan.transform.to_map(tile_rect.x, tile_rect.y + tile_rect.height)};
+    std::vector<double> seconds(formats.size());
+    within_tile([&] { tbb::parallel_for(std::size_t(0), formats.size(), [&](std::size_t f) {
+      const auto started = Clock::now();
+      const auto writer = make_model_writer(formats[f], (out_dir / planned[f]).string(), context);
+      for (const BuildingModel& m : models) writer->add(m);
+      writer->finish();
+      seconds[f] = seconds_since(started);
+    }); });
+    for (double s : seconds) r->write_seconds += s;
   }
   if (!r->quicklook_background.empty()) {
     std::vector<QuicklookOutline> outlines;
@@ -411,13 +395,12 @@ TileOutputs write_tile_outputs(const RunPlan& plan, TileResult& result) {
     GeoTransform t = plan.transform;
     t.c[0] = plan.transform.to_map(tile_rect.x, tile_rect.y).x();
     t.c[3] = plan.transform.to_map(tile_rect.x, tile_rect.y).y();
-    write_quicklook((out_dir / ("tiles/" + r->name + ".png")).string(), r->quicklook_background, t, outlines);
-    written.push_back("tiles/" + r->name + ".png");
+    write_quicklook((out_dir / planned.back()).string(), r->quicklook_background, t, outlines);
   }
   // Each file with its fingerprint, in the done marker and (by the caller) in the tile index:
   // a later run or merge trusts it only while it is unchanged.
   TileOutputs outputs;
-  for (const std::string& relative : written) {
+  for (const std::string& relative : planned) {
     std::string fingerprint = file_fingerprint((out_dir / relative).string());
     if (fingerprint.empty()) throw InputError("'" + (out_dir / relative).string() + "': written, but gone or not a file");
     r->summary += summary_output_line(relative, fingerprint);

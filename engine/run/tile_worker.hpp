@@ -86,6 +86,11 @@ struct TileResult {
 
 std::shared_ptr<TileResult> process_tile(const RunPlan& plan, int tile);
 
+// The files of a tile (relative to out_dir) that lodforge can show it wrote, and so may replace:
+// those its done marker or write intent lists (store.own_files) and those an earlier tile index
+// lists (indexed, may be null).
+std::set<std::string> replaceable_files(const CheckpointStore& store, const std::set<std::string>* indexed, const std::string& tile);
+
 // The pixels a tile reads as planned: its rectangle with the halo, and with the heights' margin
 // when there is a DSM (a window grown for a large building reads more).
 cv::Rect tile_read_area(const RunPlan& plan, int tile);

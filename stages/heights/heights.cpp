@@ -52,8 +52,10 @@ cv::Rect heights_box(const PolygonWithHoles& footprint, const GeoTransform& tran
   return footprint_box(footprint, transform, size, margin);
 }
 
-Heights building_heights(const PolygonWithHoles& footprint, const HeightRaster& dsm, const HeightRaster* dtm,
-                         const HeightOptions& o) {
+namespace {
+
+Heights measure_heights(const PolygonWithHoles& footprint, const HeightRaster& dsm, const HeightRaster* dtm,
+                        const HeightOptions& o) {
   Heights h;
   const double pixel = dsm.transform.pixel_size();
   const cv::Rect box = heights_box(footprint, dsm.transform, dsm.values.size(), o);
@@ -91,6 +93,20 @@ Heights building_heights(const PolygonWithHoles& footprint, const HeightRaster& 
   }
   h.ok = true;
   return h;
+}
+
+}  // namespace
+
+Heights building_heights(const PolygonWithHoles& footprint, const HeightRaster& dsm, const HeightRaster* dtm,
+                         const HeightOptions& o) {
+  try {
+    return measure_heights(footprint, dsm, dtm, o);
+  } catch (const std::exception& e) {  // one building's failure is its own: it keeps its LOD0, with the reason
+    Heights h;
+    h.ok = false;
+    h.reason = std::string("internal: ") + e.what();
+    return h;
+  }
 }
 
 }  // namespace lodforge

@@ -47,7 +47,7 @@ struct Heights {
 // these pixels gives the same heights as any larger one.
 cv::Rect heights_box(const PolygonWithHoles& footprint, const GeoTransform& transform, cv::Size size, const HeightOptions& options);
 
-// dtm may be null (ground from a DSM ring).
+// dtm may be null (ground from a DSM ring). Never throws: a failure is a status with its reason.
 Heights building_heights(const PolygonWithHoles& footprint, const HeightRaster& dsm, const HeightRaster* dtm,
                          const HeightOptions& options);
 

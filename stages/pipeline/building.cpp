@@ -459,19 +459,26 @@ BuildingResult regularize_with(const std::string& regularizer, const std::vector
     result.reason = "no contour";
     return result;
   }
-  if (regularizer == "cgal") {
-    std::string problem;
-    result.footprint = cgal_regularize_contours(rings, options.cgal, &problem);
-    if (!problem.empty()) {
-      result.ok = false;
-      result.failed_stage = "cgal";
-      result.reason = problem;
-      result.footprint = fallback_footprint(rings, options.fallback.tolerance_m);
-    }
-  } else if (regularizer == "douglas_peucker" || regularizer == "none") {
-    result.footprint = fallback_footprint(rings, regularizer == "douglas_peucker" ? options.fallback.tolerance_m : 0.0);
-  } else {
+  if (regularizer != "cgal" && regularizer != "douglas_peucker" && regularizer != "none")
     throw std::invalid_argument("unknown regularizer '" + regularizer + "'");
+  try {
+    if (regularizer == "cgal") {
+      std::string problem;
+      result.footprint = cgal_regularize_contours(rings, options.cgal, &problem);
+      if (!problem.empty()) {
+        result.ok = false;
+        result.failed_stage = "cgal";
+        result.reason = problem;
+        result.footprint = fallback_footprint(rings, options.fallback.tolerance_m);
+      }
+    } else {
+      result.footprint = fallback_footprint(rings, regularizer == "douglas_peucker" ? options.fallback.tolerance_m : 0.0);
+    }
+  } catch (const std::exception& e) {  // one building's failure is its own, never the run's
+    result.ok = false;
+    result.failed_stage = "internal";
+    result.reason = e.what();
+    result.footprint = fallback_footprint(rings, options.fallback.tolerance_m);
   }
   result.seconds = std::chrono::duration<double>(Clock::now() - start).count();
   return result;

@@ -40,7 +40,8 @@ BuildingResult regularize_building(const std::vector<Ring>& rings, double pixel_
 // contour, collinear vertices removed). The last two always succeed.
 const std::vector<std::string>& regularizer_names();
 
-// The same rings through a named regularizer (one of regularizer_names()).
+// The same rings through a named regularizer (one of regularizer_names()). A failure inside is
+// the building's status (ok false, stage, reason, the fallback footprint), never an exception.
 BuildingResult regularize_with(const std::string& regularizer, const std::vector<Ring>& rings, double pixel_size,
                                const CoreOptions& options);
 
