@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <cmath>
 
+#include <Eigen/Dense>
+
 #include "geometry/polygon.hpp"
 #include "labeling/mrf.hpp"
 
@@ -34,6 +36,53 @@ Line fit_line(const Ring& ring, int first, int count, const Vec2& normal) {
   return {normal, total > 0 ? weighted / total : normal.dot(ring[first])};
 }
 
+// True when a parabola across the run's middle (its ends, a window each, left out) explains at
+// least min_explained of the contour's spread about a straight line: an arc bends one way over
+// its whole length, a wobble of several half-waves along a long wall does not.
+bool bends_consistently(const Ring& ring, int first, int count, const Line& line, double trim, double min_explained) {
+  if (min_explained <= 0) return true;
+  const Vec2 along(-line.normal.y(), line.normal.x());
+  const double total = run_length(ring, first, count);
+  Eigen::Matrix3d quadratic = Eigen::Matrix3d::Zero();
+  Eigen::Vector3d rhs = Eigen::Vector3d::Zero();
+  double position = 0, origin = 0;
+  bool have_origin = false;
+  for (int k = 0; k < count; ++k) {
+    const std::size_t i = (first + k) % ring.size();
+    const Vec2 e = edge_vector(ring, i);
+    const double len = e.norm();
+    position += len;
+    if (position < trim || position > total - trim) continue;
+    const Vec2 mid = ring[i] + 0.5 * e;
+    if (!have_origin) { origin = along.dot(mid); have_origin = true; }
+    const double u = along.dot(mid) - origin, v = line.normal.dot(mid) - line.offset;
+    const Eigen::Vector3d basis(1.0, u, u * u);
+    quadratic += len * basis * basis.transpose();
+    rhs += len * v * basis;
+  }
+  if (quadratic(0, 0) <= 0) return false;
+  // Spread about the best straight line (offset and tilt) and about the best parabola.
+  const auto residual = [&](int terms) {
+    const Eigen::VectorXd c = quadratic.topLeftCorner(terms, terms).ldlt().solve(rhs.head(terms));
+    return c.dot(quadratic.topLeftCorner(terms, terms) * c) - 2 * c.dot(rhs.head(terms));
+  };
+  // Both residuals less the same sum of v^2, which cancels in their difference.
+  const double straight = residual(2), bent = residual(3);
+  double sum_v2 = 0;
+  position = 0;
+  for (int k = 0; k < count; ++k) {
+    const std::size_t i = (first + k) % ring.size();
+    const Vec2 e = edge_vector(ring, i);
+    const double len = e.norm();
+    position += len;
+    if (position < trim || position > total - trim) continue;
+    const double v = line.normal.dot(ring[i] + 0.5 * e) - line.offset;
+    sum_v2 += len * v * v;
+  }
+  const double spread = sum_v2 + straight;  // about the straight line
+  return spread > 0 && (straight - bent) >= min_explained * spread;
+}
+
 // True when the run's contour departs from its line by more than curve_px, and curve_noise_factor
 // times the building's boundary noise, on average over two consecutive windows of curve_window_px
 // and curve_window_m, both to the same side: a boundary wobble averages out over a window or
@@ -57,7 +106,7 @@ bool is_curved(const Ring& ring, int first, int count, const Line& line, const C
     if (window_length >= window) {
       const double mean = window_sum / window_length;
       const int now = std::abs(mean) > threshold ? (mean > 0 ? 1 : -1) : 0;
-      if (now != 0 && now == side) return true;
+      if (now != 0 && now == side) return bends_consistently(ring, first, count, line, window, o.curve_min_explained);
       side = now;
       window_length = window_sum = 0;
     }

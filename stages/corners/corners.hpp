@@ -24,6 +24,7 @@ struct CornerOptions {
   double curve_noise_factor = 2.5;   // ... and this many times the building's boundary noise
   double curve_window_px = 16.0;     // ... measured as the mean offset over windows of this length
   double curve_window_m = 4.0;       // ... and at least this (m)
+  double curve_min_explained = 0.3;  // ... and a parabola explains this share of its spread about a line
   double curve_tolerance_noise = 0.5;  // a curve's contour is simplified to a pixel and this many times the noise
   double snap_max_deg = 10.0;        // a straight wall within this of the building's lattice ...
   double snap_shift_m = 0.0;         // ... is turned onto it when its ends move by at most this (m) ...
@@ -51,6 +52,7 @@ struct CornerOptions {
     v("curve_noise_factor", curve_noise_factor, "... and by more than this many times the building's boundary noise (a wobble's window means stay below, an arc's do not)", Check::at_least(0));
     v("curve_window_px", curve_window_px, "length of the windows over which a run's departure from its line is averaged (pixels)", Check::above(0));
     v("curve_window_m", curve_window_m, "... and their least length (m)", Check::at_least(0));
+    v("curve_min_explained", curve_min_explained, "... and a parabola along the run explains at least this share of its contour's spread about a straight line: an arc bends one way all along, a wobble of several half-waves along a long wall does not (0 = off)", Check::between(0, 1));
     v("curve_tolerance_noise", curve_tolerance_noise, "a curved wall's contour is simplified by Douglas-Peucker to a pixel or this many times the boundary noise, the larger", Check::at_least(0));
     v("snap_max_deg", snap_max_deg, "a straight wall within this angle of the building's lattice (its main direction and quarter turns of it) is turned onto the lattice when that moves its ends little (degrees, 0 = off)", Check::between(0, 45));
     v("snap_shift_m", snap_shift_m, "... by at most this (m) ...", Check::at_least(0));

@@ -32,7 +32,11 @@ std::vector<Vec2> smooth_normals(const Ring& ring, double pixel_size, const Smoo
     s += len;
   }
   const double total = s;
-  const double floor_m = o.min_neighbourhood_px * pixel_size;
+  // At least min_neighbourhood_px (a staircase averages to its wall's direction), but at most
+  // max_neighbourhood_m (walls that short keep their own normals), never below least_neighbourhood_px.
+  double floor_m = o.min_neighbourhood_px * pixel_size;
+  if (o.max_neighbourhood_m > 0)
+    floor_m = std::max(std::min(floor_m, o.max_neighbourhood_m), std::min(floor_m, o.least_neighbourhood_px * pixel_size));
   const double scale = std::max(1.0, floor_m / std::max(o.neighbourhood_m, 1e-12));
   const double threshold = o.neighbourhood_m * scale;
   const double sigma_d2 = std::pow(o.sigma_d_m * scale, 2);

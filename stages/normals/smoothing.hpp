@@ -13,6 +13,8 @@ struct SmoothingOptions {
   double neighbourhood_m = 0.5;  // thre_d: neighbours closer than this along the contour (m)
   double min_neighbourhood_px = 5.0;  // on coarse rasters, widen both to this many pixels
                                       // (the paper's 0.5 m at its 9 cm pixels is 5.5 px)
+  double max_neighbourhood_m = 2.5;     // ... but at most this (m): walls this short keep their own normals
+  double least_neighbourhood_px = 2.0;  // ... the bound never narrowing it below this many pixels
   int passes = 3;                // one pass leaves a wall as two clusters (NOTES.md)
 
   template <class V>
@@ -21,6 +23,8 @@ struct SmoothingOptions {
     v("sigma_a_deg", sigma_a_deg, "angle width sigma_a of eq. 2 (degrees)", Check::above(0));
     v("neighbourhood_m", neighbourhood_m, "thre_d: neighbours along the contour closer than this (m)", Check::at_least(0));
     v("min_neighbourhood_px", min_neighbourhood_px, "lower bound of thre_d and sigma_d in pixels, for coarse rasters", Check::at_least(0));
+    v("max_neighbourhood_m", max_neighbourhood_m, "upper bound of that widening in metres: on coarse rasters (pixels over 0.5 m) min_neighbourhood_px pixels would average the normals of walls shorter than this, which then get no direction of their own (0 = no bound)", Check::at_least(0));
+    v("least_neighbourhood_px", least_neighbourhood_px, "... the bound never narrowing the widening below this many pixels (a staircase needs two edges to show its wall's direction)", Check::at_least(0));
     v("passes", passes, "number of smoothing passes", Check::between(1, 100));
   }
 };

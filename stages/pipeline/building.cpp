@@ -253,6 +253,12 @@ double contour_fit(const std::vector<Ring>& rings, const PolygonWithHoles& polyg
   return total > 0 ? sum / total : 0.0;
 }
 
+std::size_t vertex_count(const PolygonWithHoles& polygon) {
+  std::size_t n = polygon.outer.size();
+  for (const Ring& hole : polygon.holes) n += hole.size();
+  return n;
+}
+
 // The contour length labeled with each direction.
 std::vector<double> labeled_support(const EdgeLabels& labels, const std::vector<std::vector<double>>& lengths,
                                     std::size_t directions) {
@@ -271,6 +277,16 @@ Vec2 main_direction(const EdgeLabels& labels, const std::vector<std::vector<doub
 // The boundary noise the model choice allows for (m): as measured, and at least a staircase's.
 double model_noise(const BuildingResult& result, double pixel_size, const ModelOptions& o) {
   return std::max(result.noise_m, o.min_noise_px * pixel_size);
+}
+
+// How much worse a simpler outline may explain the contour (mean distance) and still be taken:
+// models.lattice_tolerance standard errors of that mean, the noise over the square root of the
+// number of independent stretches of contour (of the noise's correlation length) along the rings.
+double fit_tolerance(const std::vector<Ring>& rings, double pixel_size, const BuildingResult& result, const CoreOptions& o) {
+  double perimeter_m = 0;
+  for (const Ring& ring : rings) perimeter_m += perimeter(ring);
+  const double correlation = std::max(o.corners.snap_correlation_m, pixel_size);
+  return o.models.lattice_tolerance * model_noise(result, pixel_size, o.models) * std::sqrt(correlation / std::max(perimeter_m, correlation));
 }
 
 // Replaces the chain's outline by the building's moment rectangle when that explains the contour
@@ -370,19 +386,51 @@ void run_chain(const std::vector<Ring>& rings, double pixel_size, const CoreOpti
   CornerContext context;
   if (on_lattice) context.lattice = main_direction(labels, input.lengths, input.directions);
   context.noise = noise;
+  const double allowed = o.models.outline_tolerance * model_noise(result, pixel_size, o.models);
   PolygonWithHoles regular, plain;
   const StageProblem regular_problem =
       outline(fit_rings, labels, input.directions, o, origin, pixel_size, context,
               std::max(o.corners.min_run_px, o.corners.min_run_noise * noise / pixel_size), regular);
   const StageProblem plain_problem =
       outline(fit_rings, labels, input.directions, o, origin, pixel_size, CornerContext{}, o.corners.min_run_px, plain);
-  if (!regular_problem.second.empty() && !plain_problem.second.empty())
-    throw StageError(regular_problem.first, regular_problem.second);
-  const double allowed = o.models.outline_tolerance * model_noise(result, pixel_size, o.models);
-  const bool regular_wins = !plain_problem.second.empty() ||
-                            (regular_problem.second.empty() && contour_fit(rings, regular) <= contour_fit(rings, plain) + allowed);
-  result.footprint = std::move(regular_wins ? regular : plain);
-  result.model = regular_wins ? "regular" : "lines";
+  // The lattice outline: every wall on the building's lattice (its main direction and quarter
+  // turns), labeled by the MRF among those four alone. The most regular outline the building can
+  // have short of a rectangle; it replaces the chain's when it has no more vertices and explains
+  // the contour about as well (fit_tolerance), and stands in for a chain that failed.
+  PolygonWithHoles lattice_outline;
+  bool lattice_ok = false;
+  if (on_lattice && o.models.lattice_tolerance > 0) {
+    LabelingInput axes = input;
+    const Vec2 l = context.lattice;
+    axes.directions = {l, Vec2(-l.y(), l.x()), -l, Vec2(l.y(), -l.x())};
+    axes.support.assign(4, 1.0);
+    const EdgeLabels axis_labels = label_edges(axes, o.labeling);
+    CoreOptions straight = o;  // its walls are straight: no curve
+    straight.corners.curve_px = 0;
+    lattice_ok = outline(fit_rings, axis_labels, axes.directions, straight, origin, pixel_size, context,
+                         std::max(o.corners.min_run_px, o.corners.min_run_noise * noise / pixel_size), lattice_outline)
+                     .second.empty();
+  }
+  const double lattice_fit = lattice_ok ? contour_fit(rings, lattice_outline) : 0.0;
+  if (!regular_problem.second.empty() && !plain_problem.second.empty()) {
+    // As a stand-in for a failed chain, the lattice outline must explain the contour within the
+    // noise, or as well as the fallback does.
+    const bool rescues = lattice_ok && (lattice_fit <= o.models.rescue_fit_noise * model_noise(result, pixel_size, o.models) ||
+                                        lattice_fit <= contour_fit(rings, fallback_footprint(rings, o.fallback.tolerance_m)) + allowed);
+    if (!rescues) throw StageError(regular_problem.first, regular_problem.second);
+    result.footprint = std::move(lattice_outline);
+    result.model = "lattice";
+  } else {
+    const bool regular_wins = !plain_problem.second.empty() ||
+                              (regular_problem.second.empty() && contour_fit(rings, regular) <= contour_fit(rings, plain) + allowed);
+    result.footprint = std::move(regular_wins ? regular : plain);
+    result.model = regular_wins ? "regular" : "lines";
+    if (lattice_ok && vertex_count(lattice_outline) <= vertex_count(result.footprint) &&
+        lattice_fit <= contour_fit(rings, result.footprint) + fit_tolerance(rings, pixel_size, result, o)) {
+      result.footprint = std::move(lattice_outline);
+      result.model = "lattice";
+    }
+  }
   if (on_lattice) choose_rectangle(rings, pixel_size, o.models, result);  // a round shape is no rectangle
 }
 
