@@ -440,6 +440,38 @@ TEST_F(ModelFiles, DsmOnTheSameGridInAnotherCrsIsRefusedBeforeAnyOutput) {
   EXPECT_TRUE(written.empty()) << written.front();
 }
 
+// Issue 17: output.crs declares the inputs' CRS with a vertical one; one that is not an EPSG code,
+// or whose horizontal part is not the inputs' CRS (nothing is reprojected), stops the run before
+// any output, naming the key.
+TEST_F(ModelFiles, AnOutputCrsThatIsNotTheInputsIsRefusedBeforeAnyOutput) {
+  const std::string data = test::test_data();
+  const auto run = [&](const std::string& name, const std::string& crs) {
+    std::ofstream(dir / (name + ".yaml")) << "inputs:\n  segmentation: {path: " << data << "/delft-ahn3-bgt/derived/top_class_50cm.tif}\n"
+                                          << "tiling: {tile_size_m: 1000}\noutput: {dir: " << name << "_out, crs: \"" << crs << "\"}\n"
+                                          << "work_dir: " << name << "_work\n";
+    return shell(std::string(LODFORGE_BINARY) + " run " + (dir / (name + ".yaml")).string() + " --threads 2");
+  };
+  const Output utm = run("utm", "EPSG:32631");
+  EXPECT_EQ(utm.code, 1) << utm.output;
+  EXPECT_NE(utm.output.find("output.crs: 'EPSG:32631' is horizontally WGS 84 / UTM zone 31N (EPSG:32631), but the inputs are in "
+                            "Amersfoort / RD New (EPSG:28992)"), std::string::npos) << utm.output;
+  const Output bad = run("bad", "RD+NAP");
+  EXPECT_EQ(bad.code, 1) << bad.output;
+  EXPECT_NE(bad.output.find("output.crs: 'RD+NAP' is not an EPSG code GDAL knows"), std::string::npos) << bad.output;
+  const Output vertical = run("vertical", "EPSG:5709");
+  EXPECT_EQ(vertical.code, 1) << vertical.output;
+  EXPECT_NE(vertical.output.find("output.crs: 'EPSG:5709' (NAP height) has no horizontal CRS"), std::string::npos) << vertical.output;
+  for (const char* out : {"utm_out", "bad_out", "vertical_out"}) {
+    std::vector<std::string> written;
+    if (fs::exists(dir / out))
+      for (const auto& entry : fs::recursive_directory_iterator(dir / out))
+        if (entry.is_regular_file()) written.push_back(entry.path().string());
+    EXPECT_TRUE(written.empty()) << written.front();
+  }
+  const Output same = run("same", "EPSG:28992");  // the inputs' own CRS: accepted
+  EXPECT_EQ(same.code, 0) << same.output;
+}
+
 // Issue 17: CityJSON Text Sequences per tile and merged: one feature per building, the same
 // buildings and coordinates as the CityJSON files, valid against the CityJSONFeature schema.
 TEST_F(ModelFiles, CityJsonSeqHoldsTheSameBuildingsAsCityJsonAndValidates) {
@@ -498,7 +530,8 @@ TEST_F(ModelFiles, MergedTilesEqualOneTileAndValidate) {
   auto job = [&](const std::string& name, double tile) {
     std::ofstream(dir / (name + ".yaml")) << "inputs:\n  segmentation: {path: " << data << "/delft-ahn3-bgt/derived/top_class_50cm.tif}\n"
                                           << "  dsm: {path: " << data << "/delft-ahn3-bgt/derived/dsm_50cm.tif}\n"
-                                          << "tiling: {tile_size_m: " << tile << "}\noutput: {dir: " << name << "_out}\nwork_dir: " << name << "_work\n";
+                                          << "tiling: {tile_size_m: " << tile << "}\noutput: {dir: " << name << "_out, crs: \"EPSG:7415\"}\n"
+                                          << "work_dir: " << name << "_work\n";
     const Output r = shell(std::string(LODFORGE_BINARY) + " run " + (dir / (name + ".yaml")).string());
     EXPECT_EQ(r.code, 0) << r.output;
   };
@@ -557,7 +590,40 @@ TEST_F(ModelFiles, MergedTilesEqualOneTileAndValidate) {
   // The merged files name the run, not their first tile.
   EXPECT_NE(gml.find("<gml:name>lodforge, merged from "), std::string::npos);
   EXPECT_EQ(gml.find("<gml:name>lodforge tile "), std::string::npos);
-  EXPECT_NE(slurp_file(merged / "lodforge.city.json").find("\"title\": \"lodforge, merged from "), std::string::npos);
+  const std::string cityjson = slurp_file(merged / "lodforge.city.json"), whole_cityjson = slurp_file(dir / "whole_out" / "tiles" / "r0000_c0000.city.json");
+  EXPECT_NE(cityjson.find("\"title\": \"lodforge, merged from "), std::string::npos);
+  // The CRS the job declares (output.crs: RD New + NAP height, issue 17), in each format's form.
+  EXPECT_NE(gml.find("srsName=\"urn:ogc:def:crs:EPSG::7415\""), std::string::npos);
+  EXPECT_EQ(gml.find("srsName=\"EPSG:"), std::string::npos);
+  EXPECT_NE(cityjson.find("\"referenceSystem\": \"https://www.opengis.net/def/crs/EPSG/0/7415\""), std::string::npos);
+  EXPECT_NE(slurp_file(merged / "lodforge.obj").find("CRS EPSG:7415"), std::string::npos);
+  // The merged extent (the union of the tiles') is the one-tile run's, and holds every vertex.
+  const std::regex envelope(R"(<gml:lowerCorner>([^<]*)</gml:lowerCorner><gml:upperCorner>([^<]*)</gml:upperCorner>)");
+  std::smatch merged_box, whole_box;
+  ASSERT_TRUE(std::regex_search(gml, merged_box, envelope));
+  ASSERT_TRUE(std::regex_search(whole, whole_box, envelope));
+  EXPECT_EQ(merged_box[1], whole_box[1]);
+  EXPECT_EQ(merged_box[2], whole_box[2]);
+  const std::regex extent(R"re("geographicalExtent": (\[[^\]]*\]))re");
+  std::smatch merged_extent, whole_extent;
+  ASSERT_TRUE(std::regex_search(cityjson, merged_extent, extent));
+  ASSERT_TRUE(std::regex_search(whole_cityjson, whole_extent, extent));
+  EXPECT_EQ(merged_extent[1], whole_extent[1]);
+  std::istringstream lower(merged_box[1].str()), upper(merged_box[2].str());
+  double box[6];
+  lower >> box[0] >> box[1] >> box[2];
+  upper >> box[3] >> box[4] >> box[5];
+  const std::regex pos(R"(<gml:posList>([^<]*)</gml:posList>)");
+  for (std::sregex_iterator it(gml.begin(), gml.end(), pos), stop; it != stop; ++it) {
+    std::istringstream numbers((*it)[1].str());
+    double v[3];
+    for (int k = 0; numbers >> v[k % 3]; ++k)
+      if (k % 3 == 2)
+        for (int c = 0; c < 3; ++c) {
+          EXPECT_GE(v[c], box[c] - 1e-3);
+          EXPECT_LE(v[c], box[c + 3] + 1e-3);
+        }
+  }
   if (schemas.empty()) GTEST_SKIP() << test::kNoSchemas;  // (everything above was checked)
 }
 

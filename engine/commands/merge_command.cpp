@@ -6,6 +6,7 @@
 #include <fstream>
 #include <gdal_priv.h>
 #include <iostream>
+#include <limits>
 #include <map>
 #include <memory>
 #include <ogrsf_frmts.h>
@@ -29,9 +30,50 @@ namespace fs = std::filesystem;
 
 namespace {
 
+std::string fixed3(double v) {
+  char buffer[48];
+  std::snprintf(buffer, sizeof buffer, "%.3f", v);
+  return buffer;
+}
+
+// The union of the extents the files declare in their first lines (CityGML's gml:boundedBy,
+// CityJSON's geographicalExtent): the merged file's. A file without one (written by an earlier
+// version) is named in a warning and left out.
+Extent merged_extent(const std::vector<fs::path>& files) {
+  static const std::regex gml(R"(<gml:lowerCorner>(\S+) (\S+) (\S+)</gml:lowerCorner><gml:upperCorner>(\S+) (\S+) (\S+)</gml:upperCorner>)");
+  static const std::regex json(R"re("geographicalExtent": ?\[([^\]]*)\])re");
+  constexpr double inf = std::numeric_limits<double>::infinity();
+  Extent all{inf, inf, inf, -inf, -inf, -inf};
+  for (const fs::path& file : files) {
+    std::ifstream in(file);
+    std::string line;
+    std::vector<double> values;
+    for (int k = 0; k < 8 && values.empty() && std::getline(in, line); ++k) {
+      std::smatch m;
+      if (std::regex_search(line, m, gml)) {
+        for (std::size_t i = 1; i <= 6; ++i) values.push_back(std::stod(m[i]));
+      } else if (std::regex_search(line, m, json)) {
+        std::istringstream list(m[1].str());
+        for (std::string item; std::getline(list, item, ',');) values.push_back(std::stod(item));
+      }
+    }
+    if (values.size() != 6) {
+      spdlog::warn("'{}': declares no extent (written by an earlier lodforge?); the merged extent leaves it out", file.string());
+      continue;
+    }
+    for (std::size_t i = 0; i < 3; ++i) {
+      all[i] = std::min(all[i], values[i]);
+      all[i + 3] = std::max(all[i + 3], values[i + 3]);
+    }
+  }
+  if (all[0] > all[3]) all = Extent{};
+  return all;
+}
+
 // CityGML: one header, every tile's cityObjectMember blocks, one footer.
 void merge_citygml(const std::vector<fs::path>& files, const fs::path& target) {
   AtomicTextFile o(target);
+  const Extent extent = merged_extent(files);
   for (std::size_t k = 0; k < files.size(); ++k) {
     std::ifstream in(files[k]);
     std::string line;
@@ -41,6 +83,11 @@ void merge_citygml(const std::vector<fs::path>& files, const fs::path& target) {
       if (line.rfind("  <core:cityObjectMember>", 0) == 0) body = true;
       if (!body && k == 0 && line.rfind("  <gml:name>lodforge tile ", 0) == 0)  // the merged file is the run's, not a tile's
         line = "  <gml:name>lodforge, merged from " + std::to_string(files.size()) + " tiles</gml:name>";
+      if (!body && k == 0 && line.rfind("  <gml:boundedBy>", 0) == 0)
+        line = std::regex_replace(line, std::regex("<gml:lowerCorner>.*</gml:upperCorner>"),
+                                  "<gml:lowerCorner>" + fixed3(extent[0]) + ' ' + fixed3(extent[1]) + ' ' + fixed3(extent[2]) +
+                                      "</gml:lowerCorner><gml:upperCorner>" + fixed3(extent[3]) + ' ' + fixed3(extent[4]) + ' ' +
+                                      fixed3(extent[5]) + "</gml:upperCorner>");
       if (body || k == 0) o.out() << line << '\n';
     }
   }
@@ -63,6 +110,7 @@ void merge_obj(const std::vector<fs::path>& files, const fs::path& target) {
   long long ox = 0, oy = 0;
   std::size_t offset = 0;
   const std::regex origin(R"(# origin (\S+) (\S+) )");
+  std::string crs = "unknown";  // the first tile's, from its first line
   for (std::size_t k = 0; k < files.size(); ++k) {
     std::ifstream in(files[k]);
     std::string line;
@@ -70,13 +118,15 @@ void merge_obj(const std::vector<fs::path>& files, const fs::path& target) {
     std::size_t count = 0;
     while (std::getline(in, line)) {
       std::smatch m;
-      if (std::regex_search(line, m, origin)) {
+      if (k == 0 && line.rfind("# lodforge OBJ, tile ", 0) == 0 && line.find(", CRS ") != std::string::npos) {
+        crs = line.substr(line.find(", CRS ") + 6);
+      } else if (std::regex_search(line, m, origin)) {
         tx = millimetres(m[1]);
         ty = millimetres(m[2]);
         if (k == 0) {
           ox = tx;
           oy = ty;
-          o.out() << "# lodforge OBJ, merged from " << files.size() << " tiles\n" << line << '\n';
+          o.out() << "# lodforge OBJ, merged from " << files.size() << " tiles, CRS " << crs << "\n" << line << '\n';
         }
       } else if (line.rfind("v ", 0) == 0) {
         std::istringstream v(line.substr(2));
@@ -101,6 +151,7 @@ void merge_obj(const std::vector<fs::path>& files, const fs::path& target) {
 // CityJSON: CityObjects concatenated, vertices re-indexed onto one transform.
 void merge_cityjson(const std::vector<fs::path>& files, const fs::path& target) {
   AtomicTextFile o(target);
+  const Extent extent = merged_extent(files);
   std::map<std::array<long long, 3>, std::size_t> index;
   std::vector<std::array<long long, 3>> vertices;
   long long ox = 0, oy = 0;
@@ -119,7 +170,11 @@ void merge_cityjson(const std::vector<fs::path>& files, const fs::path& target) 
       oy = ty;
       const std::size_t objects = text.find("\"CityObjects\": {");
       const std::string merged_title = "\"title\": \"lodforge, merged from " + std::to_string(files.size()) + " tiles\"";
-      o.out() << std::regex_replace(text.substr(0, objects), std::regex(R"re("title": "lodforge tile [^"]*")re"), merged_title)
+      std::string merged_extent_text = "\"geographicalExtent\": [";
+      for (std::size_t i = 0; i < 6; ++i) merged_extent_text += (i ? ", " : "") + fixed3(extent[i]);
+      merged_extent_text += "]";
+      const std::string header = std::regex_replace(text.substr(0, objects), std::regex(R"re("title": "lodforge tile [^"]*")re"), merged_title);
+      o.out() << std::regex_replace(header, std::regex(R"re("geographicalExtent": \[[^\]]*\])re"), merged_extent_text)
               << "\"CityObjects\": {";
     }
     // This tile's vertices, moved onto the first tile's translate.
@@ -181,6 +236,7 @@ void merge_cityjson(const std::vector<fs::path>& files, const fs::path& target) 
 // each read as JSON and its vertices moved onto the first tile's transform (exact integers).
 void merge_cityjsonseq(const std::vector<fs::path>& files, const fs::path& target) {
   AtomicTextFile o(target);
+  const Extent extent = merged_extent(files);
   std::array<long long, 2> first_translate{};
   for (std::size_t k = 0; k < files.size(); ++k) {
     std::ifstream in(files[k]);
@@ -199,6 +255,7 @@ void merge_cityjsonseq(const std::vector<fs::path>& files, const fs::path& targe
     if (k == 0) {
       first_translate = here;
       header["metadata"]["title"] = "lodforge, merged from " + std::to_string(files.size()) + " tiles";
+      header["metadata"]["geographicalExtent"] = extent;
       o.out() << header.dump() << '\n';
     }
     const long long dx = here[0] - first_translate[0], dy = here[1] - first_translate[1];

@@ -152,14 +152,14 @@ int run_job(int argc, char** argv) {
   std::unique_ptr<InputCrs> input_crs;
   if (all_on_grid) {
     input_crs = std::make_unique<InputCrs>(job.inputs.segmentation.path, "inputs.segmentation.path", companions,
-                                           job.inputs.on_grid_mismatch == "error");
+                                           job.inputs.on_grid_mismatch == "error", job.output.crs);
   } else {
     seg.crs_wkt = raster_crs_wkt(job.inputs.segmentation.path, "inputs.segmentation.path");
     for (std::size_t i = 0; i < companions.size(); ++i) {
       companion_grids[i].crs_wkt = raster_crs_wkt(companions[i].path, companions[i].key);
       check_companion(companions[i].key, companions[i].path, companion_grids[i], seg, job);
     }
-    input_crs = std::make_unique<InputCrs>(seg.crs_wkt);
+    input_crs = std::make_unique<InputCrs>(seg.crs_wkt, job.output.crs);
   }
   BuildingSelector selector;
   selector.values = job.inputs.segmentation.building_values;

@@ -32,6 +32,37 @@ std::string epsg_of(const std::string& wkt) {
   return name && code && std::string(name) == "EPSG" ? std::string("EPSG:") + code : std::string();
 }
 
+std::string declared_output_crs(const std::string& output_crs, const std::string& wkt) {
+  if (output_crs.empty()) return {};
+  OGRSpatialReference declared;
+  const std::string code = output_crs.rfind("EPSG:", 0) == 0 ? output_crs.substr(5) : std::string();
+  if (code.empty() || code.find_first_not_of("0123456789") != std::string::npos ||
+      declared.importFromEPSG(std::stoi(code)) != OGRERR_NONE)
+    throw InputError("output.crs: '" + output_crs + "' is not an EPSG code GDAL knows (write it as EPSG:7415, say)");
+  OGRSpatialReference horizontal = declared;
+  if (horizontal.IsCompound()) horizontal.StripVertical();
+  if (horizontal.IsVertical() || !(horizontal.IsProjected() || horizontal.IsGeographic()))
+    throw InputError("output.crs: '" + output_crs + "' (" + (declared.GetName() ? declared.GetName() : "?") +
+                     ") has no horizontal CRS; give the inputs' CRS with a vertical one, a compound CRS");
+  OGRSpatialReference inputs;
+  if (!wkt.empty() && inputs.importFromWkt(wkt.c_str()) == OGRERR_NONE) {
+    const std::string inputs_epsg = epsg_of(wkt);
+    char* horizontal_wkt = nullptr;
+    horizontal.exportToWkt(&horizontal_wkt);
+    const std::string horizontal_epsg = epsg_of(horizontal_wkt ? horizontal_wkt : "");
+    CPLFree(horizontal_wkt);
+    const char* options[] = {"IGNORE_DATA_AXIS_TO_SRS_AXIS_MAPPING=YES", nullptr};
+    const bool same = !inputs_epsg.empty() && !horizontal_epsg.empty() ? inputs_epsg == horizontal_epsg
+                                                                        : horizontal.IsSame(&inputs, options) != 0;
+    if (!same)
+      throw InputError("output.crs: '" + output_crs + "' is horizontally " + (horizontal.GetName() ? horizontal.GetName() : "?") +
+                       (horizontal_epsg.empty() ? "" : " (" + horizontal_epsg + ")") + ", but the inputs are in " +
+                       (inputs.GetName() ? inputs.GetName() : "?") + (inputs_epsg.empty() ? "" : " (" + inputs_epsg + ")") +
+                       "; lodforge does not reproject: give a CRS whose horizontal part is the inputs'");
+  }
+  return "EPSG:" + code;
+}
+
 bool same_crs(const std::string& a, const std::string& b) {
   if (a.empty() || b.empty() || a == b) return true;  // the usual case, without PROJ
   OGRSpatialReference sa, sb;
@@ -47,26 +78,28 @@ struct InputCrs::Impl {
   std::mutex mutex;
   std::atomic<bool> done{false};
   std::exception_ptr error;
-  std::string wkt, epsg;
+  std::string wkt, epsg, output_crs;
 
   void read() {
     std::string seg = raster_crs_wkt(segmentation_path, segmentation_key);
     for (const Companion& c : companions)
       if (strict && !same_crs(seg, raster_crs_wkt(c.path, c.key)))
         throw InputError(c.key + ": '" + c.path + "': is on another grid and CRS than the segmentation (inputs.on_grid_mismatch: error)");
-    epsg = epsg_of(seg);
+    epsg = output_crs.empty() ? epsg_of(seg) : declared_output_crs(output_crs, seg);
     wkt = std::move(seg);
   }
 };
 
-InputCrs::InputCrs(std::string wkt) : impl_(new Impl) {
-  impl_->epsg = epsg_of(wkt);
+InputCrs::InputCrs(std::string wkt, std::string output_crs) : impl_(new Impl) {
+  impl_->epsg = output_crs.empty() ? epsg_of(wkt) : declared_output_crs(output_crs, wkt);
   impl_->wkt = std::move(wkt);
   impl_->done = true;
 }
 
-InputCrs::InputCrs(std::string segmentation_path, std::string segmentation_key, std::vector<Companion> companions, bool strict)
+InputCrs::InputCrs(std::string segmentation_path, std::string segmentation_key, std::vector<Companion> companions, bool strict,
+                   std::string output_crs)
     : impl_(new Impl) {
+  impl_->output_crs = std::move(output_crs);
   impl_->segmentation_path = std::move(segmentation_path);
   impl_->segmentation_key = std::move(segmentation_key);
   impl_->companions = std::move(companions);

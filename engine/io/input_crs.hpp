@@ -13,6 +13,11 @@ std::string raster_crs_wkt(const std::string& path, const std::string& key);
 // "EPSG:28992" for a CRS with an EPSG code, else empty.
 std::string epsg_of(const std::string& wkt);
 
+// output.crs checked against the inputs' CRS (wkt): "EPSG:NNNN" for a CRS GDAL knows by that EPSG
+// code whose horizontal part (a compound CRS less its vertical one) is the inputs' CRS; otherwise
+// an InputError naming output.crs. Empty stays empty.
+std::string declared_output_crs(const std::string& output_crs, const std::string& wkt);
+
 // Whether two CRS are the same; an empty one (unknown) matches any.
 bool same_crs(const std::string& wkt_a, const std::string& wkt_b);
 
@@ -26,13 +31,16 @@ class InputCrs {
   struct Companion {
     std::string key, path;
   };
-  // Already known (the inputs were checked before the run).
-  explicit InputCrs(std::string wkt);
+  // Already known (the inputs were checked before the run). output_crs: output.crs (see epsg()).
+  explicit InputCrs(std::string wkt, std::string output_crs = {});
   // Checked on first use; a companion in another CRS fails when `strict` (on_grid_mismatch: error).
-  InputCrs(std::string segmentation_path, std::string segmentation_key, std::vector<Companion> companions, bool strict);
+  InputCrs(std::string segmentation_path, std::string segmentation_key, std::vector<Companion> companions, bool strict,
+           std::string output_crs = {});
   ~InputCrs();
   const std::string& wkt() const;
-  const std::string& epsg() const;  // epsg_of(wkt()), worked out once
+  // The CRS the 3D outputs declare, "EPSG:7415": output.crs when given (checked on first use:
+  // an EPSG code whose horizontal part is the inputs' CRS), else epsg_of(wkt()); worked out once.
+  const std::string& epsg() const;
 
  private:
   struct Impl;

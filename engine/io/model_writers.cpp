@@ -8,6 +8,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <limits>
 #include <map>
 #include <sstream>
 #include <unordered_map>
@@ -89,7 +90,7 @@ class CityGmlWriter : public ModelWriter {
  public:
   CityGmlWriter(const std::string& path, const WriterContext& c) : file_(path) {
     three_decimals(file_.out());
-    srs_ = c.epsg.empty() ? "" : " srsName=\"" + c.epsg + "\"";
+    srs_ = c.epsg.empty() ? "" : " srsName=\"urn:ogc:def:crs:EPSG::" + c.epsg.substr(5) + "\"";
     auto& o = file_.out();
     o << "<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n"
       << "<core:CityModel xmlns:core=\"http://www.opengis.net/citygml/2.0\" xmlns:bldg=\"http://www.opengis.net/citygml/building/2.0\""
@@ -97,7 +98,10 @@ class CityGmlWriter : public ModelWriter {
          " xmlns:xlink=\"http://www.w3.org/1999/xlink\" xmlns:xsi=\"http://www.w3.org/2001/XMLSchema-instance\""
          " xsi:schemaLocation=\"http://www.opengis.net/citygml/building/2.0 http://schemas.opengis.net/citygml/building/2.0/building.xsd"
          " http://www.opengis.net/citygml/generics/2.0 http://schemas.opengis.net/citygml/generics/2.0/generics.xsd\">\n"
-      << "  <gml:name>lodforge tile " << xml_escape(c.tile) << "</gml:name>\n";
+      << "  <gml:name>lodforge tile " << xml_escape(c.tile) << "</gml:name>\n"
+      << "  <gml:boundedBy><gml:Envelope" << srs_ << " srsDimension=\"3\"><gml:lowerCorner>" << Fixed3{c.extent[0]} << ' '
+      << Fixed3{c.extent[1]} << ' ' << Fixed3{c.extent[2]} << "</gml:lowerCorner><gml:upperCorner>" << Fixed3{c.extent[3]} << ' '
+      << Fixed3{c.extent[4]} << ' ' << Fixed3{c.extent[5]} << "</gml:upperCorner></gml:Envelope></gml:boundedBy>\n";
   }
   void add(const BuildingModel& m) override {
     auto& o = file_.out();
@@ -238,7 +242,9 @@ void write_cityjson_header(std::ostream& o, const WriterContext& c, const char* 
   o << "{\"type\": \"CityJSON\", \"version\": \"2.0\"," << separator << "\"transform\": {\"scale\": [0.001, 0.001, 0.001], \"translate\": ["
     << c.origin.x() << ", " << c.origin.y() << ", 0.0]}," << separator << "\"metadata\": {\"title\": \"lodforge tile " << c.tile << "\"";
   if (!c.epsg.empty()) o << ", \"referenceSystem\": \"https://www.opengis.net/def/crs/EPSG/0/" << c.epsg.substr(5) << "\"";
-  o << "}";
+  o << ", \"geographicalExtent\": [";
+  for (std::size_t k = 0; k < 6; ++k) o << (k ? ", " : "") << Fixed3{c.extent[k]};
+  o << "]}";
 }
 
 class CityJsonWriter : public ModelWriter {
@@ -402,6 +408,19 @@ class FootprintModelWriter : public ModelWriter {
 };
 
 }  // namespace
+
+Extent extent_of(const std::vector<BuildingModel>& models) {
+  constexpr double inf = std::numeric_limits<double>::infinity();
+  Extent e{inf, inf, inf, -inf, -inf, -inf};
+  const auto add = [&](const Vec2& p, double z_low, double z_high) {
+    e[0] = std::min(e[0], p.x()); e[1] = std::min(e[1], p.y()); e[2] = std::min(e[2], z_low);
+    e[3] = std::max(e[3], p.x()); e[4] = std::max(e[4], p.y()); e[5] = std::max(e[5], z_high);
+  };
+  for (const BuildingModel& m : models)
+    for (const Vec2& p : m.footprint.outer) add(p, m.has_lod1 ? std::min(m.ground, m.roof) : 0.0, m.has_lod1 ? std::max(m.ground, m.roof) : 0.0);
+  if (models.empty()) e = Extent{};
+  return e;
+}
 
 std::unique_ptr<ModelWriter> make_model_writer(const std::string& format, const std::string& path, const WriterContext& context) {
   if (format == "citygml") return std::make_unique<CityGmlWriter>(path, context);

@@ -1,6 +1,7 @@
 // Writers of a tile's building models, one per format behind one small interface. Each streams
 // its file (no document is built in memory) to a temporary name and renames it on finish().
 #pragma once
+#include <array>
 #include <cstdint>
 #include <memory>
 #include <string>
@@ -21,11 +22,16 @@ struct BuildingModel {
   std::string status, stage, reason, regularizer;
 };
 
+// The 3D box of some models: min x, y, z, max x, y, z (CityJSON's geographicalExtent order).
+using Extent = std::array<double, 6>;
+Extent extent_of(const std::vector<BuildingModel>& models);
+
 struct WriterContext {
   std::string crs_wkt;
-  std::string epsg;  // "EPSG:28992" when crs_wkt has an EPSG code (epsg_of), else empty
+  std::string epsg;  // "EPSG:7415": the CRS the 3D formats declare (output.crs, else the inputs'), or empty
   std::string tile;
   Vec2 origin = Vec2::Zero();  // the tile's lower-left corner: OBJ and CityJSON are relative to it
+  Extent extent{};             // of the file's models: CityGML's gml:boundedBy, CityJSON's geographicalExtent
 };
 
 class ModelWriter {

@@ -378,7 +378,8 @@ TileOutputs write_tile_outputs(const RunPlan& plan, TileResult& result) {
     for (std::size_t i = 0; i < r->buildings.size(); ++i)
       models.push_back(model_of(r->buildings[i], r->heights.empty() ? nullptr : &r->heights[i], r->name, job));
     r->write_seconds += seconds_since(modeling);
-    const WriterContext context{crs_wkt, plan.crs.epsg(), r->name, plan.transform.to_map(tile_rect.x, tile_rect.y + tile_rect.height)};
+    const WriterContext context{crs_wkt, plan.crs.epsg(), r->name, plan.transform.to_map(tile_rect.x, tile_rect.y + tile_rect.height),
+                                extent_of(models)};
     std::vector<double> seconds(formats.size());
     within_tile([&] { tbb::parallel_for(std::size_t(0), formats.size(), [&](std::size_t f) {
       const auto started = Clock::now();
