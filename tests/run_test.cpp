@@ -680,17 +680,32 @@ TEST_F(Rerun, MergeRefusesShardsOfDifferentRuns) {
   EXPECT_FALSE(fs::exists(dir / "out" / "merged"));
 }
 
-// Issue 17: the tile index's rings are counter-clockwise (RFC 7946 exterior rings), and the index
-// reads as JSON (a parser, not patterns) with every tile's outputs and fingerprints.
-TEST_F(Rerun, TileIndexRingsAreCounterClockwise) {
-  ASSERT_EQ(lodforge("run " + write_job("gpkg").string()).code, 0);
+// Issue 17: the tile index and the geojson format are RFC 7946 GeoJSON: WGS 84 longitude and
+// latitude, no crs member, exterior rings counter-clockwise; the index reads as JSON (a parser,
+// not patterns) with every tile's outputs and fingerprints.
+TEST_F(Rerun, TileIndexAndGeoJsonAreRfc7946) {
+  ASSERT_EQ(lodforge("run " + write_job("gpkg, geojson").string()).code, 0);
+  ASSERT_EQ(lodforge("merge " + (dir / "out").string()).code, 0);
   const nlohmann::json index = nlohmann::json::parse(slurp(dir / "out" / "tile_index.geojson"));
   ASSERT_EQ(index.at("type"), "FeatureCollection");
+  EXPECT_FALSE(index.contains("crs"));
   ASSERT_EQ(index.at("features").size(), 16u);
+  // The synthetic city lies in the Netherlands (EPSG:28992): longitude 3-8 E, latitude 50-54 N.
+  const auto in_the_netherlands = [](const nlohmann::json& point) {
+    return point.at(0).get<double>() > 3 && point.at(0).get<double>() < 8 && point.at(1).get<double>() > 50 && point.at(1).get<double>() < 54;
+  };
+  for (const fs::path& geojson : {dir / "out" / "tiles" / "r0000_c0000.geojson", dir / "out" / "merged" / "lodforge.geojson"}) {
+    const nlohmann::json footprints = nlohmann::json::parse(slurp(geojson));
+    EXPECT_FALSE(footprints.contains("crs")) << geojson;
+    ASSERT_FALSE(footprints.at("features").empty()) << geojson;
+    for (const auto& feature : footprints.at("features"))
+      EXPECT_TRUE(in_the_netherlands(feature.at("geometry").at("coordinates").at(0).at(0))) << geojson << ": " << feature.dump();
+  }
   for (const auto& feature : index.at("features")) {
     const auto& ring = feature.at("geometry").at("coordinates").at(0);
     ASSERT_EQ(ring.size(), 5u);
     EXPECT_EQ(ring.front(), ring.back());
+    EXPECT_TRUE(in_the_netherlands(ring.front())) << ring.dump();
     double twice_area = 0;
     for (std::size_t i = 0; i + 1 < ring.size(); ++i)
       twice_area += ring[i][0].get<double>() * ring[i + 1][1].get<double>() - ring[i + 1][0].get<double>() * ring[i][1].get<double>();

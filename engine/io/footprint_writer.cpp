@@ -97,7 +97,9 @@ FootprintFileWriter::FootprintFileWriter(const std::string& path, const Footprin
     srs_ptr = &srs;
   }
   try {
-    impl_->ogr_layer = impl_->dataset->CreateLayer(layer.name.c_str(), srs_ptr, wkbPolygon, nullptr);
+    const char* rfc7946[] = {"RFC7946=YES", "COORDINATE_PRECISION=7", nullptr};
+    impl_->ogr_layer = impl_->dataset->CreateLayer(layer.name.c_str(), srs_ptr, wkbPolygon,
+                                                   layer.rfc7946 && driver_name == "GeoJSON" ? const_cast<char**>(rfc7946) : nullptr);
     if (!impl_->ogr_layer) impl_->fail("cannot create layer");
     auto field = [&](const char* name, OGRFieldType type) {
       OGRFieldDefn def(name, type);

@@ -28,6 +28,7 @@ struct FootprintLayer {
   bool write_heights = false; // roof_height, ground_height
   std::string kind_field;     // name of the field holding `kind` ("kind", "tile"); empty: none
   bool write_lod1 = false;    // a GeoPackage also gets a layer "lod1": each block's faces as a MultiPolygon Z
+  bool rfc7946 = false;       // GeoJSON as RFC 7946: WGS 84 longitude, latitude (7 decimals), no crs member
 };
 
 // Checks up front that path can be written (directory exists and is writable, extension known).

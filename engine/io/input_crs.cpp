@@ -63,6 +63,21 @@ std::string declared_output_crs(const std::string& output_crs, const std::string
   return "EPSG:" + code;
 }
 
+std::vector<std::array<double, 2>> to_lon_lat(const std::string& wkt, const std::vector<std::array<double, 2>>& points) {
+  OGRSpatialReference source, wgs84;
+  if (wkt.empty() || source.importFromWkt(wkt.c_str()) != OGRERR_NONE || wgs84.importFromEPSG(4326) != OGRERR_NONE) return {};
+  source.SetAxisMappingStrategy(OAMS_TRADITIONAL_GIS_ORDER);
+  wgs84.SetAxisMappingStrategy(OAMS_TRADITIONAL_GIS_ORDER);  // longitude first
+  std::unique_ptr<OGRCoordinateTransformation> transform(OGRCreateCoordinateTransformation(&source, &wgs84));
+  if (!transform) return {};
+  std::vector<double> x, y;
+  for (const auto& p : points) { x.push_back(p[0]); y.push_back(p[1]); }
+  if (!points.empty() && !transform->Transform(int(points.size()), x.data(), y.data())) return {};
+  std::vector<std::array<double, 2>> out;
+  for (std::size_t i = 0; i < points.size(); ++i) out.push_back({x[i], y[i]});
+  return out;
+}
+
 bool same_crs(const std::string& a, const std::string& b) {
   if (a.empty() || b.empty() || a == b) return true;  // the usual case, without PROJ
   OGRSpatialReference sa, sb;

@@ -1,5 +1,6 @@
 // The CRS of a run's inputs: read from the rasters and compared, now or when first needed.
 #pragma once
+#include <array>
 #include <memory>
 #include <string>
 #include <vector>
@@ -17,6 +18,10 @@ std::string epsg_of(const std::string& wkt);
 // code whose horizontal part (a compound CRS less its vertical one) is the inputs' CRS; otherwise
 // an InputError naming output.crs. Empty stays empty.
 std::string declared_output_crs(const std::string& output_crs, const std::string& wkt);
+
+// The points (in the CRS of wkt) as WGS 84 longitude, latitude (RFC 7946's order); empty when
+// the CRS is unknown or PROJ cannot transform them.
+std::vector<std::array<double, 2>> to_lon_lat(const std::string& wkt, const std::vector<std::array<double, 2>>& points);
 
 // Whether two CRS are the same; an empty one (unknown) matches any.
 bool same_crs(const std::string& wkt_a, const std::string& wkt_b);

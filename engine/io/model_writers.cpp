@@ -402,6 +402,7 @@ class FootprintModelWriter : public ModelWriter {
     layer.write_heights = true;
     layer.kind_field = "tile";
     layer.write_lod1 = true;  // (GeoPackage only)
+    layer.rfc7946 = true;     // (GeoJSON only)
     return layer;
   }
   FootprintFileWriter file_;

@@ -10,6 +10,7 @@
 
 #include "io/atomic_file.hpp"
 #include "io/errors.hpp"
+#include "io/input_crs.hpp"
 #include "io/model_writers.hpp"
 
 namespace lodforge {
@@ -96,10 +97,11 @@ void record_tile(Totals& totals, const RunPlan& plan, const TileResult& result, 
   // The tile's extent, counter-clockwise as RFC 7946 wants an exterior ring.
   std::array<Vec2, 4> corners{a, Vec2(b.x(), a.y()), b, Vec2(a.x(), b.y())};
   if ((b.x() - a.x()) * (b.y() - a.y()) < 0) std::swap(corners[1], corners[3]);  // (signed area of that order < 0)
-  feature << "]}, \"geometry\": {\"type\": \"Polygon\", \"coordinates\": [[";
-  for (int k = 0; k <= 4; ++k) feature << (k ? ", [" : "[") << corners[k % 4].x() << ", " << corners[k % 4].y() << "]";
-  feature << "]]}}";
+  feature << "]}, \"geometry\": ";  // written with the index, in WGS 84
   totals.index_features.emplace_back(r->tile, feature.str());
+  std::array<std::array<double, 2>, 4> ring;
+  for (int k = 0; k < 4; ++k) ring[k] = {corners[k].x(), corners[k].y()};
+  totals.index_rings.emplace_back(r->tile, ring);
   std::ostringstream tile_json;
   tile_json << "{\"tile\": \"" << r->name << "\", \"buildings\": " << count << ", \"skipped\": " << (r->skipped ? "true" : "false")
             << ", \"seconds\": " << r->seconds << "}";
@@ -140,12 +142,27 @@ void write_index_and_report(const Totals& totals, const RunPlan& plan, const std
   struct { std::size_t n; std::size_t size() const { return n; } } tiles{tiles_count};
   // The tile index and the run report (one per shard when sharded).
   const std::string suffix = shard_suffix(shard.index, shard.count);
+  // The tile index is RFC 7946 GeoJSON: WGS 84 longitude and latitude (7 decimals, about 1 cm),
+  // no crs member. Only an input without a CRS leaves its tiles in map coordinates.
+  auto rings = totals.index_rings;
+  std::stable_sort(rings.begin(), rings.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
+  std::vector<std::array<double, 2>> corners;
+  for (const auto& [tile, ring] : rings) corners.insert(corners.end(), ring.begin(), ring.end());
+  std::vector<std::array<double, 2>> lon_lat = to_lon_lat(plan.crs.wkt(), corners);
+  if (lon_lat.empty() && !corners.empty())
+    spdlog::warn("the tile index is in map coordinates, not WGS 84 as RFC 7946 asks: the inputs' CRS is unknown or cannot be transformed");
+  const bool geographic = !lon_lat.empty();
+  if (!geographic) lon_lat = corners;
   std::ostringstream index;
+  index.precision(geographic ? 7 : 3);
+  index << std::fixed;
   index << "{\"type\": \"FeatureCollection\", \"name\": \"tile_index\", \"run_key\": \"" << hex(plan.job_key) << "\"";
-  if (const std::string crs = plan.crs.epsg(); !crs.empty())
-    index << ", \"crs\": {\"type\": \"name\", \"properties\": {\"name\": \"urn:ogc:def:crs:" << crs.substr(0, crs.find(':')) << "::" << crs.substr(crs.find(':') + 1) << "\"}}";
   index << ", \"features\": [\n";
-  for (std::size_t i = 0; i < index_features.size(); ++i) index << index_features[i] << (i + 1 < index_features.size() ? ",\n" : "\n");
+  for (std::size_t i = 0; i < index_features.size(); ++i) {
+    index << index_features[i] << "{\"type\": \"Polygon\", \"coordinates\": [[";
+    for (int k = 0; k <= 4; ++k) index << (k ? ", [" : "[") << lon_lat[4 * i + k % 4][0] << ", " << lon_lat[4 * i + k % 4][1] << "]";
+    index << "]]}}" << (i + 1 < index_features.size() ? ",\n" : "\n");
+  }
   index << "]}\n";
   write_text_atomically(out_dir / ("tile_index" + suffix + ".geojson"), index.str());
   std::ostringstream report;

@@ -1,5 +1,6 @@
 // The run's accounting: totals over tiles, the tile index and the report (JSON and a summary).
 #pragma once
+#include <array>
 #include <cstddef>
 #include <filesystem>
 #include <optional>
@@ -21,6 +22,7 @@ struct Totals {
   // Each entry with its tile: tiles are recorded in the order they are processed, the files list
   // them in tile order.
   std::vector<std::pair<int, std::string>> failed_json, too_large, tile_json, index_features;
+  std::vector<std::pair<int, std::array<std::array<double, 2>, 4>>> index_rings;  // each index feature's tile, counter-clockwise
 };
 
 // Adds a finished (or resumed) tile to the totals and the index.
