@@ -14,6 +14,7 @@
 #include <opencv2/core.hpp>
 #include <opencv2/imgcodecs.hpp>
 #include <sstream>
+#include <tiny_gltf.h>
 
 #include "geometry/polygon.hpp"
 #include "heights/heights.hpp"
@@ -438,6 +439,84 @@ TEST_F(ModelFiles, DsmOnTheSameGridInAnotherCrsIsRefusedBeforeAnyOutput) {
   for (const auto& entry : fs::recursive_directory_iterator(dir / "crs_out"))
     if (entry.is_regular_file()) written.push_back(entry.path().string());
   EXPECT_TRUE(written.empty()) << written.front();
+}
+
+// Issue 17: glTF 2.0 (.glb) per tile and merged, for web viewers and Blender. Each tile's file
+// holds its LOD1 blocks (one mesh each, as many as the OBJ's objects) at the OBJ's very points
+// (glTF frame and origin undone, to the millimetre), each mesh closed (every edge once in each
+// direction); read back by tinygltf and checked against the GLB layout rules by
+// scripts/validate/glb.py; the merged file has every block, its tiles placed by their origins.
+TEST_F(ModelFiles, GltfHoldsTheObjBlocksClosedAndValidates) {
+  const std::string data = test::test_data();
+  std::ofstream(dir / "gltf.yaml") << "inputs:\n  segmentation: {path: " << data << "/delft-ahn3-bgt/derived/top_class_50cm.tif}\n"
+                                   << "  dsm: {path: " << data << "/delft-ahn3-bgt/derived/dsm_50cm.tif}\n"
+                                   << "tiling: {tile_size_m: 64}\noutput: {dir: gltf_out, formats: [gltf, obj]}\nwork_dir: gltf_work\n";
+  ASSERT_EQ(shell(std::string(LODFORGE_BINARY) + " run " + (dir / "gltf.yaml").string()).code, 0);
+  ASSERT_EQ(shell(std::string(LODFORGE_BINARY) + " merge " + (dir / "gltf_out").string()).code, 0);
+  tinygltf::TinyGLTF io;
+  std::size_t blocks = 0;
+  std::string all;
+  for (const fs::path& glb : files_with(dir / "gltf_out" / "tiles", ".glb")) {
+    all += " " + glb.string();
+    tinygltf::Model model;
+    std::string error, warning;
+    ASSERT_TRUE(io.LoadBinaryFromFile(&model, &error, &warning, glb.string())) << glb << ": " << error;
+    const tinygltf::Value& origin = model.asset.extras.Get("origin");
+    ASSERT_TRUE(origin.IsArray()) << glb;
+    const double ox = origin.Get(0).GetNumberAsDouble(), oy = origin.Get(1).GetNumberAsDouble();
+    fs::path obj = glb;
+    obj.replace_extension(".obj");
+    std::size_t objects = 0;
+    for (std::ifstream in(obj); !in.eof();) {
+      std::string line;
+      std::getline(in, line);
+      objects += line.rfind("o ", 0) == 0;
+    }
+    EXPECT_EQ(model.meshes.size(), objects) << glb;
+    blocks += model.meshes.size();
+    std::vector<std::array<long long, 3>> points;
+    for (const tinygltf::Mesh& mesh : model.meshes) {
+      ASSERT_EQ(mesh.primitives.size(), 1u);
+      const tinygltf::Primitive& p = mesh.primitives[0];
+      const tinygltf::Accessor& positions = model.accessors[p.attributes.at("POSITION")];
+      const tinygltf::Accessor& indices = model.accessors[p.indices];
+      ASSERT_EQ(positions.componentType, TINYGLTF_COMPONENT_TYPE_FLOAT);
+      ASSERT_EQ(indices.componentType, TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT);
+      const auto& pv = model.bufferViews[positions.bufferView];
+      const auto& iv = model.bufferViews[indices.bufferView];
+      const auto* xyz = reinterpret_cast<const float*>(model.buffers[pv.buffer].data.data() + pv.byteOffset + positions.byteOffset);
+      const auto* ids = reinterpret_cast<const std::uint32_t*>(model.buffers[iv.buffer].data.data() + iv.byteOffset + indices.byteOffset);
+      for (std::size_t v = 0; v < positions.count; ++v)  // glTF (x, height, -y) back to the map
+        points.push_back({std::llround((xyz[3 * v] + ox) * 1000), std::llround((oy - xyz[3 * v + 2]) * 1000), std::llround(xyz[3 * v + 1] * 1000)});
+      ASSERT_EQ(indices.count % 3, 0u);
+      std::map<std::pair<std::uint32_t, std::uint32_t>, int> directed;
+      for (std::size_t t = 0; t < indices.count; t += 3)
+        for (int k = 0; k < 3; ++k) directed[{ids[t + k], ids[t + (k + 1) % 3]}]++;
+      for (const auto& [edge, n] : directed) {
+        EXPECT_EQ(n, 1) << glb << " " << mesh.name;
+        EXPECT_EQ(directed.count({edge.second, edge.first}), 1u) << glb << " " << mesh.name << ": an edge without its twin";
+      }
+    }
+    // The same points (single precision in metres from the origin: within a millimetre).
+    std::sort(points.begin(), points.end());
+    points.erase(std::unique(points.begin(), points.end()), points.end());
+    const auto expected = obj_vertices(obj);
+    const std::set<std::array<long long, 3>> obj_points(expected.begin(), expected.end());
+    EXPECT_EQ(points.size(), expected.size()) << glb;
+    for (const auto& q : points) {
+      bool found = false;
+      for (int d = 0; d < 27 && !found; ++d) found = obj_points.count({q[0] + d % 3 - 1, q[1] + d / 3 % 3 - 1, q[2] + d / 9 - 1}) > 0;
+      EXPECT_TRUE(found) << glb << ": " << q[0] << " " << q[1] << " " << q[2] << " is no OBJ point";
+    }
+  }
+  EXPECT_EQ(blocks, 55u);
+  const fs::path merged = dir / "gltf_out" / "merged" / "lodforge.glb";
+  tinygltf::Model model;
+  std::string error, warning;
+  ASSERT_TRUE(io.LoadBinaryFromFile(&model, &error, &warning, merged.string())) << error;
+  EXPECT_EQ(model.meshes.size(), blocks);
+  const Output layout = shell("/usr/bin/python3 " + std::string(LODFORGE_SOURCE_DIR) + "/scripts/validate/glb.py" + all + " " + merged.string());
+  EXPECT_EQ(layout.code, 0) << layout.output;
 }
 
 // Issue 17: output.crs declares the inputs' CRS with a vertical one; one that is not an EPSG code,

@@ -14,6 +14,7 @@
 #include <regex>
 #include <spdlog/spdlog.h>
 #include <sstream>
+#include <tiny_gltf.h>
 #include <unistd.h>
 
 #include "cli/args.hpp"
@@ -229,6 +230,60 @@ void merge_cityjson(const std::vector<fs::path>& files, const fs::path& target) 
   for (std::size_t i = 0; i < vertices.size(); ++i)
     o.out() << (i ? ", " : "") << (i % 4 == 0 ? "\n  " : "") << '[' << vertices[i][0] << ", " << vertices[i][1] << ", " << vertices[i][2] << ']';
   o.out() << "\n ]\n}\n";
+  o.commit();
+}
+
+// glTF: one scene with a node per tile, placed by its origin's offset from the first tile's (exact:
+// node translations are doubles), holding the tile's block nodes; the tiles' buffers become one.
+void merge_gltf(const std::vector<fs::path>& files, const fs::path& target) {
+  tinygltf::TinyGLTF io;
+  tinygltf::Model merged;
+  merged.buffers.emplace_back();
+  merged.scenes.emplace_back();
+  merged.defaultScene = 0;
+  std::array<double, 2> first_origin{};
+  for (std::size_t k = 0; k < files.size(); ++k) {
+    tinygltf::Model tile;
+    std::string error, warning;
+    if (!io.LoadBinaryFromFile(&tile, &error, &warning, files[k].string()) || tile.buffers.size() > 1)
+      throw InputError("'" + files[k].string() + "': not a lodforge glTF tile: " + (error.empty() ? "more than one buffer" : error));
+    const tinygltf::Value& origin = tile.asset.extras.Get("origin");
+    if (!origin.IsArray() || origin.ArrayLen() < 2) throw InputError("'" + files[k].string() + "': no origin in the asset's extras");
+    const std::array<double, 2> here{origin.Get(0).GetNumberAsDouble(), origin.Get(1).GetNumberAsDouble()};
+    if (k == 0) {
+      first_origin = here;
+      merged.asset = tile.asset;
+      tinygltf::Value::Object extras = tile.asset.extras.Get<tinygltf::Value::Object>();
+      extras.erase("tile");
+      extras["tiles"] = tinygltf::Value(int(files.size()));
+      merged.asset.extras = tinygltf::Value(extras);
+    }
+    const int views = int(merged.bufferViews.size()), accessors = int(merged.accessors.size()), meshes = int(merged.meshes.size());
+    std::vector<unsigned char>& bytes = merged.buffers[0].data;
+    const std::size_t base = bytes.size();
+    if (!tile.buffers.empty()) bytes.insert(bytes.end(), tile.buffers[0].data.begin(), tile.buffers[0].data.end());
+    for (tinygltf::BufferView v : tile.bufferViews) { v.buffer = 0; v.byteOffset += base; merged.bufferViews.push_back(std::move(v)); }
+    for (tinygltf::Accessor a : tile.accessors) { a.bufferView += views; merged.accessors.push_back(std::move(a)); }
+    for (tinygltf::Mesh m : tile.meshes) {
+      for (auto& p : m.primitives) {
+        for (auto& [name, accessor] : p.attributes) accessor += accessors;
+        p.indices += accessors;
+      }
+      merged.meshes.push_back(std::move(m));
+    }
+    tinygltf::Node group;
+    group.name = tile.asset.extras.Get("tile").IsString() ? tile.asset.extras.Get("tile").Get<std::string>() : files[k].stem().string();
+    group.translation = {here[0] - first_origin[0], 0.0, -(here[1] - first_origin[1])};  // glTF: +Z is south
+    for (tinygltf::Node n : tile.nodes) {
+      n.mesh += meshes;
+      group.children.push_back(int(merged.nodes.size()));
+      merged.nodes.push_back(std::move(n));
+    }
+    merged.scenes[0].nodes.push_back(int(merged.nodes.size()));
+    merged.nodes.push_back(std::move(group));
+  }
+  AtomicTextFile o(target);
+  if (!io.WriteGltfSceneToStream(&merged, o.out(), false, true)) throw InputError("'" + target.string() + "': glTF could not be written");
   o.commit();
 }
 
@@ -538,6 +593,7 @@ int run_merge(int argc, char** argv) {
     else if (format == "obj") merge_obj(files, target);
     else if (format == "gpkg") merge_ogr(files, target, "GPKG");
     else if (format == "geojson") merge_ogr(files, target, "GeoJSON");
+    else if (format == "gltf") merge_gltf(files, target);
     else throw InputError("--formats: unknown format '" + format + "'");
     spdlog::info("{}: {} tiles", target.string(), files.size());
   }

@@ -1,18 +1,19 @@
 #include "io/model_writers.hpp"
 
-#include "io/atomic_file.hpp"
+#include <tiny_gltf.h>
 
 #include <charconv>
-
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <functional>
 #include <limits>
 #include <map>
 #include <sstream>
 #include <unordered_map>
 
+#include "io/atomic_file.hpp"
 #include "geometry/polygon.hpp"
 #include "io/errors.hpp"
 #include "io/footprint_writer.hpp"
@@ -23,7 +24,7 @@ namespace lodforge {
 namespace fs = std::filesystem;
 
 const std::vector<std::string>& model_formats() {
-  static const std::vector<std::string> formats{"citygml", "cityjson", "cityjsonseq", "obj", "gpkg", "geojson"};
+  static const std::vector<std::string> formats{"citygml", "cityjson", "cityjsonseq", "obj", "gpkg", "geojson", "gltf"};
   return formats;
 }
 
@@ -33,6 +34,7 @@ std::string extension_of(const std::string& format) {
   if (format == "cityjsonseq") return ".city.jsonl";
   if (format == "obj") return ".obj";
   if (format == "gpkg") return ".gpkg";
+  if (format == "gltf") return ".glb";
   return ".geojson";
 }
 
@@ -303,6 +305,43 @@ class CityJsonSeqWriter : public ModelWriter {
 
 // Wavefront OBJ: one object per building, coordinates relative to the tile origin so that single
 // precision holds; the origin is in the header. Faces with holes are triangulated.
+// The faces of a solid as polygons a mesh format takes, outward as the solid's: walls (one ring of
+// at most 4 vertices) as they are, and faces with holes or more vertices (tops and bottoms)
+// triangulated in the plan; with every_face, horizontal faces of up to 4 vertices too (a quad
+// footprint need not be convex). origin: subtracted for the triangulation's numerical range.
+void for_each_mesh_polygon(const Solid& solid, const Vec2& origin, bool every_face,
+                           const std::function<void(const std::vector<Vec3>&)>& polygon) {
+  for (const Face& f : solid.faces) {
+    bool horizontal = true;
+    for (const Vec3& p : f.rings[0]) horizontal &= p.z() == f.rings[0].front().z();
+    if (f.rings.size() == 1 && f.rings[0].size() <= 4 && !(every_face && horizontal)) {
+      polygon(std::vector<Vec3>(f.rings[0].begin(), f.rings[0].end()));
+      continue;
+    }
+    // Triangulated in the plan (outer ring counter-clockwise, holes clockwise), the triangles
+    // turned over for a face that looks down (the bottom).
+    std::vector<Ring> rings;
+    bool downward = false;
+    for (std::size_t k = 0; k < f.rings.size(); ++k) {
+      Ring flat;
+      for (const Vec3& p : f.rings[k]) flat.emplace_back(p.x() - origin.x(), p.y() - origin.y());
+      if (k == 0) downward = signed_area(flat) < 0;
+      if ((signed_area(flat) > 0) != (k == 0)) std::reverse(flat.begin(), flat.end());
+      rings.push_back(flat);
+    }
+    TriangulationOptions plain;
+    plain.max_vertices = 0;  // no refinement: the input vertices only
+    const TriangleMesh mesh = triangulate(rings, 1e9, plain);
+    const double z = f.rings[0].front().z();
+    for (const auto& t : mesh.triangles) {
+      std::vector<Vec3> triangle;
+      for (int k : t) triangle.emplace_back(mesh.vertices[k].x() + origin.x(), mesh.vertices[k].y() + origin.y(), z);
+      if (downward) std::reverse(triangle.begin(), triangle.end());
+      polygon(triangle);
+    }
+  }
+}
+
 class ObjWriter : public ModelWriter {
  public:
   ObjWriter(const std::string& path, const WriterContext& c) : file_(path), origin_(c.origin) {
@@ -315,36 +354,11 @@ class ObjWriter : public ModelWriter {
     auto& o = file_.out();
     o << "o " << gml_id(m.id) << "\n";
     object_vertices_.clear();
-    for (const Face& f : m.solid.faces) {
-      if (f.rings.size() == 1 && f.rings[0].size() <= 4) {
-        std::vector<std::size_t> ids;
-        for (const Vec3& p : f.rings[0]) ids.push_back(vertex(p));
-        face(ids);
-        continue;
-      }
-      // A top or bottom face with holes (or many vertices): constrained triangulation in 2D.
-      // Triangulate in the plan (outer ring counter-clockwise, holes clockwise) and turn the
-      // triangles over for a face that looks down (the bottom).
-      std::vector<Ring> rings;
-      bool downward = false;
-      for (std::size_t k = 0; k < f.rings.size(); ++k) {
-        Ring flat;
-        for (const Vec3& p : f.rings[k]) flat.emplace_back(p.x() - origin_.x(), p.y() - origin_.y());
-        if (k == 0) downward = signed_area(flat) < 0;
-        if ((signed_area(flat) > 0) != (k == 0)) std::reverse(flat.begin(), flat.end());
-        rings.push_back(flat);
-      }
-      TriangulationOptions plain;
-      plain.max_vertices = 0;  // no refinement: the input vertices only
-      const TriangleMesh mesh = triangulate(rings, 1e9, plain);
-      const double z = f.rings[0].front().z();
-      for (const auto& t : mesh.triangles) {
-        std::vector<std::size_t> ids;
-        for (int k : t) ids.push_back(vertex(Vec3(mesh.vertices[k].x() + origin_.x(), mesh.vertices[k].y() + origin_.y(), z)));
-        if (downward) std::reverse(ids.begin(), ids.end());
-        face(ids);
-      }
-    }
+    for_each_mesh_polygon(m.solid, origin_, false, [&](const std::vector<Vec3>& polygon) {
+      std::vector<std::size_t> ids;
+      for (const Vec3& p : polygon) ids.push_back(vertex(p));
+      face(ids);
+    });
   }
   void finish() override { file_.commit(); }
 
@@ -408,6 +422,121 @@ class FootprintModelWriter : public ModelWriter {
   FootprintFileWriter file_;
 };
 
+// glTF 2.0, binary (.glb): one mesh and node per LOD1 block (named by its gml:id), triangles with
+// the block's points shared, positions in metres from the tile's origin in glTF's frame (+X
+// east, +Y up, +Z south); the origin and CRS in the asset's extras. No normals: viewers shade
+// the flat faces themselves.
+class GltfWriter : public ModelWriter {
+ public:
+  GltfWriter(const std::string& path, const WriterContext& c) : file_(path), origin_(c.origin), epsg_(c.epsg), tile_(c.tile) {}
+  void add(const BuildingModel& m) override {
+    if (!m.has_lod1) return;  // glTF carries the LOD1 blocks only
+    Block block{gml_id(m.id), {}, {}};
+    std::map<std::array<long long, 3>, std::uint32_t> index;  // this block's points, to the millimetre
+    for_each_mesh_polygon(m.solid, origin_, true, [&](const std::vector<Vec3>& polygon) {
+      std::vector<std::uint32_t> ids;
+      for (const Vec3& p : polygon) {
+        const double x = p.x() - origin_.x(), y = p.y() - origin_.y(), z = p.z();
+        const std::array<long long, 3> key{std::llround(x * 1000), std::llround(y * 1000), std::llround(z * 1000)};
+        const auto [it, added] = index.try_emplace(key, std::uint32_t(block.positions.size() / 3));
+        if (added) block.positions.insert(block.positions.end(), {float(key[0] / 1000.0), float(key[2] / 1000.0), float(-key[1] / 1000.0)});
+        ids.push_back(it->second);
+      }
+      for (std::size_t k = 1; k + 1 < ids.size(); ++k) block.indices.insert(block.indices.end(), {ids[0], ids[k], ids[k + 1]});
+    });
+    blocks_.push_back(std::move(block));
+  }
+  void finish() override {
+    tinygltf::Model model;
+    model.asset.version = "2.0";
+    model.asset.generator = "lodforge";
+    tinygltf::Value::Object extras;
+    extras["tile"] = tinygltf::Value(tile_);
+    extras["crs"] = tinygltf::Value(epsg_.empty() ? std::string("unknown") : epsg_);
+    extras["origin"] = tinygltf::Value(tinygltf::Value::Array{tinygltf::Value(origin_.x()), tinygltf::Value(origin_.y()), tinygltf::Value(0.0)});
+    extras["axes"] = tinygltf::Value(std::string("glTF +X = map x (east), +Y = height, +Z = -map y (south), metres from origin"));
+    model.asset.extras = tinygltf::Value(extras);
+    // One buffer: every block's positions, then every block's indices.
+    std::vector<unsigned char> bytes;
+    const auto append = [&](const void* data, std::size_t size) {
+      const auto* b = static_cast<const unsigned char*>(data);
+      bytes.insert(bytes.end(), b, b + size);
+    };
+    std::size_t positions_size = 0;
+    for (const Block& b : blocks_) positions_size += b.positions.size() * sizeof(float);
+    for (const Block& b : blocks_) append(b.positions.data(), b.positions.size() * sizeof(float));
+    for (const Block& b : blocks_) append(b.indices.data(), b.indices.size() * sizeof(std::uint32_t));
+    tinygltf::Scene scene;
+    if (!blocks_.empty()) {
+      tinygltf::Buffer buffer;
+      buffer.data = bytes;
+      model.buffers.push_back(std::move(buffer));
+      tinygltf::BufferView positions, indices;
+      positions.buffer = indices.buffer = 0;
+      positions.byteLength = positions_size;
+      positions.byteStride = 3 * sizeof(float);
+      positions.target = TINYGLTF_TARGET_ARRAY_BUFFER;
+      indices.byteOffset = positions_size;
+      indices.byteLength = bytes.size() - positions_size;
+      indices.target = TINYGLTF_TARGET_ELEMENT_ARRAY_BUFFER;
+      model.bufferViews = {positions, indices};
+      std::size_t position_offset = 0, index_offset = 0;
+      for (const Block& b : blocks_) {
+        tinygltf::Accessor p, i;
+        p.bufferView = 0;
+        p.byteOffset = position_offset;
+        p.componentType = TINYGLTF_COMPONENT_TYPE_FLOAT;
+        p.type = TINYGLTF_TYPE_VEC3;
+        p.count = b.positions.size() / 3;
+        p.minValues = {std::numeric_limits<double>::infinity(), std::numeric_limits<double>::infinity(), std::numeric_limits<double>::infinity()};
+        p.maxValues = {-std::numeric_limits<double>::infinity(), -std::numeric_limits<double>::infinity(), -std::numeric_limits<double>::infinity()};
+        for (std::size_t k = 0; k < b.positions.size(); ++k) {
+          p.minValues[k % 3] = std::min(p.minValues[k % 3], double(b.positions[k]));
+          p.maxValues[k % 3] = std::max(p.maxValues[k % 3], double(b.positions[k]));
+        }
+        i.bufferView = 1;
+        i.byteOffset = index_offset;
+        i.componentType = TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT;
+        i.type = TINYGLTF_TYPE_SCALAR;
+        i.count = b.indices.size();
+        position_offset += b.positions.size() * sizeof(float);
+        index_offset += b.indices.size() * sizeof(std::uint32_t);
+        tinygltf::Primitive primitive;
+        primitive.attributes["POSITION"] = int(model.accessors.size());
+        model.accessors.push_back(std::move(p));
+        primitive.indices = int(model.accessors.size());
+        model.accessors.push_back(std::move(i));
+        primitive.mode = TINYGLTF_MODE_TRIANGLES;
+        tinygltf::Mesh mesh;
+        mesh.name = b.id;
+        mesh.primitives.push_back(std::move(primitive));
+        tinygltf::Node node;
+        node.name = b.id;
+        node.mesh = int(model.meshes.size());
+        model.meshes.push_back(std::move(mesh));
+        scene.nodes.push_back(int(model.nodes.size()));
+        model.nodes.push_back(std::move(node));
+      }
+    }
+    model.scenes.push_back(std::move(scene));
+    model.defaultScene = 0;
+    tinygltf::TinyGLTF writer;
+    if (!writer.WriteGltfSceneToStream(&model, file_.out(), false, true)) throw InputError("glTF: the model could not be written");
+    file_.commit();
+  }
+
+ private:
+  struct Block {
+    std::string id;
+    std::vector<float> positions;        // x, y, z per point, glTF frame
+    std::vector<std::uint32_t> indices;  // triangles
+  };
+  AtomicTextFile file_;
+  Vec2 origin_;
+  std::string epsg_, tile_;
+  std::vector<Block> blocks_;
+};
+
 }  // namespace
 
 Extent extent_of(const std::vector<BuildingModel>& models) {
@@ -428,6 +557,7 @@ std::unique_ptr<ModelWriter> make_model_writer(const std::string& format, const 
   if (format == "cityjson") return std::make_unique<CityJsonWriter>(path, context);
   if (format == "cityjsonseq") return std::make_unique<CityJsonSeqWriter>(path, context);
   if (format == "obj") return std::make_unique<ObjWriter>(path, context);
+  if (format == "gltf") return std::make_unique<GltfWriter>(path, context);
   return std::make_unique<FootprintModelWriter>(path, context);
 }
 

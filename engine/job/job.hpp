@@ -70,7 +70,7 @@ struct OutputOptions {
     v("dir", dir, "output directory: one file per tile and format, the tile index and the run report");
     v("crs", crs, "the CRS the 3D outputs declare, as an EPSG code: the inputs' horizontal CRS with a vertical one, e.g. EPSG:7415 (RD New + NAP height) for inputs in EPSG:28992; written as urn:ogc:def:crs:EPSG::7415 in CityGML and https://www.opengis.net/def/crs/EPSG/0/7415 in CityJSON. Nothing is reprojected: its horizontal part must be the inputs' CRS. Empty: the inputs' CRS");
     v("quicklook", quicklook, "a PNG per tile for visual checks: LOD0 outlines over the orthophoto, or over a hillshade of the DSM (about a third of a run's time at 0.25 m)");
-    v("formats", formats, "output formats, one file per tile each: citygml (2.0), cityjson (2.0), cityjsonseq (CityJSON Text Sequences, .city.jsonl), obj, gpkg, geojson", Check::one_of({"citygml", "cityjson", "cityjsonseq", "obj", "gpkg", "geojson"}));
+    v("formats", formats, "output formats, one file per tile each: citygml (2.0), cityjson (2.0), cityjsonseq (CityJSON Text Sequences, .city.jsonl), obj, gpkg, geojson (RFC 7946), gltf (glTF 2.0 binary, .glb: the LOD1 blocks for web viewers and Blender)", Check::one_of({"citygml", "cityjson", "cityjsonseq", "obj", "gpkg", "geojson", "gltf"}));
   }
 };
 
