@@ -411,24 +411,32 @@ void run_chain(const std::vector<Ring>& rings, double pixel_size, const CoreOpti
                          std::max(o.corners.min_run_px, o.corners.min_run_noise * noise / pixel_size), lattice_outline)
                      .second.empty();
   }
-  const double lattice_fit = lattice_ok ? contour_fit(rings, lattice_outline) : 0.0;
+  // (Each contour fit computed once, when it is needed: they are a good part of the time.)
   if (!regular_problem.second.empty() && !plain_problem.second.empty()) {
     // As a stand-in for a failed chain, the lattice outline must explain the contour within the
     // noise, or as well as the fallback does.
+    const double lattice_fit = lattice_ok ? contour_fit(rings, lattice_outline) : 0.0;
     const bool rescues = lattice_ok && (lattice_fit <= o.models.rescue_fit_noise * model_noise(result, pixel_size, o.models) ||
                                         lattice_fit <= contour_fit(rings, fallback_footprint(rings, o.fallback.tolerance_m)) + allowed);
     if (!rescues) throw StageError(regular_problem.first, regular_problem.second);
     result.footprint = std::move(lattice_outline);
     result.model = "lattice";
   } else {
-    const bool regular_wins = !plain_problem.second.empty() ||
-                              (regular_problem.second.empty() && contour_fit(rings, regular) <= contour_fit(rings, plain) + allowed);
+    double chosen_fit = -1;  // unknown yet
+    bool regular_wins = !plain_problem.second.empty();
+    if (!regular_wins && regular_problem.second.empty()) {
+      const double regular_fit = contour_fit(rings, regular), plain_fit = contour_fit(rings, plain);
+      regular_wins = regular_fit <= plain_fit + allowed;
+      chosen_fit = regular_wins ? regular_fit : plain_fit;
+    }
     result.footprint = std::move(regular_wins ? regular : plain);
     result.model = regular_wins ? "regular" : "lines";
-    if (lattice_ok && vertex_count(lattice_outline) <= vertex_count(result.footprint) &&
-        lattice_fit <= contour_fit(rings, result.footprint) + fit_tolerance(rings, pixel_size, result, o)) {
-      result.footprint = std::move(lattice_outline);
-      result.model = "lattice";
+    if (lattice_ok && vertex_count(lattice_outline) <= vertex_count(result.footprint)) {
+      if (chosen_fit < 0) chosen_fit = contour_fit(rings, result.footprint);
+      if (contour_fit(rings, lattice_outline) <= chosen_fit + fit_tolerance(rings, pixel_size, result, o)) {
+        result.footprint = std::move(lattice_outline);
+        result.model = "lattice";
+      }
     }
   }
   if (on_lattice) choose_rectangle(rings, pixel_size, o.models, result);  // a round shape is no rectangle
