@@ -5,6 +5,7 @@
 #include <sstream>
 #include <iostream>
 #include <map>
+#include <nlohmann/json.hpp>
 #include <spdlog/spdlog.h>
 #include <tbb/global_control.h>
 #include <tbb/parallel_for.h>
@@ -156,27 +157,33 @@ int run_regularize(int argc, char** argv) {
       std::find_if(classes.begin(), classes.end(), [&](const SizeClass& c) { return edges < c.below; })->seconds.push_back(results[i].seconds);
       all.push_back(results[i].seconds);
     }
-    const auto times = [](std::vector<double> seconds) {  // "seconds_mean": ..., "seconds_median": ..., "seconds_p99": ...
+    const auto times = [](std::vector<double> seconds, nlohmann::ordered_json& into) {  // mean, median, p99
       std::sort(seconds.begin(), seconds.end());
       double total = 0;
       for (double s : seconds) total += s;
       const auto at = [&](double q) { return seconds.empty() ? 0.0 : seconds[std::min(seconds.size() - 1, std::size_t(q * double(seconds.size())))]; };
-      std::ostringstream o;
-      o << "\"seconds_mean\": " << (seconds.empty() ? 0.0 : total / double(seconds.size())) << ", \"seconds_median\": " << at(0.5)
-        << ", \"seconds_p99\": " << at(0.99);
-      return o.str();
+      into["seconds_mean"] = seconds.empty() ? 0.0 : total / double(seconds.size());
+      into["seconds_median"] = at(0.5);
+      into["seconds_p99"] = at(0.99);
     };
     double total = 0;
     for (double s : all) total += s;
-    std::ostringstream out;
-    out << "{\"regularizer\": \"" << regularizer << "\", \"route\": \"" << options.core.corners.route << "\", \"buildings\": " << count
-        << ", \"ok\": " << count - failed << ", \"fallback\": " << failed << ", \"original_route\": " << rerouted << ", \"seconds_total\": " << total << ", " << times(all)
-        << ",\n \"by_size\": {";
-    for (std::size_t c = 0; c < classes.size(); ++c)
-      out << (c ? ",\n  " : "\n  ") << "\"" << classes[c].name << "\": {\"buildings\": " << classes[c].seconds.size() << ", "
-          << times(classes[c].seconds) << "}";
-    out << "}}\n";
-    write_text_atomically(*stats, out.str());
+    nlohmann::ordered_json out;
+    out["regularizer"] = regularizer;
+    out["route"] = options.core.corners.route;
+    out["buildings"] = count;
+    out["ok"] = count - failed;
+    out["fallback"] = failed;
+    out["original_route"] = rerouted;
+    out["seconds_total"] = total;
+    times(all, out);
+    for (const SizeClass& c : classes) {
+      nlohmann::ordered_json size_class;
+      size_class["buildings"] = c.seconds.size();
+      times(c.seconds, size_class);
+      out["by_size"][c.name] = size_class;
+    }
+    write_text_atomically(*stats, out.dump(1) + "\n");
   }
   return 0;
 }

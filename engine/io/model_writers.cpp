@@ -1,5 +1,6 @@
 #include "io/model_writers.hpp"
 
+#include <nlohmann/json.hpp>
 #include <tiny_gltf.h>
 
 #include <charconv>
@@ -159,20 +160,11 @@ class CityGmlWriter : public ModelWriter {
 };
 
 // CityJSON 2.0: integer vertices with a transform (mm), Solid LOD1 and MultiSurface LOD0.
-// JSON string contents: quotes, backslashes and control characters escaped.
+// A JSON string's contents (nlohmann-json): quotes, backslashes and control characters escaped,
+// invalid UTF-8 replaced.
 std::string json_text(const std::string& s) {
-  std::string out;
-  for (const char c : s) {
-    if (c == '"' || c == '\\') { out += '\\'; out += c; }
-    else if (c == '\n') out += "\\n";
-    else if (c == '\t') out += "\\t";
-    else if (static_cast<unsigned char>(c) < 0x20) {
-      char buffer[8];
-      std::snprintf(buffer, sizeof buffer, "\\u%04x", static_cast<unsigned>(static_cast<unsigned char>(c)));
-      out += buffer;
-    } else out += c;
-  }
-  return out;
+  const std::string quoted = nlohmann::json(s).dump(-1, ' ', false, nlohmann::json::error_handler_t::replace);
+  return quoted.substr(1, quoted.size() - 2);
 }
 
 // CityJSON's vertices of one file or one feature: integer millimetres from the origin, each once.
@@ -212,8 +204,8 @@ void write_city_object(std::ostream& o, const BuildingModel& m, CityJsonVertices
     for (const Vec2& p : r) lifted.emplace_back(p.x(), p.y(), z);
     ring3(lifted);
   };
-  o << "{\"type\": \"Building\", \"attributes\": {\"status\": \"" << m.status << "\", \"regularizer\": \"" << m.regularizer
-    << "\", \"tile\": \"" << m.tile << "\"";
+  o << "{\"type\": \"Building\", \"attributes\": {\"status\": \"" << json_text(m.status) << "\", \"regularizer\": \""
+    << json_text(m.regularizer) << "\", \"tile\": \"" << json_text(m.tile) << "\"";
   if (!m.stage.empty()) o << ", \"failed_stage\": \"" << json_text(m.stage) << "\"";
   if (!m.reason.empty()) o << ", \"reason\": \"" << json_text(m.reason) << "\"";
   if (m.has_lod1) o << ", \"measuredHeight\": " << (m.roof - m.ground) << ", \"ground_height\": " << m.ground << ", \"roof_height\": " << m.roof;
