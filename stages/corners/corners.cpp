@@ -45,7 +45,7 @@ bool bends_consistently(const Ring& ring, int first, int count, const Line& line
   const double total = run_length(ring, first, count);
   Eigen::Matrix3d quadratic = Eigen::Matrix3d::Zero();
   Eigen::Vector3d rhs = Eigen::Vector3d::Zero();
-  double position = 0, origin = 0;
+  double position = 0, origin = 0, sum_v2 = 0;
   bool have_origin = false;
   for (int k = 0; k < count; ++k) {
     const std::size_t i = (first + k) % ring.size();
@@ -59,6 +59,7 @@ bool bends_consistently(const Ring& ring, int first, int count, const Line& line
     const Eigen::Vector3d basis(1.0, u, u * u);
     quadratic += len * basis * basis.transpose();
     rhs += len * v * basis;
+    sum_v2 += len * v * v;
   }
   if (quadratic(0, 0) <= 0) return false;
   // Spread about the best straight line (offset and tilt) and about the best parabola.
@@ -66,19 +67,8 @@ bool bends_consistently(const Ring& ring, int first, int count, const Line& line
     const Eigen::VectorXd c = quadratic.topLeftCorner(terms, terms).ldlt().solve(rhs.head(terms));
     return c.dot(quadratic.topLeftCorner(terms, terms) * c) - 2 * c.dot(rhs.head(terms));
   };
-  // Both residuals less the same sum of v^2, which cancels in their difference.
+  // Both residuals less the same sum of v^2 (which cancels in their difference).
   const double straight = residual(2), bent = residual(3);
-  double sum_v2 = 0;
-  position = 0;
-  for (int k = 0; k < count; ++k) {
-    const std::size_t i = (first + k) % ring.size();
-    const Vec2 e = edge_vector(ring, i);
-    const double len = e.norm();
-    position += len;
-    if (position < trim || position > total - trim) continue;
-    const double v = line.normal.dot(ring[i] + 0.5 * e) - line.offset;
-    sum_v2 += len * v * v;
-  }
   const double spread = sum_v2 + straight;  // about the straight line
   return spread > 0 && (straight - bent) >= min_explained * spread;
 }
