@@ -67,7 +67,7 @@ inputs:
   dsm: {path: city/dsm.tif}
   dtm: {path: city/dtm.tif}
 tiling: {tile_size_m: 100}
-output: {dir: OUT, quicklook: true}
+output: {dir: OUT, quicklook: true, crs: "EPSG:7415", formats: [citygml, cityjson, cityjsonseq, obj, gpkg, geojson, gltf]}
 work_dir: WORK
 EOF
 sed 's/OUT/host_out/; s/WORK/host_work/' "$work/job.yaml" > "$work/host.yaml"
