@@ -21,6 +21,7 @@
 #include "commands/commands.hpp"
 #include "io/atomic_file.hpp"
 #include "io/errors.hpp"
+#include "io/footprint_writer.hpp"
 #include "io/model_writers.hpp"
 #include "run/checkpoint.hpp"
 #include "run/run_report.hpp"
@@ -369,9 +370,8 @@ void merge_ogr_into(const std::vector<fs::path>& files, const fs::path& target, 
       OGRLayer*& layer = layers[source->GetName()];
       if (!layer) {
         // GeoJSON as RFC 7946 (its tiles are WGS 84 already: nothing moves, the precision stays).
-        const char* rfc7946[] = {"RFC7946=YES", "COORDINATE_PRECISION=7", nullptr};
         layer = out->CreateLayer(source->GetName(), source->GetSpatialRef(), source->GetGeomType(),
-                                 driver_name == "GeoJSON" ? const_cast<char**>(rfc7946) : nullptr);
+                                 driver_name == "GeoJSON" ? rfc7946_layer_options() : nullptr);
         if (!layer) throw InputError("'" + target.string() + "': cannot create the layer " + source->GetName());
         for (int i = 0; i < source->GetLayerDefn()->GetFieldCount(); ++i)
           if (layer->CreateField(source->GetLayerDefn()->GetFieldDefn(i)) != OGRERR_NONE)

@@ -56,6 +56,11 @@ struct FootprintFileWriter::Impl {
   }
 };
 
+char** rfc7946_layer_options() {
+  static const char* options[] = {"RFC7946=YES", "COORDINATE_PRECISION=7", nullptr};
+  return const_cast<char**>(options);
+}
+
 FootprintFileWriter::FootprintFileWriter(const std::string& path, const FootprintLayer& layer) : impl_(new Impl) {
   GDALAllRegister();
   CPLErrorReset();
@@ -97,9 +102,8 @@ FootprintFileWriter::FootprintFileWriter(const std::string& path, const Footprin
     srs_ptr = &srs;
   }
   try {
-    const char* rfc7946[] = {"RFC7946=YES", "COORDINATE_PRECISION=7", nullptr};
     impl_->ogr_layer = impl_->dataset->CreateLayer(layer.name.c_str(), srs_ptr, wkbPolygon,
-                                                   layer.rfc7946 && driver_name == "GeoJSON" ? const_cast<char**>(rfc7946) : nullptr);
+                                                   layer.rfc7946 && driver_name == "GeoJSON" ? rfc7946_layer_options() : nullptr);
     if (!impl_->ogr_layer) impl_->fail("cannot create layer");
     auto field = [&](const char* name, OGRFieldType type) {
       OGRFieldDefn def(name, type);

@@ -31,6 +31,10 @@ struct FootprintLayer {
   bool rfc7946 = false;       // GeoJSON as RFC 7946: WGS 84 longitude, latitude (7 decimals), no crs member
 };
 
+// GDAL's GeoJSON layer creation options for RFC 7946: WGS 84 longitude, latitude to 7 decimals
+// (about 1 cm), no crs member. (A CSL list, null-terminated, for CreateLayer.)
+char** rfc7946_layer_options();
+
 // Checks up front that path can be written (directory exists and is writable, extension known).
 void check_output_path(const std::string& path);
 

@@ -204,8 +204,9 @@ void write_city_object(std::ostream& o, const BuildingModel& m, CityJsonVertices
     for (const Vec2& p : r) lifted.emplace_back(p.x(), p.y(), z);
     ring3(lifted);
   };
-  o << "{\"type\": \"Building\", \"attributes\": {\"status\": \"" << json_text(m.status) << "\", \"regularizer\": \""
-    << json_text(m.regularizer) << "\", \"tile\": \"" << json_text(m.tile) << "\"";
+  // (status, regularizer and tile are lodforge's own words and names; stage and reason are free text)
+  o << "{\"type\": \"Building\", \"attributes\": {\"status\": \"" << m.status << "\", \"regularizer\": \"" << m.regularizer
+    << "\", \"tile\": \"" << m.tile << "\"";
   if (!m.stage.empty()) o << ", \"failed_stage\": \"" << json_text(m.stage) << "\"";
   if (!m.reason.empty()) o << ", \"reason\": \"" << json_text(m.reason) << "\"";
   if (m.has_lod1) o << ", \"measuredHeight\": " << (m.roof - m.ground) << ", \"ground_height\": " << m.ground << ", \"roof_height\": " << m.roof;
@@ -295,8 +296,6 @@ class CityJsonSeqWriter : public ModelWriter {
   Vec2 origin_;
 };
 
-// Wavefront OBJ: one object per building, coordinates relative to the tile origin so that single
-// precision holds; the origin is in the header. Faces with holes are triangulated.
 // The faces of a solid as polygons a mesh format takes, outward as the solid's: walls (one ring of
 // at most 4 vertices) as they are, and faces with holes or more vertices (tops and bottoms)
 // triangulated in the plan; with every_face, horizontal faces of up to 4 vertices too (a quad
@@ -334,6 +333,8 @@ void for_each_mesh_polygon(const Solid& solid, const Vec2& origin, bool every_fa
   }
 }
 
+// Wavefront OBJ: one object per building, coordinates relative to the tile origin so that single
+// precision holds; the origin is in the header. Faces with holes are triangulated.
 class ObjWriter : public ModelWriter {
  public:
   ObjWriter(const std::string& path, const WriterContext& c) : file_(path), origin_(c.origin) {

@@ -62,9 +62,10 @@ void account(const std::string& summary, const std::string& tile, int tile_index
 
 
 // The entries in the order of their tiles (stable: a tile's own entries keep their order).
-std::vector<std::string> in_tile_order(std::vector<std::pair<int, std::string>> entries) {
+template <class T>
+std::vector<T> in_tile_order(std::vector<std::pair<int, T>> entries) {
   std::stable_sort(entries.begin(), entries.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
-  std::vector<std::string> out;
+  std::vector<T> out;
   for (auto& e : entries) out.push_back(std::move(e.second));
   return out;
 }
@@ -98,10 +99,9 @@ void record_tile(Totals& totals, const RunPlan& plan, const TileResult& result, 
   std::array<Vec2, 4> corners{a, Vec2(b.x(), a.y()), b, Vec2(a.x(), b.y())};
   if ((b.x() - a.x()) * (b.y() - a.y()) < 0) std::swap(corners[1], corners[3]);  // (signed area of that order < 0)
   feature << "]}, \"geometry\": ";  // written with the index, in WGS 84
-  totals.index_features.emplace_back(r->tile, feature.str());
-  std::array<std::array<double, 2>, 4> ring;
-  for (int k = 0; k < 4; ++k) ring[k] = {corners[k].x(), corners[k].y()};
-  totals.index_rings.emplace_back(r->tile, ring);
+  Totals::IndexFeature entry{feature.str(), {}};
+  for (int k = 0; k < 4; ++k) entry.ring[k] = {corners[k].x(), corners[k].y()};
+  totals.index_features.emplace_back(r->tile, std::move(entry));
   std::ostringstream tile_json;
   tile_json << "{\"tile\": \"" << r->name << "\", \"buildings\": " << count << ", \"skipped\": " << (r->skipped ? "true" : "false")
             << ", \"seconds\": " << r->seconds << "}";
@@ -135,7 +135,8 @@ std::optional<TileIndex> read_tile_index(const fs::path& path) {
 void write_index_and_report(const Totals& totals, const RunPlan& plan, const std::string& job_path, int shard_index,
                             int shard_count, std::size_t tiles_count, double elapsed) {
   const Job& job = plan.job;
-  const std::vector<std::string> index_features = in_tile_order(totals.index_features), tile_json = in_tile_order(totals.tile_json),
+  const std::vector<Totals::IndexFeature> index_features = in_tile_order(totals.index_features);
+  const std::vector<std::string> tile_json = in_tile_order(totals.tile_json),
                                  failed_json = in_tile_order(totals.failed_json), too_large = in_tile_order(totals.too_large);
   const fs::path& out_dir = plan.out_dir;
   struct { int index, count; } shard{shard_index, shard_count};
@@ -144,10 +145,8 @@ void write_index_and_report(const Totals& totals, const RunPlan& plan, const std
   const std::string suffix = shard_suffix(shard.index, shard.count);
   // The tile index is RFC 7946 GeoJSON: WGS 84 longitude and latitude (7 decimals, about 1 cm),
   // no crs member. Only an input without a CRS leaves its tiles in map coordinates.
-  auto rings = totals.index_rings;
-  std::stable_sort(rings.begin(), rings.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
   std::vector<std::array<double, 2>> corners;
-  for (const auto& [tile, ring] : rings) corners.insert(corners.end(), ring.begin(), ring.end());
+  for (const Totals::IndexFeature& f : index_features) corners.insert(corners.end(), f.ring.begin(), f.ring.end());
   std::vector<std::array<double, 2>> lon_lat = to_lon_lat(plan.crs.wkt(), corners);
   if (lon_lat.empty() && !corners.empty())
     spdlog::warn("the tile index is in map coordinates, not WGS 84 as RFC 7946 asks: the inputs' CRS is unknown or cannot be transformed");
@@ -159,7 +158,7 @@ void write_index_and_report(const Totals& totals, const RunPlan& plan, const std
   index << "{\"type\": \"FeatureCollection\", \"name\": \"tile_index\", \"run_key\": \"" << hex(plan.job_key) << "\"";
   index << ", \"features\": [\n";
   for (std::size_t i = 0; i < index_features.size(); ++i) {
-    index << index_features[i] << "{\"type\": \"Polygon\", \"coordinates\": [[";
+    index << index_features[i].head << "{\"type\": \"Polygon\", \"coordinates\": [[";
     for (int k = 0; k <= 4; ++k) index << (k ? ", [" : "[") << lon_lat[4 * i + k % 4][0] << ", " << lon_lat[4 * i + k % 4][1] << "]";
     index << "]]}}" << (i + 1 < index_features.size() ? ",\n" : "\n");
   }

@@ -21,8 +21,12 @@ struct Totals {
   std::size_t blocks_decoded = 0;  // raster blocks decoded by the shared cache (a block freed and read again counts again)
   // Each entry with its tile: tiles are recorded in the order they are processed, the files list
   // them in tile order.
-  std::vector<std::pair<int, std::string>> failed_json, too_large, tile_json, index_features;
-  std::vector<std::pair<int, std::array<std::array<double, 2>, 4>>> index_rings;  // each index feature's tile, counter-clockwise
+  std::vector<std::pair<int, std::string>> failed_json, too_large, tile_json;
+  struct IndexFeature {
+    std::string head;                            // the feature up to its geometry
+    std::array<std::array<double, 2>, 4> ring;  // the tile's corners in map coordinates, counter-clockwise
+  };
+  std::vector<std::pair<int, IndexFeature>> index_features;
 };
 
 // Adds a finished (or resumed) tile to the totals and the index.

@@ -220,15 +220,15 @@ using StageProblem = std::pair<std::string, std::string>;  // stage, problem (em
 // is retried with coarser run absorption (short runs are where crossings come from), then again
 // with runs left unsplit (steps are short too).
 StageProblem outline(const std::vector<Ring>& rings, const EdgeLabels& labels, const std::vector<Vec2>& directions,
-                     const CoreOptions& o, const Vec2& origin, double pixel_size, const CornerContext& context,
+                     const CornerOptions& o, const Vec2& origin, double pixel_size, const CornerContext& context,
                      double min_run_px, PolygonWithHoles& footprint) {
-  CornerOptions corner_options = o.corners;
+  CornerOptions corner_options = o;
   std::string problem;
   try {
-    for (const double split_px : {o.corners.split_px, 0.0}) {
+    for (const double split_px : {o.split_px, 0.0}) {
       corner_options.split_px = split_px;
       corner_options.min_run_px = min_run_px;
-      for (int attempt = 0; attempt <= o.corners.repair_attempts; ++attempt) {
+      for (int attempt = 0; attempt <= o.repair_attempts; ++attempt) {
         footprint = corner_polygon(rings, labels, directions, corner_options, origin, pixel_size, context);
         problem = polygon_problem(footprint);
         if (problem.empty()) return {};
@@ -388,11 +388,11 @@ void run_chain(const std::vector<Ring>& rings, double pixel_size, const CoreOpti
   context.noise = noise;
   const double allowed = o.models.outline_tolerance * model_noise(result, pixel_size, o.models);
   PolygonWithHoles regular, plain;
+  const double regular_min_run_px = std::max(o.corners.min_run_px, o.corners.min_run_noise * noise / pixel_size);
   const StageProblem regular_problem =
-      outline(fit_rings, labels, input.directions, o, origin, pixel_size, context,
-              std::max(o.corners.min_run_px, o.corners.min_run_noise * noise / pixel_size), regular);
+      outline(fit_rings, labels, input.directions, o.corners, origin, pixel_size, context, regular_min_run_px, regular);
   const StageProblem plain_problem =
-      outline(fit_rings, labels, input.directions, o, origin, pixel_size, CornerContext{}, o.corners.min_run_px, plain);
+      outline(fit_rings, labels, input.directions, o.corners, origin, pixel_size, CornerContext{}, o.corners.min_run_px, plain);
   // The lattice outline: every wall on the building's lattice (its main direction and quarter
   // turns), labeled by the MRF among those four alone. The most regular outline the building can
   // have short of a rectangle; it replaces the chain's when it has no more vertices and explains
@@ -400,16 +400,15 @@ void run_chain(const std::vector<Ring>& rings, double pixel_size, const CoreOpti
   PolygonWithHoles lattice_outline;
   bool lattice_ok = false;
   if (on_lattice && o.models.lattice_tolerance > 0) {
-    LabelingInput axes = input;
+    // (The labeling input's last use: its directions become the lattice's, its normals stay.)
     const Vec2 l = context.lattice;
-    axes.directions = {l, Vec2(-l.y(), l.x()), -l, Vec2(l.y(), -l.x())};
-    axes.support.assign(4, 1.0);
-    const EdgeLabels axis_labels = label_edges(axes, o.labeling);
-    CoreOptions straight = o;  // its walls are straight: no curve
-    straight.corners.curve_px = 0;
-    lattice_ok = outline(fit_rings, axis_labels, axes.directions, straight, origin, pixel_size, context,
-                         std::max(o.corners.min_run_px, o.corners.min_run_noise * noise / pixel_size), lattice_outline)
-                     .second.empty();
+    input.directions = {l, Vec2(-l.y(), l.x()), -l, Vec2(l.y(), -l.x())};
+    input.support.assign(4, 1.0);
+    const EdgeLabels axis_labels = label_edges(input, o.labeling);
+    CornerOptions straight = o.corners;  // its walls are straight: no curve
+    straight.curve_px = 0;
+    lattice_ok = outline(fit_rings, axis_labels, input.directions, straight, origin, pixel_size, context, regular_min_run_px,
+                         lattice_outline).second.empty();
   }
   // (Each contour fit computed once, when it is needed: they are a good part of the time.)
   if (!regular_problem.second.empty() && !plain_problem.second.empty()) {
