@@ -10,6 +10,7 @@
 #include <limits>
 #include <gdal_priv.h>
 #include <map>
+#include <nlohmann/json.hpp>
 #include <ogrsf_frmts.h>
 #include <opencv2/core.hpp>
 #include <opencv2/imgcodecs.hpp>
@@ -206,12 +207,11 @@ TEST_F(ModelFiles, DelftOutputsValidateAgainstTheOfficialSchemasAndEveryShellIsC
   ASSERT_EQ(run.code, 0) << run.output;
   const std::string report = slurp_file(dir / "out" / "report.json");
   // Every building is written with LOD1; at most a few take the fallback footprint.
-  std::smatch counts;
-  ASSERT_TRUE(std::regex_search(report, counts, std::regex(R"re("buildings": (\d+), "ok": (\d+), "fallback": (\d+), "lod1": (\d+))re"))) << report;
-  EXPECT_EQ(counts[1], "55");
-  EXPECT_EQ(counts[4], "55");
-  EXPECT_GE(std::stoi(counts[2]), 52) << report;
-  EXPECT_EQ(std::stoi(counts[2]) + std::stoi(counts[3]), 55);
+  const nlohmann::json counts = nlohmann::json::parse(report);
+  EXPECT_EQ(counts.at("buildings"), 55);
+  EXPECT_EQ(counts.at("lod1"), 55);
+  EXPECT_GE(counts.at("ok").get<int>(), 52) << report;
+  EXPECT_EQ(counts.at("ok").get<int>() + counts.at("fallback").get<int>(), 55);
 
   const auto gml = files_with(dir / "out" / "tiles", ".gml");
   ASSERT_GT(gml.size(), 5u);
@@ -273,7 +273,10 @@ TEST_F(ModelFiles, DelftOutputsValidateAgainstTheOfficialSchemasAndEveryShellIsC
   }
   EXPECT_EQ(objects, 55);
   // Each OBJ's origin (header) is the one the tile index records for its tile.
-  const std::string index = slurp_file(dir / "out" / "tile_index.geojson");
+  std::map<std::string, nlohmann::json> origins;  // tile -> its origin in the index
+  const nlohmann::json index = nlohmann::json::parse(slurp_file(dir / "out" / "tile_index.geojson"));
+  for (const auto& f : index.at("features"))
+    origins[f.at("properties").at("tile").get<std::string>()] = f.at("properties").at("origin");
   for (const fs::path& p : files_with(dir / "out" / "tiles", ".obj")) {
     std::ifstream in(p);
     std::string line;
@@ -282,14 +285,9 @@ TEST_F(ModelFiles, DelftOutputsValidateAgainstTheOfficialSchemasAndEveryShellIsC
     double ox = 0, oy = 0;
     std::istringstream(line.substr(std::string("# origin ").size())) >> ox >> oy;
     const std::string tile = p.filename().string().substr(0, 11);
-    const std::size_t at = index.find("\"tile\": \"" + tile + "\"");
-    ASSERT_NE(at, std::string::npos) << tile;
-    const std::size_t origin = index.find("\"origin\": [", at);
-    double ix = 0, iy = 0;
-    char comma;
-    std::istringstream(index.substr(origin + 11)) >> ix >> comma >> iy;
-    EXPECT_DOUBLE_EQ(ix, ox) << tile;
-    EXPECT_DOUBLE_EQ(iy, oy) << tile;
+    ASSERT_TRUE(origins.count(tile)) << tile;
+    EXPECT_DOUBLE_EQ(origins[tile].at(0).get<double>(), ox) << tile;
+    EXPECT_DOUBLE_EQ(origins[tile].at(1).get<double>(), oy) << tile;
   }
 
   // A quick-look picture per tile with buildings: the tile's size, outlines drawn in red.
@@ -322,9 +320,13 @@ TEST_F(ModelFiles, BuildingWithoutHeightsIsReportedAndStillWrittenAsLod0) {
                                   << "tiling: {tile_size_m: 1000}\noutput: {dir: out, formats: [citygml, gpkg]}\nwork_dir: work\n";
   const Output run = shell(std::string(LODFORGE_BINARY) + " run " + (dir / "job.yaml").string());
   ASSERT_EQ(run.code, 0) << run.output;
-  const std::string report = slurp_file(dir / "out" / "report.json");
-  EXPECT_NE(report.find("\"lod1\": 0"), std::string::npos) << report;
-  EXPECT_NE(report.find("no valid DSM value inside the footprint (LOD0 only)"), std::string::npos) << report;
+  const nlohmann::json report = nlohmann::json::parse(slurp_file(dir / "out" / "report.json"));
+  EXPECT_EQ(report.at("lod1"), 0) << report;
+  ASSERT_FALSE(report.at("failed_buildings").empty()) << report;
+  for (const auto& failed : report.at("failed_buildings")) {
+    EXPECT_EQ(failed.at("stage"), "heights") << failed;
+    EXPECT_EQ(failed.at("reason"), "no valid DSM value inside the footprint (LOD0 only)") << failed;
+  }
   const std::string gml = slurp_file(dir / "out" / "tiles" / "r0000_c0000.gml");
   const auto count = [&gml](const std::string& what) {
     std::size_t n = 0;

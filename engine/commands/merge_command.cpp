@@ -417,109 +417,12 @@ std::vector<fs::path> shard_parts(const fs::path& dir, const std::string& name, 
   return parts;
 }
 
-// The shards' tile indexes, as one. Every shard of one N must be there.
-void merge_indexes(const fs::path& dir) {
-  const std::vector<fs::path> parts = shard_parts(dir, "tile_index", "geojson", "tile indexes");
-  if (parts.empty()) return;
-  std::vector<std::pair<std::string, std::string>> features;  // (tile name, feature)
-  std::string header, first_key;
-  const std::regex tile(R"re("tile": "([^"]+)")re");
-  for (const fs::path& p : parts) {
-    // Shards of one run: the same inputs, options and tiling (the run key), else not one result.
-    const std::string run_key = read_tile_index(p).value_or(TileIndex{}).run_key;
-    if (p == parts.front()) first_key = run_key;
-    else if (run_key != first_key)
-      throw InputError("'" + p.string() + "': from a run with other inputs or options (run key " + run_key + ") than '" +
-                       parts.front().string() + "' (" + first_key + "); rerun the shards with one job");
-    std::ifstream in(p);
-    std::string line;
-    std::getline(in, line);
-    header = line;
-    while (std::getline(in, line)) {
-      std::smatch m;
-      if (line.rfind("{\"type\": \"Feature\"", 0) != 0 || !std::regex_search(line, m, tile)) continue;
-      if (line.back() == ',') line.pop_back();
-      features.push_back({m[1], line});
-    }
-  }
-  std::sort(features.begin(), features.end());
-  AtomicTextFile o(dir / "tile_index.geojson");
-  o.out() << header << '\n';
-  for (std::size_t i = 0; i < features.size(); ++i) o.out() << features[i].second << (i + 1 < features.size() ? ",\n" : "\n");
-  o.out() << "]}\n";
-  o.commit();
-}
-
-// The shards' run reports, as one report.json: counts, core and stage seconds summed, seconds the slowest shard's, the
-// failed and too-large buildings and the per-tile lines in tile order. Every shard must be there.
-void merge_reports(const fs::path& dir) {
-  const std::vector<fs::path> parts = shard_parts(dir, "report", "json", "run reports");
-  if (parts.empty()) return;
-  const int count = int(parts.size());
-  std::map<std::string, long long> sums;
-  double seconds = 0, core_seconds = 0;
-  std::map<std::string, double> stage_seconds;
-  std::string job;
-  std::vector<std::string> failed, too_large;
-  std::vector<std::string> tiles;  // sorted, they are in tile order (names rRRRR_cCCCC lead each line)
-  const std::regex pair(R"re("(\w+)": (-?[0-9.eE+-]+))re"), quoted(R"re("([^"]+)")re");
-  for (const fs::path& p : parts) {
-    std::ifstream in(p);
-    if (!in) throw InputError("'" + p.string() + "': cannot read");
-    std::string line, section;
-    while (std::getline(in, line)) {
-      if (line.rfind("  \"job\": ", 0) == 0) { job = line; continue; }
-      if (line.rfind("  \"failed_buildings\": [", 0) == 0) section = "failed";
-      else if (line.rfind("  \"too_large_buildings\": [", 0) == 0) section = "too_large";
-      else if (line.rfind("  \"per_tile\": [", 0) == 0) section = "per_tile";
-      if (section.empty()) {
-        const bool checkpoints = line.rfind("  \"checkpoints_reused\"", 0) == 0;
-        const bool stages = line.rfind("  \"stage_seconds\"", 0) == 0;
-        for (std::sregex_iterator it(line.begin(), line.end(), pair), stop; it != stop; ++it) {
-          std::string key = (*it)[1];
-          if (stages) { stage_seconds[key] += std::stod((*it)[2]); continue; }
-          if (checkpoints && key == "buildings") key = "checkpoint_buildings";
-          if (key == "seconds") seconds = std::max(seconds, std::stod((*it)[2]));
-          else if (key == "core_seconds") core_seconds += std::stod((*it)[2]);
-          else sums[key] += std::stoll((*it)[2]);
-        }
-        continue;
-      }
-      std::string item = line.substr(line.find_first_not_of(' '));
-      if (item.back() == ',') item.pop_back();
-      if (section == "too_large") {
-        const std::string list = line.substr(line.find('['));
-        for (std::sregex_iterator it(list.begin(), list.end(), quoted), stop; it != stop; ++it) too_large.push_back((*it)[0]);
-      } else if (item.front() == '{') {
-        std::string entry = item.back() == ']' ? item.substr(0, item.size() - 1) : item;
-        (section == "failed" ? failed : tiles).push_back(entry);
-      }
-    }
-  }
-  // Failed buildings in tile order, each tile's in its own order, as a single run lists them.
-  const auto tile_of = [](const std::string& entry) { const std::size_t at = entry.find("\"tile\": "); return entry.substr(at, 22); };
-  std::stable_sort(failed.begin(), failed.end(), [&](const std::string& a, const std::string& b) { return tile_of(a) < tile_of(b); });
-  // Too-large buildings in tile order too ("... around tile rRRRR_cCCCC ..."), each tile's in its order.
-  const auto tile_named = [](const std::string& text) { const std::size_t at = text.find("tile r"); return at == std::string::npos ? text : text.substr(at, 16); };
-  std::stable_sort(too_large.begin(), too_large.end(), [&](const std::string& a, const std::string& b) { return tile_named(a) < tile_named(b); });
-  std::sort(tiles.begin(), tiles.end());
-  std::ostringstream r;
-  r << "{\n" << job << "\n  \"shard\": \"merged " << count << "\",\n  \"tiles\": " << sums["tiles"] << ", \"tiles_processed\": " << sums["tiles_processed"]
-    << ", \"tiles_resumed\": " << sums["tiles_resumed"] << ", \"tiles_empty\": " << sums["tiles_empty"] << ",\n  \"checkpoints_reused\": {\"contours\": "
-    << sums["contours"] << ", \"buildings\": " << sums["checkpoint_buildings"] << "},\n  \"buildings\": " << sums["buildings"] << ", \"ok\": " << sums["ok"]
-    << ", \"fallback\": " << sums["fallback"] << ", \"lod1\": " << sums["lod1"] << ", \"dropped_small\": " << sums["dropped_small"]
-    << ", \"too_large\": " << sums["too_large"] << ",\n  \"seconds\": " << seconds << ", \"core_seconds\": " << core_seconds
-    << ",\n  \"stage_seconds\": {\"contours\": " << stage_seconds["contours"] << ", \"regularization\": " << stage_seconds["regularization"]
-    << ", \"heights\": " << stage_seconds["heights"] << ", \"writing\": " << stage_seconds["writing"] << "},\n  \"blocks_decoded\": " << sums["blocks_decoded"] << ",\n  \"failed_buildings\": [";
-  for (std::size_t i = 0; i < failed.size(); ++i) r << (i ? ",\n    " : "\n    ") << failed[i];
-  r << "],\n  \"too_large_buildings\": [";
-  for (std::size_t i = 0; i < too_large.size(); ++i) r << (i ? ", " : "") << too_large[i];
-  r << "],\n  \"per_tile\": [";
-  for (std::size_t i = 0; i < tiles.size(); ++i) r << (i ? ",\n    " : "\n    ") << tiles[i];
-  r << "]\n}\n";
-  AtomicTextFile o(dir / "report.json");
-  o.out() << r.str();
-  o.commit();
+// The shards' tile indexes and run reports, as one each. Every shard of one N must be there.
+void merge_shards(const fs::path& dir) {
+  const std::vector<fs::path> indexes = shard_parts(dir, "tile_index", "geojson", "tile indexes");
+  if (!indexes.empty()) merge_tile_indexes(indexes, dir / "tile_index.geojson");
+  const std::vector<fs::path> reports = shard_parts(dir, "report", "json", "run reports");
+  if (!reports.empty()) merge_run_reports(reports, dir / "report.json");
 }
 
 // The files the tile index lists (the run's own, not whatever else is in tiles/), in tile order,
@@ -571,8 +474,7 @@ int run_merge(int argc, char** argv) {
   for (const std::string& format : formats)
     if (std::find(model_formats().begin(), model_formats().end(), format) == model_formats().end())
       throw InputError("--formats: unknown format '" + format + "'");
-  merge_indexes(dir);
-  merge_reports(dir);
+  merge_shards(dir);
   const auto outputs = indexed_outputs(dir);
   verify_outputs(dir, outputs);
   fs::create_directories(dir / "merged");

@@ -1,6 +1,7 @@
 #include "run/run_report.hpp"
 
 #include <algorithm>
+#include <cmath>
 #include <array>
 #include <filesystem>
 #include <fstream>
@@ -19,17 +20,7 @@ namespace fs = std::filesystem;
 
 namespace {
 
-std::string json_escape(const std::string& s) {
-  std::string out;
-  for (char c : s) {
-    if (c == '"' || c == '\\') { out += '\\'; out += c; }
-    else if (c == '\n') out += "\\n";
-    else if (static_cast<unsigned char>(c) < 0x20) out += ' ';
-    else out += c;
-  }
-  return out;
-}
-
+using Json = nlohmann::ordered_json;  // keys in the order they are written
 
 void account(const std::string& summary, const std::string& tile, int tile_index, Totals& t, std::size_t& buildings_in_tile) {
   std::istringstream in(summary);
@@ -51,15 +42,13 @@ void account(const std::string& summary, const std::string& tile, int tile_index
       std::getline(fields, a, '\t');
       std::getline(fields, b, '\t');
       std::getline(fields, c);
-      t.failed_json.emplace_back(tile_index, "{\"id\": " + a + ", \"tile\": \"" + tile + "\", \"stage\": \"" + json_escape(b) +
-                                                 "\", \"reason\": \"" + json_escape(c) + "\"}");
+      t.failed.emplace_back(tile_index, Totals::Failed{a, tile, b, c});
     } else if (kind == "too_large") {
       std::getline(fields, a);
       t.too_large.emplace_back(tile_index, a);
     }
   }
 }
-
 
 // The entries in the order of their tiles (stable: a tile's own entries keep their order).
 template <class T>
@@ -68,6 +57,51 @@ std::vector<T> in_tile_order(std::vector<std::pair<int, T>> entries) {
   std::vector<T> out;
   for (auto& e : entries) out.push_back(std::move(e.second));
   return out;
+}
+
+// JSON text a person can read and a diff can compare: one member of the top object per line, an
+// array of objects one object per line, everything else compact. Strings escaped by nlohmann-json
+// (invalid UTF-8 replaced).
+std::string readable(const Json& object) {
+  const auto compact = [](const Json& j) { return j.dump(-1, ' ', false, Json::error_handler_t::replace); };
+  std::string out = "{";
+  bool first = true;
+  for (const auto& [key, value] : object.items()) {
+    out += (first ? "\n  " : ",\n  ") + compact(Json(key)) + ": ";
+    first = false;
+    if (value.is_array() && !value.empty() && value.front().is_object()) {
+      out += "[";
+      for (std::size_t i = 0; i < value.size(); ++i) out += (i ? ",\n    " : "\n    ") + compact(value[i]);
+      out += "\n  ]";
+    } else {
+      out += compact(value);
+    }
+  }
+  return out + "\n}\n";
+}
+
+// A coordinate rounded to `decimals` (written by nlohmann-json as the shortest text that reads back
+// as that double: 7 decimals at most for 1e-7).
+double rounded(double v, int decimals) {
+  const double scale = std::pow(10.0, decimals);
+  return std::round(v * scale) / scale;
+}
+
+// The tile index as RFC 7946 GeoJSON, one feature per line (merge reads it back as JSON).
+std::string tile_index_text(const std::string& run_key, const Json& features) {
+  std::string out = "{\"type\":\"FeatureCollection\",\"name\":\"tile_index\",\"run_key\":" + Json(run_key).dump() + ",\"features\":[";
+  for (std::size_t i = 0; i < features.size(); ++i) out += (i ? ",\n" : "\n") + features[i].dump();
+  return out + "\n]}\n";
+}
+
+Json read_json(const fs::path& path, const char* what) {
+  std::ifstream in(path);
+  if (!in) throw InputError("'" + path.string() + "': cannot read");
+  try {
+    return Json::parse(in);
+  } catch (const std::exception& e) {
+    throw InputError("'" + path.string() + "': not a " + std::string(what) + ": " + e.what());
+  }
 }
 
 }  // namespace
@@ -87,25 +121,13 @@ void record_tile(Totals& totals, const RunPlan& plan, const TileResult& result, 
   if (count == 0) totals.tiles_empty++;
   const cv::Rect rect = grid.rect(r->tile);
   const Vec2 a = plan.transform.to_map(rect.x, rect.y), b = plan.transform.to_map(rect.x + rect.width, rect.y + rect.height);
-  std::ostringstream feature;
-  feature.precision(12);
-  feature << "{\"type\": \"Feature\", \"properties\": {\"tile\": \"" << r->name << "\", \"col\": " << r->tile % grid.cols
-          << ", \"row\": " << r->tile / grid.cols << ", \"status\": \"" << (count ? "done" : "empty")
-          << "\", \"buildings\": " << count << ", \"origin\": [" << a.x() << ", " << b.y() << "], \"outputs\": [";
-  for (std::size_t i = 0; i < outputs.size(); ++i) feature << (i ? ", " : "") << '"' << outputs[i].first << '"';
-  feature << "], \"fingerprints\": [";
-  for (std::size_t i = 0; i < outputs.size(); ++i) feature << (i ? ", " : "") << '"' << outputs[i].second << '"';
   // The tile's extent, counter-clockwise as RFC 7946 wants an exterior ring.
   std::array<Vec2, 4> corners{a, Vec2(b.x(), a.y()), b, Vec2(a.x(), b.y())};
   if ((b.x() - a.x()) * (b.y() - a.y()) < 0) std::swap(corners[1], corners[3]);  // (signed area of that order < 0)
-  feature << "]}, \"geometry\": ";  // written with the index, in WGS 84
-  Totals::IndexFeature entry{feature.str(), {}};
+  Totals::IndexFeature entry{r->name, r->tile % grid.cols, r->tile / grid.cols, count, {a.x(), b.y()}, outputs, {}};
   for (int k = 0; k < 4; ++k) entry.ring[k] = {corners[k].x(), corners[k].y()};
   totals.index_features.emplace_back(r->tile, std::move(entry));
-  std::ostringstream tile_json;
-  tile_json << "{\"tile\": \"" << r->name << "\", \"buildings\": " << count << ", \"skipped\": " << (r->skipped ? "true" : "false")
-            << ", \"seconds\": " << r->seconds << "}";
-  totals.tile_json.emplace_back(r->tile, tile_json.str());
+  totals.tile_lines.emplace_back(r->tile, Totals::TileLine{r->name, count, r->skipped, r->seconds});
 }
 
 std::string shard_suffix(int shard_index, int shard_count) {
@@ -133,16 +155,12 @@ std::optional<TileIndex> read_tile_index(const fs::path& path) {
 }
 
 void write_index_and_report(const Totals& totals, const RunPlan& plan, const std::string& job_path, int shard_index,
-                            int shard_count, std::size_t tiles_count, double elapsed) {
+                            int shard_count, std::size_t tiles, double elapsed) {
   const Job& job = plan.job;
   const std::vector<Totals::IndexFeature> index_features = in_tile_order(totals.index_features);
-  const std::vector<std::string> tile_json = in_tile_order(totals.tile_json),
-                                 failed_json = in_tile_order(totals.failed_json), too_large = in_tile_order(totals.too_large);
   const fs::path& out_dir = plan.out_dir;
-  struct { int index, count; } shard{shard_index, shard_count};
-  struct { std::size_t n; std::size_t size() const { return n; } } tiles{tiles_count};
   // The tile index and the run report (one per shard when sharded).
-  const std::string suffix = shard_suffix(shard.index, shard.count);
+  const std::string suffix = shard_suffix(shard_index, shard_count);
   // The tile index is RFC 7946 GeoJSON: WGS 84 longitude and latitude (7 decimals, about 1 cm),
   // no crs member. Only an input without a CRS leaves its tiles in map coordinates.
   std::vector<std::array<double, 2>> corners;
@@ -150,37 +168,54 @@ void write_index_and_report(const Totals& totals, const RunPlan& plan, const std
   std::vector<std::array<double, 2>> lon_lat = to_lon_lat(plan.crs.wkt(), corners);
   if (lon_lat.empty() && !corners.empty())
     spdlog::warn("the tile index is in map coordinates, not WGS 84 as RFC 7946 asks: the inputs' CRS is unknown or cannot be transformed");
-  const bool geographic = !lon_lat.empty();
-  if (!geographic) lon_lat = corners;
-  std::ostringstream index;
-  index.precision(geographic ? 7 : 3);
-  index << std::fixed;
-  index << "{\"type\": \"FeatureCollection\", \"name\": \"tile_index\", \"run_key\": \"" << hex(plan.job_key) << "\"";
-  index << ", \"features\": [\n";
+  const int decimals = lon_lat.empty() ? 3 : 7;
+  if (lon_lat.empty()) lon_lat = corners;
+  Json features = Json::array();
   for (std::size_t i = 0; i < index_features.size(); ++i) {
-    index << index_features[i].head << "{\"type\": \"Polygon\", \"coordinates\": [[";
-    for (int k = 0; k <= 4; ++k) index << (k ? ", [" : "[") << lon_lat[4 * i + k % 4][0] << ", " << lon_lat[4 * i + k % 4][1] << "]";
-    index << "]]}}" << (i + 1 < index_features.size() ? ",\n" : "\n");
+    const Totals::IndexFeature& f = index_features[i];
+    Json files = Json::array(), fingerprints = Json::array(), ring = Json::array();
+    for (const auto& [file, fingerprint] : f.outputs) {
+      files.push_back(file);
+      fingerprints.push_back(fingerprint);
+    }
+    for (int k = 0; k <= 4; ++k) ring.push_back({rounded(lon_lat[4 * i + k % 4][0], decimals), rounded(lon_lat[4 * i + k % 4][1], decimals)});
+    features.push_back(Json{{"type", "Feature"},
+                            {"properties", {{"tile", f.tile}, {"col", f.col}, {"row", f.row}, {"status", f.buildings ? "done" : "empty"},
+                                            {"buildings", f.buildings}, {"origin", {rounded(f.origin[0], 3), rounded(f.origin[1], 3)}},
+                                            {"outputs", files}, {"fingerprints", fingerprints}}},
+                            {"geometry", {{"type", "Polygon"}, {"coordinates", Json::array({ring})}}}});
   }
-  index << "]}\n";
-  write_text_atomically(out_dir / ("tile_index" + suffix + ".geojson"), index.str());
-  std::ostringstream report;
-  report << "{\n  \"job\": \"" << json_escape(fs::absolute(job_path).string()) << "\",\n  \"shard\": \"" << shard.index << "/" << shard.count
-         << "\",\n  \"tiles\": " << tiles.size() << ", \"tiles_processed\": " << totals.tiles_processed << ", \"tiles_resumed\": "
-         << totals.tiles_skipped << ", \"tiles_empty\": " << totals.tiles_empty << ",\n  \"checkpoints_reused\": {\"contours\": " << totals.contours_reused << ", \"buildings\": " << totals.buildings_reused << "},\n  \"buildings\": " << totals.buildings
-         << ", \"ok\": " << totals.ok << ", \"fallback\": " << totals.fallback << ", \"lod1\": " << totals.lod1 << ", \"dropped_small\": " << totals.dropped_small
-         << ", \"too_large\": " << totals.too_large.size() << ",\n  \"seconds\": " << elapsed << ", \"core_seconds\": " << totals.core_seconds << ",\n  \"stage_seconds\": {\"contours\": "
-         << totals.contour_seconds << ", \"regularization\": " << totals.core_seconds << ", \"heights\": " << totals.heights_seconds
-         << ", \"writing\": " << totals.write_seconds << "},\n  \"blocks_decoded\": " << totals.blocks_decoded << ",\n  \"failed_buildings\": [";
-  for (std::size_t i = 0; i < failed_json.size(); ++i) report << (i ? ",\n    " : "\n    ") << failed_json[i];
-  report << "],\n  \"too_large_buildings\": [";
-  for (std::size_t i = 0; i < too_large.size(); ++i) report << (i ? ", " : "") << '"' << json_escape(too_large[i]) << '"';
-  report << "],\n  \"per_tile\": [";
-  for (std::size_t i = 0; i < tile_json.size(); ++i) report << (i ? ",\n    " : "\n    ") << tile_json[i];
-  report << "]\n}\n";
-  write_text_atomically(out_dir / ("report" + suffix + ".json"), report.str());
+  write_text_atomically(out_dir / ("tile_index" + suffix + ".geojson"), tile_index_text(hex(plan.job_key), features));
+  Json failed = Json::array(), too_large = Json::array(), per_tile = Json::array();
+  for (const Totals::Failed& f : in_tile_order(totals.failed))
+    failed.push_back({{"id", std::stoll(f.id)}, {"tile", f.tile}, {"stage", f.stage}, {"reason", f.reason}});
+  for (const std::string& t : in_tile_order(totals.too_large)) too_large.push_back(t);
+  for (const Totals::TileLine& t : in_tile_order(totals.tile_lines))
+    per_tile.push_back({{"tile", t.tile}, {"buildings", t.buildings}, {"skipped", t.skipped}, {"seconds", t.seconds}});
+  const Json report{{"job", fs::absolute(job_path).string()},
+                    {"shard", std::to_string(shard_index) + "/" + std::to_string(shard_count)},
+                    {"tiles", tiles},
+                    {"tiles_processed", totals.tiles_processed},
+                    {"tiles_resumed", totals.tiles_skipped},
+                    {"tiles_empty", totals.tiles_empty},
+                    {"checkpoints_reused", {{"contours", totals.contours_reused}, {"buildings", totals.buildings_reused}}},
+                    {"buildings", totals.buildings},
+                    {"ok", totals.ok},
+                    {"fallback", totals.fallback},
+                    {"lod1", totals.lod1},
+                    {"dropped_small", totals.dropped_small},
+                    {"too_large", totals.too_large.size()},
+                    {"seconds", elapsed},
+                    {"core_seconds", totals.core_seconds},
+                    {"stage_seconds", {{"contours", totals.contour_seconds}, {"regularization", totals.core_seconds},
+                                       {"heights", totals.heights_seconds}, {"writing", totals.write_seconds}}},
+                    {"blocks_decoded", totals.blocks_decoded},
+                    {"failed_buildings", failed},
+                    {"too_large_buildings", too_large},
+                    {"per_tile", per_tile}};
+  write_text_atomically(out_dir / ("report" + suffix + ".json"), readable(report));
   spdlog::info("{} tiles ({} computed, {} resumed from {}), {} buildings: {} ok, {} fallback, {} with LOD1; {} small components dropped{}; {:.1f} s",
-               tiles.size(), totals.tiles_processed, totals.tiles_skipped, job.work_dir, totals.buildings, totals.ok, totals.fallback, totals.lod1,
+               tiles, totals.tiles_processed, totals.tiles_skipped, job.work_dir, totals.buildings, totals.ok, totals.fallback, totals.lod1,
                totals.dropped_small, totals.too_large.empty() ? "" : "; " + std::to_string(totals.too_large.size()) + " too large (see report)",
                elapsed);
   if (totals.tiles_processed > 0)
@@ -188,8 +223,86 @@ void write_index_and_report(const Totals& totals, const RunPlan& plan, const std
                  totals.contour_seconds, totals.core_seconds, totals.heights_seconds, totals.write_seconds);
   if (totals.buildings == 0 && totals.dropped_small == 0 && totals.too_large.empty())
     spdlog::warn("no building found in {}{}: is inputs.segmentation.{} right for this raster?", job.inputs.segmentation.path,
-                 shard.count > 1 ? " (in this shard)" : "", job.inputs.segmentation.building_rgb.empty() ? "building_values" : "building_rgb");
+                 shard_count > 1 ? " (in this shard)" : "", job.inputs.segmentation.building_rgb.empty() ? "building_values" : "building_rgb");
   spdlog::info("outputs in {} (tile_index{}.geojson, report{}.json)", out_dir.string(), suffix, suffix);
+}
+
+namespace {
+
+// Adds the numbers of `from` into `into`, member by member (integers stay integers), nested objects
+// too; "seconds" (a run's wall time: shards run side by side) keeps the larger.
+void add_numbers(Json& into, const Json& from) {
+  for (auto& [key, value] : into.items()) {
+    if (!from.contains(key)) continue;
+    const Json& other = from.at(key);
+    if (value.is_object()) add_numbers(value, other);
+    else if (value.is_number() && !other.is_number()) throw std::runtime_error("'" + key + "' is not a number");
+    else if (key == "seconds") value = std::max(value.get<double>(), other.get<double>());
+    else if (value.is_number_integer() && other.is_number_integer()) value = value.get<long long>() + other.get<long long>();
+    else if (value.is_number()) value = value.get<double>() + other.get<double>();
+  }
+}
+
+}  // namespace
+
+void merge_tile_indexes(const std::vector<fs::path>& parts, const fs::path& target) {
+  std::vector<std::pair<std::string, Json>> features;  // (tile name, feature)
+  std::string first_key;
+  for (const fs::path& p : parts) {
+    const Json index = read_json(p, "lodforge tile index");
+    try {
+      // Shards of one run: the same inputs, options and tiling (the run key), else not one result.
+      const std::string run_key = index.at("run_key").get<std::string>();
+      if (p == parts.front()) first_key = run_key;
+      else if (run_key != first_key)
+        throw InputError("'" + p.string() + "': from a run with other inputs or options (run key " + run_key + ") than '" +
+                         parts.front().string() + "' (" + first_key + "); rerun the shards with one job");
+      for (const Json& f : index.at("features")) features.emplace_back(f.at("properties").at("tile").get<std::string>(), f);
+    } catch (const Json::exception& e) {
+      throw InputError("'" + p.string() + "': not a lodforge tile index: " + e.what());
+    }
+  }
+  std::stable_sort(features.begin(), features.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
+  Json all = Json::array();
+  for (auto& f : features) all.push_back(std::move(f.second));
+  write_text_atomically(target, tile_index_text(first_key, all));
+}
+
+void merge_run_reports(const std::vector<fs::path>& parts, const fs::path& target) {
+  Json merged;
+  std::vector<std::pair<std::string, Json>> failed, per_tile;  // (tile name, entry)
+  std::vector<std::pair<std::string, Json>> too_large;
+  for (const fs::path& p : parts) {
+    const Json report = read_json(p, "lodforge run report");
+    try {
+      for (const char* list : {"failed_buildings", "too_large_buildings", "per_tile"})
+        if (!report.at(list).is_array()) throw std::runtime_error(std::string("'") + list + "' is not a list");
+      if (merged.is_null()) merged = report;
+      else add_numbers(merged, report);
+      for (const Json& f : report.at("failed_buildings")) failed.emplace_back(f.at("tile").get<std::string>(), f);
+      for (const Json& t : report.at("per_tile")) per_tile.emplace_back(t.at("tile").get<std::string>(), t);
+      // "... around tile rRRRR_cCCCC ...": in tile order too.
+      for (const Json& t : report.at("too_large_buildings")) {
+        const std::string text = t.get<std::string>();
+        const std::size_t at = text.find("tile r");
+        too_large.emplace_back(at == std::string::npos ? text : text.substr(at, 16), t);
+      }
+    } catch (const std::exception& e) {
+      throw InputError("'" + p.string() + "': not a lodforge run report: " + e.what());
+    }
+  }
+  // In tile order, each tile's entries in their own order, as a single run lists them.
+  const auto listed = [](std::vector<std::pair<std::string, Json>>& entries) {
+    std::stable_sort(entries.begin(), entries.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
+    Json out = Json::array();
+    for (auto& e : entries) out.push_back(std::move(e.second));
+    return out;
+  };
+  merged["shard"] = "merged " + std::to_string(parts.size());
+  merged["failed_buildings"] = listed(failed);
+  merged["too_large_buildings"] = listed(too_large);
+  merged["per_tile"] = listed(per_tile);
+  write_text_atomically(target, readable(merged));
 }
 
 }  // namespace lodforge

@@ -21,11 +21,26 @@ struct Totals {
   std::size_t blocks_decoded = 0;  // raster blocks decoded by the shared cache (a block freed and read again counts again)
   // Each entry with its tile: tiles are recorded in the order they are processed, the files list
   // them in tile order.
-  std::vector<std::pair<int, std::string>> failed_json, too_large, tile_json;
+  struct Failed {
+    std::string id, tile, stage, reason;
+  };
+  struct TileLine {
+    std::string tile;
+    std::size_t buildings = 0;
+    bool skipped = false;
+    double seconds = 0;
+  };
   struct IndexFeature {
-    std::string head;                            // the feature up to its geometry
+    std::string tile;
+    int col = 0, row = 0;
+    std::size_t buildings = 0;
+    std::array<double, 2> origin{};              // the tile's upper-left corner in map coordinates
+    TileOutputs outputs;                         // its files with their fingerprints
     std::array<std::array<double, 2>, 4> ring;  // the tile's corners in map coordinates, counter-clockwise
   };
+  std::vector<std::pair<int, Failed>> failed;
+  std::vector<std::pair<int, std::string>> too_large;
+  std::vector<std::pair<int, TileLine>> tile_lines;
   std::vector<std::pair<int, IndexFeature>> index_features;
 };
 
@@ -45,8 +60,17 @@ struct TileIndex {
 // Reads a tile index as JSON; nullopt when there is no such file; InputError when it is not one.
 std::optional<TileIndex> read_tile_index(const std::filesystem::path& path);
 
-// Writes tile_index[.shard-K-of-N].geojson and report[...].json; logs the summary.
+// Writes tile_index[.shard-K-of-N].geojson and report[...].json (through nlohmann-json); logs the summary.
 void write_index_and_report(const Totals& totals, const RunPlan& plan, const std::string& job_path, int shard_index,
                             int shard_count, std::size_t tiles, double elapsed);
+
+// The shards' tile indexes (read as JSON) as one, written to target: every feature, in tile order.
+// InputError naming the file when one is not a tile index or comes from another run (run key).
+void merge_tile_indexes(const std::vector<std::filesystem::path>& parts, const std::filesystem::path& target);
+
+// The shards' run reports (read as JSON) as one report.json: every count, core and stage seconds
+// summed, the seconds the slowest shard's, the failed and too-large buildings and the per-tile
+// entries in tile order. InputError naming the file when one is not a run report.
+void merge_run_reports(const std::vector<std::filesystem::path>& parts, const std::filesystem::path& target);
 
 }  // namespace lodforge
