@@ -18,7 +18,7 @@ esac
 packages=(
   build-essential cmake ccache pkg-config
   libeigen3-dev libopencv-dev libcgal-dev libceres-dev libmaxflow-dev
-  libgdal-dev gdal-bin libtbb-dev libspdlog-dev libyaml-cpp-dev libcli11-dev nlohmann-json3-dev libtinygltf-dev
+  libgdal-dev gdal-bin libtbb-dev libspdlog-dev libyaml-cpp-dev libcli11-dev nlohmann-json3-dev libtinygltf-dev libxml2-dev
   libgtest-dev libgmock-dev libbenchmark-dev
   libxml2-utils python3 python3-gdal python3-jsonschema python3-numpy python3-pil
 )

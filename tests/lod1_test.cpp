@@ -23,6 +23,7 @@
 #include "io/ogr_polygon.hpp"
 #include "io/raster_writer.hpp"
 #include "lod1/solid.hpp"
+#include "run/checkpoint.hpp"
 #include "support/process.hpp"
 #include "support/shapes.hpp"
 
@@ -672,11 +673,12 @@ TEST_F(ModelFiles, MergedTilesEqualOneTileAndValidate) {
   EXPECT_NE(gml.find("<gml:name>lodforge, merged from "), std::string::npos);
   EXPECT_EQ(gml.find("<gml:name>lodforge tile "), std::string::npos);
   const std::string cityjson = slurp_file(merged / "lodforge.city.json"), whole_cityjson = slurp_file(dir / "whole_out" / "tiles" / "r0000_c0000.city.json");
-  EXPECT_NE(cityjson.find("\"title\": \"lodforge, merged from "), std::string::npos);
+  const nlohmann::json merged_json = nlohmann::json::parse(cityjson), whole_json = nlohmann::json::parse(whole_cityjson);
+  EXPECT_EQ(merged_json.at("metadata").at("title"), "lodforge, merged from 16 tiles");
   // The CRS the job declares (output.crs: RD New + NAP height, issue 17), in each format's form.
   EXPECT_NE(gml.find("srsName=\"urn:ogc:def:crs:EPSG::7415\""), std::string::npos);
   EXPECT_EQ(gml.find("srsName=\"EPSG:"), std::string::npos);
-  EXPECT_NE(cityjson.find("\"referenceSystem\": \"https://www.opengis.net/def/crs/EPSG/0/7415\""), std::string::npos);
+  EXPECT_EQ(merged_json.at("metadata").at("referenceSystem"), "https://www.opengis.net/def/crs/EPSG/0/7415");
   EXPECT_NE(slurp_file(merged / "lodforge.obj").find("CRS EPSG:7415"), std::string::npos);
   // The merged extent (the union of the tiles') is the one-tile run's, and holds every vertex.
   const std::regex envelope(R"(<gml:lowerCorner>([^<]*)</gml:lowerCorner><gml:upperCorner>([^<]*)</gml:upperCorner>)");
@@ -685,11 +687,8 @@ TEST_F(ModelFiles, MergedTilesEqualOneTileAndValidate) {
   ASSERT_TRUE(std::regex_search(whole, whole_box, envelope));
   EXPECT_EQ(merged_box[1], whole_box[1]);
   EXPECT_EQ(merged_box[2], whole_box[2]);
-  const std::regex extent(R"re("geographicalExtent": (\[[^\]]*\]))re");
-  std::smatch merged_extent, whole_extent;
-  ASSERT_TRUE(std::regex_search(cityjson, merged_extent, extent));
-  ASSERT_TRUE(std::regex_search(whole_cityjson, whole_extent, extent));
-  EXPECT_EQ(merged_extent[1], whole_extent[1]);
+  EXPECT_EQ(merged_json.at("metadata").at("geographicalExtent"), whole_json.at("metadata").at("geographicalExtent"));
+  EXPECT_EQ(merged_json.at("CityObjects").size(), 55u);
   std::istringstream lower(merged_box[1].str()), upper(merged_box[2].str());
   double box[6];
   lower >> box[0] >> box[1] >> box[2];
@@ -706,6 +705,60 @@ TEST_F(ModelFiles, MergedTilesEqualOneTileAndValidate) {
         }
   }
   if (schemas.empty()) GTEST_SKIP() << test::kNoSchemas;  // (everything above was checked)
+}
+
+// Issue 17: merge parses the tiles (libxml2, nlohmann-json, OBJ line by line) and refuses what is
+// not a lodforge tile, naming the file and line; a failed merge leaves nothing behind, and an
+// earlier merge's files as they were.
+TEST_F(ModelFiles, AMergeOfABrokenTileStopsNamingItAndLeavesNothingBehind) {
+  const std::string data = test::test_data();
+  std::ofstream(dir / "job.yaml") << "inputs:\n  segmentation: {path: " << data << "/delft-ahn3-bgt/derived/top_class_50cm.tif}\n"
+                                  << "  dsm: {path: " << data << "/delft-ahn3-bgt/derived/dsm_50cm.tif}\n"
+                                  << "tiling: {tile_size_m: 128}\noutput: {dir: out, formats: [citygml, cityjson, obj]}\nwork_dir: work\n";
+  ASSERT_EQ(shell(std::string(LODFORGE_BINARY) + " run " + (dir / "job.yaml").string()).code, 0);
+  const fs::path out = dir / "out", merged = out / "merged";
+  ASSERT_EQ(shell(std::string(LODFORGE_BINARY) + " merge " + out.string()).code, 0);
+  const std::string good_gml = slurp_file(merged / "lodforge.gml"), good_json = slurp_file(merged / "lodforge.city.json");
+  // A tile broken after the run (its fingerprint in the index updated, so that only parsing can tell).
+  const auto break_tile = [&](const std::string& name, const std::string& from, const std::string& to) {
+    const fs::path tile = out / "tiles" / name;
+    std::string text = slurp_file(tile);
+    const std::string old_print = file_fingerprint(tile.string());
+    const std::size_t at = text.find(from);
+    ASSERT_NE(at, std::string::npos) << name;
+    text.replace(at, from.size(), to);
+    std::ofstream(tile, std::ios::binary) << text;
+    std::string index = slurp_file(out / "tile_index.geojson");
+    index.replace(index.find(old_print), old_print.size(), file_fingerprint(tile.string()));
+    std::ofstream(out / "tile_index.geojson", std::ios::binary) << index;
+  };
+  const auto merge = [&](const std::string& formats) { return shell(std::string(LODFORGE_BINARY) + " merge " + out.string() + " --formats " + formats); };
+  break_tile("r0001_c0001.gml", "</bldg:Building>", "</bldg:Buildin>");
+  Output r = merge("obj,citygml");
+  EXPECT_EQ(r.code, 1) << r.output;
+  EXPECT_NE(r.output.find("r0001_c0001.gml': line "), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("not well-formed XML"), std::string::npos) << r.output;
+  break_tile("r0001_c0001.city.json", "\"vertices\": [", "\"vertices\": [[1, 2],");
+  r = merge("cityjson");
+  EXPECT_EQ(r.code, 1) << r.output;
+  EXPECT_NE(r.output.find("r0001_c0001.city.json': not a lodforge CityJSON tile"), std::string::npos) << r.output;
+  break_tile("r0001_c0001.obj", "\nf ", "\nf 0 ");
+  r = merge("obj");
+  EXPECT_EQ(r.code, 1) << r.output;
+  EXPECT_NE(r.output.find("r0001_c0001.obj': line "), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("'0' is not one of the"), std::string::npos) << r.output;
+  // Nothing half-written: the earlier merge's files as they were, no temporaries.
+  EXPECT_EQ(slurp_file(merged / "lodforge.gml"), good_gml);
+  EXPECT_EQ(slurp_file(merged / "lodforge.city.json"), good_json);
+  std::size_t files = 0;
+  for (const auto& e : fs::directory_iterator(merged)) files += !e.path().filename().string().empty();
+  EXPECT_EQ(files, 3u);
+  // An unknown format is refused before anything is merged.
+  fs::remove_all(merged);
+  r = merge("citygml,json");
+  EXPECT_EQ(r.code, 1) << r.output;
+  EXPECT_NE(r.output.find("unknown format 'json'"), std::string::npos) << r.output;
+  EXPECT_FALSE(fs::exists(merged / "lodforge.gml"));
 }
 
 }  // namespace

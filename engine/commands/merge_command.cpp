@@ -2,6 +2,8 @@
 // shards' tile indexes into one), streaming, in tile order.
 #include <algorithm>
 #include <array>
+#include <charconv>
+#include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <gdal_priv.h>
@@ -11,7 +13,10 @@
 #include <memory>
 #include <ogrsf_frmts.h>
 #include <nlohmann/json.hpp>
+#include <libxml/xmlreader.h>
+#include <libxml/xmlwriter.h>
 #include <regex>
+#include <set>
 #include <spdlog/spdlog.h>
 #include <sstream>
 #include <tiny_gltf.h>
@@ -38,66 +43,220 @@ std::string fixed3(double v) {
   return buffer;
 }
 
-// The union of the extents the files declare in their first lines (CityGML's gml:boundedBy,
-// CityJSON's geographicalExtent): the merged file's. A file without one (written by an earlier
-// version) is named in a warning and left out.
+// ---- CityGML, read with libxml2's streaming reader and written with its text writer ----
+
+using Reader = std::unique_ptr<xmlTextReader, void (*)(xmlTextReaderPtr)>;
+using Writer = std::unique_ptr<xmlTextWriter, void (*)(xmlTextWriterPtr)>;
+
+constexpr const char* citygml_core = "http://www.opengis.net/citygml/2.0";
+constexpr const char* gml_ns = "http://www.opengis.net/gml";
+
+std::string text_of(const xmlChar* s) { return s ? reinterpret_cast<const char*>(s) : ""; }
+const xmlChar* xml(const char* s) { return reinterpret_cast<const xmlChar*>(s); }
+
+Reader open_xml(const fs::path& file) {
+  Reader r(xmlReaderForFile(file.c_str(), nullptr, XML_PARSE_NONET), xmlFreeTextReader);
+  if (!r) throw InputError("'" + file.string() + "': cannot read");
+  return r;
+}
+
+// Advances to the next node; InputError naming the file and line when the XML is not well formed.
+bool next_node(xmlTextReaderPtr r, const fs::path& file) {
+  const int status = xmlTextReaderRead(r);
+  if (status < 0) {
+    const xmlError* e = xmlGetLastError();
+    throw InputError("'" + file.string() + "': line " + std::to_string(e ? e->line : 0) + ": not well-formed XML" +
+                     (e && e->message ? std::string(": ") + e->message : std::string()));
+  }
+  return status == 1;
+}
+
+bool is_element(xmlTextReaderPtr r, const char* ns, const char* local) {
+  return xmlTextReaderNodeType(r) == XML_READER_TYPE_ELEMENT && text_of(xmlTextReaderConstLocalName(r)) == local &&
+         text_of(xmlTextReaderConstNamespaceUri(r)) == ns;
+}
+
+// A lodforge CityGML tile's root (core:CityModel) and what its gml:boundedBy declares: the
+// envelope's srsName and its corners. Leaves the reader on the root's first child.
+struct CityGmlHead {
+  std::vector<std::pair<std::string, std::string>> root_attributes;  // namespaces and schema locations
+  std::string srs;
+  std::vector<double> corners;  // 6 numbers, or none
+};
+
+CityGmlHead read_citygml_head(xmlTextReaderPtr r, const fs::path& file) {
+  CityGmlHead head;
+  while (next_node(r, file) && xmlTextReaderNodeType(r) != XML_READER_TYPE_ELEMENT) {}
+  if (!is_element(r, citygml_core, "CityModel")) throw InputError("'" + file.string() + "': not a CityGML 2.0 file (its root is not core:CityModel)");
+  while (xmlTextReaderMoveToNextAttribute(r) == 1)
+    head.root_attributes.emplace_back(text_of(xmlTextReaderConstName(r)), text_of(xmlTextReaderConstValue(r)));
+  xmlTextReaderMoveToElement(r);
+  return head;
+}
+
+// Reads gml:boundedBy (the reader on it) into head; leaves the reader on its end.
+void read_bounded_by(xmlTextReaderPtr r, const fs::path& file, CityGmlHead& head) {
+  const int depth = xmlTextReaderDepth(r);
+  std::string corner;
+  while (next_node(r, file) && xmlTextReaderDepth(r) > depth) {
+    if (is_element(r, gml_ns, "Envelope")) {
+      xmlChar* srs = xmlTextReaderGetAttribute(r, xml("srsName"));
+      head.srs = text_of(srs);
+      xmlFree(srs);
+    } else if (is_element(r, gml_ns, "lowerCorner") || is_element(r, gml_ns, "upperCorner")) {
+      xmlChar* content = xmlTextReaderReadString(r);
+      std::istringstream numbers(text_of(content));
+      xmlFree(content);
+      double v = 0;
+      int count = 0;
+      for (; count < 3 && numbers >> v; ++count) head.corners.push_back(v);
+      if (count != 3) throw InputError("'" + file.string() + "': gml:boundedBy: a corner without 3 coordinates");
+    }
+  }
+}
+
+// Copies the element the reader is on, with everything inside it, to the writer; leaves the reader
+// on its end.
+void copy_element(xmlTextReaderPtr r, xmlTextWriterPtr w, const fs::path& file) {
+  const int depth = xmlTextReaderDepth(r);
+  do {
+    switch (xmlTextReaderNodeType(r)) {
+      case XML_READER_TYPE_ELEMENT: {
+        const bool empty = xmlTextReaderIsEmptyElement(r);
+        xmlTextWriterStartElement(w, xmlTextReaderConstName(r));
+        while (xmlTextReaderMoveToNextAttribute(r) == 1) xmlTextWriterWriteAttribute(w, xmlTextReaderConstName(r), xmlTextReaderConstValue(r));
+        xmlTextReaderMoveToElement(r);
+        if (empty) {
+          xmlTextWriterEndElement(w);
+          if (xmlTextReaderDepth(r) == depth) return;
+        }
+        break;
+      }
+      case XML_READER_TYPE_END_ELEMENT:
+        xmlTextWriterFullEndElement(w);
+        if (xmlTextReaderDepth(r) == depth) return;
+        break;
+      case XML_READER_TYPE_TEXT:
+      case XML_READER_TYPE_CDATA:
+        xmlTextWriterWriteString(w, xmlTextReaderConstValue(r));
+        break;
+      case XML_READER_TYPE_WHITESPACE:
+      case XML_READER_TYPE_SIGNIFICANT_WHITESPACE:
+        xmlTextWriterWriteRaw(w, xmlTextReaderConstValue(r));  // the tiles' indentation, kept
+        break;
+      default:
+        break;  // comments, processing instructions
+    }
+  } while (next_node(r, file));
+  throw InputError("'" + file.string() + "': ends inside an element");
+}
+
+// Moves the reader from an element to its end.
+void skip_element(xmlTextReaderPtr r, const fs::path& file) {
+  if (xmlTextReaderIsEmptyElement(r)) return;
+  const int depth = xmlTextReaderDepth(r);
+  while (next_node(r, file))
+    if (xmlTextReaderNodeType(r) == XML_READER_TYPE_END_ELEMENT && xmlTextReaderDepth(r) == depth) return;
+  throw InputError("'" + file.string() + "': ends inside an element");
+}
+
+int to_stream(void* context, const char* buffer, int length) {
+  static_cast<std::ostream*>(context)->write(buffer, length);
+  return length;
+}
+
+// CityGML: the first tile's root (its namespaces), one name and envelope for the run (the union
+// of the tiles' envelopes), then every tile's core:cityObjectMember elements, parsed and copied.
+void merge_citygml(const std::vector<fs::path>& files, const fs::path& target) {
+  constexpr double inf = std::numeric_limits<double>::infinity();
+  Extent all{inf, inf, inf, -inf, -inf, -inf};
+  CityGmlHead first;
+  for (const fs::path& file : files) {  // the envelopes, each at the top of its file
+    Reader r = open_xml(file);
+    CityGmlHead head = read_citygml_head(r.get(), file);
+    while (next_node(r.get(), file) && xmlTextReaderDepth(r.get()) > 0) {
+      if (is_element(r.get(), gml_ns, "boundedBy")) { read_bounded_by(r.get(), file, head); break; }
+      if (is_element(r.get(), citygml_core, "cityObjectMember")) break;
+    }
+    if (head.corners.size() != 6) spdlog::warn("'{}': declares no extent (written by an earlier lodforge?); the merged extent leaves it out", file.string());
+    for (std::size_t i = 0; i < 3 && head.corners.size() == 6; ++i) {
+      all[i] = std::min(all[i], head.corners[i]);
+      all[i + 3] = std::max(all[i + 3], head.corners[i + 3]);
+    }
+    if (file == files.front()) first = std::move(head);
+  }
+  if (all[0] > all[3]) all = Extent{};
+  AtomicTextFile o(target);
+  xmlOutputBufferPtr buffer = xmlOutputBufferCreateIO(to_stream, nullptr, &o.out(), nullptr);
+  Writer w(xmlNewTextWriter(buffer), xmlFreeTextWriter);
+  if (!w) throw InputError("'" + target.string() + "': cannot write");
+  xmlTextWriterStartDocument(w.get(), "1.0", "UTF-8", nullptr);
+  xmlTextWriterStartElement(w.get(), xml("core:CityModel"));
+  for (const auto& [name, value] : first.root_attributes) xmlTextWriterWriteAttribute(w.get(), xml(name.c_str()), xml(value.c_str()));
+  xmlTextWriterWriteRaw(w.get(), xml("\n  "));
+  xmlTextWriterWriteElement(w.get(), xml("gml:name"), xml(("lodforge, merged from " + std::to_string(files.size()) + " tiles").c_str()));
+  xmlTextWriterWriteRaw(w.get(), xml("\n  "));
+  xmlTextWriterStartElement(w.get(), xml("gml:boundedBy"));
+  xmlTextWriterStartElement(w.get(), xml("gml:Envelope"));
+  if (!first.srs.empty()) xmlTextWriterWriteAttribute(w.get(), xml("srsName"), xml(first.srs.c_str()));
+  xmlTextWriterWriteAttribute(w.get(), xml("srsDimension"), xml("3"));
+  const auto corner = [&](const char* name, std::size_t k) {
+    xmlTextWriterWriteElement(w.get(), xml(name), xml((fixed3(all[k]) + ' ' + fixed3(all[k + 1]) + ' ' + fixed3(all[k + 2])).c_str()));
+  };
+  corner("gml:lowerCorner", 0);
+  corner("gml:upperCorner", 3);
+  xmlTextWriterEndElement(w.get());
+  xmlTextWriterEndElement(w.get());
+  for (const fs::path& file : files) {
+    Reader r = open_xml(file);
+    read_citygml_head(r.get(), file);
+    while (next_node(r.get(), file) && xmlTextReaderDepth(r.get()) > 0) {
+      if (xmlTextReaderNodeType(r.get()) != XML_READER_TYPE_ELEMENT) continue;
+      if (is_element(r.get(), citygml_core, "cityObjectMember")) {
+        xmlTextWriterWriteRaw(w.get(), xml("\n  "));
+        copy_element(r.get(), w.get(), file);
+      } else if (is_element(r.get(), gml_ns, "name") || is_element(r.get(), gml_ns, "boundedBy")) {
+        skip_element(r.get(), file);  // the tile's own, replaced by the run's
+      } else {
+        throw InputError("'" + file.string() + "': line " + std::to_string(xmlTextReaderGetParserLineNumber(r.get())) + ": " +
+                         text_of(xmlTextReaderConstName(r.get())) + " is not what a lodforge CityGML tile holds");
+      }
+    }
+  }
+  xmlTextWriterWriteRaw(w.get(), xml("\n"));
+  xmlTextWriterEndElement(w.get());
+  if (xmlTextWriterEndDocument(w.get()) < 0) throw InputError("'" + target.string() + "': writing the XML failed");
+  w.reset();  // flushes into o
+  o.commit();
+}
+
+// The union of the extents the CityJSONSeq tiles declare in their first lines (metadata's
+// geographicalExtent): the merged file's. A file without one is named in a warning and left out.
 Extent merged_extent(const std::vector<fs::path>& files) {
-  static const std::regex gml(R"(<gml:lowerCorner>(\S+) (\S+) (\S+)</gml:lowerCorner><gml:upperCorner>(\S+) (\S+) (\S+)</gml:upperCorner>)");
-  static const std::regex json(R"re("geographicalExtent": ?\[([^\]]*)\])re");
   constexpr double inf = std::numeric_limits<double>::infinity();
   Extent all{inf, inf, inf, -inf, -inf, -inf};
   for (const fs::path& file : files) {
     std::ifstream in(file);
     std::string line;
-    std::vector<double> values;
-    for (int k = 0; k < 8 && values.empty() && std::getline(in, line); ++k) {
-      std::smatch m;
-      if (std::regex_search(line, m, gml)) {
-        for (std::size_t i = 1; i <= 6; ++i) values.push_back(std::stod(m[i]));
-      } else if (std::regex_search(line, m, json)) {
-        std::istringstream list(m[1].str());
-        for (std::string item; std::getline(list, item, ',');) values.push_back(std::stod(item));
-      }
-    }
-    if (values.size() != 6) {
+    std::getline(in, line);
+    const nlohmann::json header = nlohmann::json::parse(line, nullptr, false);
+    const nlohmann::json* extent = nullptr;
+    if (header.is_object() && header.contains("metadata") && header["metadata"].contains("geographicalExtent"))
+      extent = &header["metadata"]["geographicalExtent"];
+    if (!extent || !extent->is_array() || extent->size() != 6) {
       spdlog::warn("'{}': declares no extent (written by an earlier lodforge?); the merged extent leaves it out", file.string());
       continue;
     }
     for (std::size_t i = 0; i < 3; ++i) {
-      all[i] = std::min(all[i], values[i]);
-      all[i + 3] = std::max(all[i + 3], values[i + 3]);
+      all[i] = std::min(all[i], (*extent)[i].get<double>());
+      all[i + 3] = std::max(all[i + 3], (*extent)[i + 3].get<double>());
     }
   }
   if (all[0] > all[3]) all = Extent{};
   return all;
 }
 
-// CityGML: one header, every tile's cityObjectMember blocks, one footer.
-void merge_citygml(const std::vector<fs::path>& files, const fs::path& target) {
-  AtomicTextFile o(target);
-  const Extent extent = merged_extent(files);
-  for (std::size_t k = 0; k < files.size(); ++k) {
-    std::ifstream in(files[k]);
-    std::string line;
-    bool body = false;
-    while (std::getline(in, line)) {
-      if (line == "</core:CityModel>") break;
-      if (line.rfind("  <core:cityObjectMember>", 0) == 0) body = true;
-      if (!body && k == 0 && line.rfind("  <gml:name>lodforge tile ", 0) == 0)  // the merged file is the run's, not a tile's
-        line = "  <gml:name>lodforge, merged from " + std::to_string(files.size()) + " tiles</gml:name>";
-      if (!body && k == 0 && line.rfind("  <gml:boundedBy>", 0) == 0)
-        line = std::regex_replace(line, std::regex("<gml:lowerCorner>.*</gml:upperCorner>"),
-                                  "<gml:lowerCorner>" + fixed3(extent[0]) + ' ' + fixed3(extent[1]) + ' ' + fixed3(extent[2]) +
-                                      "</gml:lowerCorner><gml:upperCorner>" + fixed3(extent[3]) + ' ' + fixed3(extent[4]) + ' ' +
-                                      fixed3(extent[5]) + "</gml:upperCorner>");
-      if (body || k == 0) o.out() << line << '\n';
-    }
-  }
-  o.out() << "</core:CityModel>\n";
-  o.commit();
-}
-
-long long millimetres(const std::string& text) { return std::llround(std::stod(text) * 1000.0); }
+long long millimetres(double metres) { return std::llround(metres * 1000.0); }
 
 // Millimetres as metres with three decimals, exactly (no floating point on the way).
 std::string metres(long long mm) {
@@ -106,43 +265,69 @@ std::string metres(long long mm) {
   return buffer;
 }
 
-// OBJ: vertices moved to the first tile's origin, face indices offset.
+// A number of an OBJ line in millimetres; InputError naming the file and line when it is not one.
+long long obj_millimetres(const std::string& text, const fs::path& file, std::size_t line) {
+  double v = 0;
+  const auto [end, error] = std::from_chars(text.data(), text.data() + text.size(), v);
+  if (error != std::errc() || end != text.data() + text.size() || !std::isfinite(v))
+    throw InputError("'" + file.string() + "': line " + std::to_string(line) + ": '" + text + "' is not a number");
+  return millimetres(v);
+}
+
+// OBJ: each tile read line by line (its header, v, f and o lines; anything else refused), the
+// vertices moved to the first tile's origin, the face indices offset and checked.
 void merge_obj(const std::vector<fs::path>& files, const fs::path& target) {
   AtomicTextFile o(target);
   long long ox = 0, oy = 0;
   std::size_t offset = 0;
-  const std::regex origin(R"(# origin (\S+) (\S+) )");
-  std::string crs = "unknown";  // the first tile's, from its first line
   for (std::size_t k = 0; k < files.size(); ++k) {
     std::ifstream in(files[k]);
-    std::string line;
-    long long tx = 0, ty = 0;
+    if (!in) throw InputError("'" + files[k].string() + "': cannot read");
+    std::string line, crs;
+    std::getline(in, line);
+    const std::string head = "# lodforge OBJ, tile ";
+    if (line.rfind(head, 0) != 0 || line.find(", CRS ") == std::string::npos)
+      throw InputError("'" + files[k].string() + "': line 1: not a lodforge OBJ tile (no '" + head + "..., CRS ...')");
+    crs = line.substr(line.find(", CRS ") + 6);
+    std::getline(in, line);
+    std::istringstream origin(line);
+    std::string hash, word, x, y;
+    if (!(origin >> hash >> word >> x >> y) || hash != "#" || word != "origin")
+      throw InputError("'" + files[k].string() + "': line 2: not a lodforge OBJ tile (no '# origin X Y Z')");
+    const long long tx = obj_millimetres(x, files[k], 2), ty = obj_millimetres(y, files[k], 2);
+    if (k == 0) {
+      ox = tx;
+      oy = ty;
+      o.out() << "# lodforge OBJ, merged from " << files.size() << " tiles, CRS " << crs << "\n" << line << '\n';
+    }
     std::size_t count = 0;
-    while (std::getline(in, line)) {
-      std::smatch m;
-      if (k == 0 && line.rfind("# lodforge OBJ, tile ", 0) == 0 && line.find(", CRS ") != std::string::npos) {
-        crs = line.substr(line.find(", CRS ") + 6);
-      } else if (std::regex_search(line, m, origin)) {
-        tx = millimetres(m[1]);
-        ty = millimetres(m[2]);
-        if (k == 0) {
-          ox = tx;
-          oy = ty;
-          o.out() << "# lodforge OBJ, merged from " << files.size() << " tiles, CRS " << crs << "\n" << line << '\n';
-        }
-      } else if (line.rfind("v ", 0) == 0) {
-        std::istringstream v(line.substr(2));
-        std::string x, y, z;
-        v >> x >> y >> z;
-        o.out() << "v " << metres(millimetres(x) + tx - ox) << ' ' << metres(millimetres(y) + ty - oy) << ' ' << z << '\n';
+    for (std::size_t number = 3; std::getline(in, line); ++number) {
+      std::istringstream fields(line);
+      std::string kind;
+      fields >> kind;
+      if (kind == "v") {
+        std::string vx, vy, vz;
+        if (!(fields >> vx >> vy >> vz)) throw InputError("'" + files[k].string() + "': line " + std::to_string(number) + ": a vertex without 3 coordinates");
+        o.out() << "v " << metres(obj_millimetres(vx, files[k], number) + tx - ox) << ' ' << metres(obj_millimetres(vy, files[k], number) + ty - oy)
+                << ' ' << metres(obj_millimetres(vz, files[k], number)) << '\n';
         ++count;
-      } else if (line.rfind("f ", 0) == 0) {
-        std::istringstream f(line.substr(2));
+      } else if (kind == "f") {
         o.out() << 'f';
-        for (std::size_t id; f >> id;) o.out() << ' ' << id + offset;
+        std::size_t corners = 0;
+        for (std::string id; fields >> id; ++corners) {
+          std::size_t v = 0;
+          const auto [end, error] = std::from_chars(id.data(), id.data() + id.size(), v);
+          if (error != std::errc() || end != id.data() + id.size() || v == 0 || v > count)
+            throw InputError("'" + files[k].string() + "': line " + std::to_string(number) + ": '" + id + "' is not one of the " +
+                             std::to_string(count) + " vertices before it");
+          o.out() << ' ' << v + offset;
+        }
+        if (corners < 3) throw InputError("'" + files[k].string() + "': line " + std::to_string(number) + ": a face with fewer than 3 corners");
         o.out() << '\n';
-      } else if (line.rfind("o ", 0) == 0) {
+      } else if (kind == "o") {
         o.out() << line << '\n';
+      } else if (!kind.empty() && kind[0] != '#') {
+        throw InputError("'" + files[k].string() + "': line " + std::to_string(number) + ": '" + kind + "' is not what a lodforge OBJ tile holds");
       }
     }
     offset += count;
@@ -150,81 +335,95 @@ void merge_obj(const std::vector<fs::path>& files, const fs::path& target) {
   o.commit();
 }
 
-// CityJSON: CityObjects concatenated, vertices re-indexed onto one transform.
+// The vertex indices of a CityJSON boundary (nested lists), renumbered by remap.
+void renumber(nlohmann::ordered_json& boundary, const std::vector<std::size_t>& remap) {
+  if (boundary.is_array()) {
+    for (auto& b : boundary) renumber(b, remap);
+  } else {
+    const std::size_t i = boundary.get<std::size_t>();
+    if (i >= remap.size()) throw std::runtime_error("vertex " + std::to_string(i) + " of " + std::to_string(remap.size()));
+    boundary = remap[i];
+  }
+}
+
+// A CityJSON tile's members but its CityObjects and vertices (parsed, not kept).
+nlohmann::ordered_json cityjson_head(const fs::path& file) {
+  std::ifstream in(file);
+  if (!in) throw InputError("'" + file.string() + "': cannot read");
+  using Json = nlohmann::ordered_json;
+  return Json::parse(in, [](int depth, Json::parse_event_t event, Json& parsed) {
+    return !(depth == 1 && event == Json::parse_event_t::key && (parsed == "CityObjects" || parsed == "vertices"));
+  });
+}
+
+// CityJSON: each tile parsed (nlohmann-json), first for its header and extent, then whole; its
+// CityObjects written one per line, their vertices moved onto the first tile's transform (exact:
+// integer millimetres) and shared across tiles.
 void merge_cityjson(const std::vector<fs::path>& files, const fs::path& target) {
   AtomicTextFile o(target);
-  const Extent extent = merged_extent(files);
   std::map<std::array<long long, 3>, std::size_t> index;
   std::vector<std::array<long long, 3>> vertices;
-  long long ox = 0, oy = 0;
-  bool first_object = true;
-  const std::regex translate(R"("translate": \[(\S+), (\S+), )");
-  for (std::size_t k = 0; k < files.size(); ++k) {
-    std::ifstream in(files[k]);
-    std::stringstream whole;
-    whole << in.rdbuf();
-    const std::string text = whole.str();
-    std::smatch m;
-    if (!std::regex_search(text, m, translate)) throw InputError("'" + files[k].string() + "': not a lodforge CityJSON tile");
-    const long long tx = millimetres(m[1]), ty = millimetres(m[2]);
-    if (k == 0) {
-      ox = tx;
-      oy = ty;
-      const std::size_t objects = text.find("\"CityObjects\": {");
-      const std::string merged_title = "\"title\": \"lodforge, merged from " + std::to_string(files.size()) + " tiles\"";
-      std::string merged_extent_text = "\"geographicalExtent\": [";
-      for (std::size_t i = 0; i < 6; ++i) merged_extent_text += (i ? ", " : "") + fixed3(extent[i]);
-      merged_extent_text += "]";
-      const std::string header = std::regex_replace(text.substr(0, objects), std::regex(R"re("title": "lodforge tile [^"]*")re"), merged_title);
-      o.out() << std::regex_replace(header, std::regex(R"re("geographicalExtent": \[[^\]]*\])re"), merged_extent_text)
-              << "\"CityObjects\": {";
-    }
-    // This tile's vertices, moved onto the first tile's translate.
-    std::vector<std::size_t> remap;
-    const std::size_t at = text.find("\"vertices\": [");
-    std::istringstream numbers(text.substr(at + 13));
-    std::string token;
-    std::vector<long long> values;
-    for (char c; numbers.get(c);) {
-      if (std::isdigit(static_cast<unsigned char>(c)) || c == '-') token += c;
-      else if (!token.empty()) { values.push_back(std::stoll(token)); token.clear(); }
-    }
-    for (std::size_t i = 0; i + 2 < values.size(); i += 3) {
-      const std::array<long long, 3> v{values[i] + tx - ox, values[i + 1] + ty - oy, values[i + 2]};
-      auto [it, inserted] = index.try_emplace(v, vertices.size());
-      if (inserted) vertices.push_back(v);
-      remap.push_back(it->second);
-    }
-    // Every CityObject line, its boundary indices renumbered.
-    std::istringstream lines(text);
-    std::string line;
-    const std::regex number(R"(\d+)");
-    while (std::getline(lines, line)) {
-      if (line.rfind("  \"lodforge_b", 0) != 0) continue;
-      if (!line.empty() && line.back() == ',') line.pop_back();
-      std::string rewritten;
-      std::size_t pos = 0;
-      for (std::size_t b = line.find("\"boundaries\": "); b != std::string::npos; b = line.find("\"boundaries\": ", pos)) {
-        const std::size_t start = b + 14;
-        std::size_t end = start;
-        for (int depth = 0; end < line.size(); ++end) {
-          if (line[end] == '[') ++depth;
-          if (line[end] == ']' && --depth == 0) break;
+  std::array<long long, 2> first_translate{};
+  std::set<std::string> ids;
+  constexpr double inf = std::numeric_limits<double>::infinity();
+  Extent all{inf, inf, inf, -inf, -inf, -inf};
+  nlohmann::ordered_json header;
+  const auto fail = [](const fs::path& file, const std::exception& e) {
+    return InputError("'" + file.string() + "': not a lodforge CityJSON tile: " + e.what());
+  };
+  for (const fs::path& file : files) {
+    try {
+      nlohmann::ordered_json head = cityjson_head(file);
+      if (head.at("type") != "CityJSON") throw std::runtime_error("its type is not CityJSON");
+      if (head.at("transform").at("scale") != nlohmann::json::array({0.001, 0.001, 0.001})) throw std::runtime_error("its scale is not 1 mm");
+      const auto& extent = head["metadata"]["geographicalExtent"];
+      if (extent.is_array() && extent.size() == 6) {
+        for (std::size_t i = 0; i < 3; ++i) {
+          all[i] = std::min(all[i], extent[i].get<double>());
+          all[i + 3] = std::max(all[i + 3], extent[i + 3].get<double>());
         }
-        rewritten += line.substr(pos, start - pos);
-        const std::string inner = line.substr(start, end + 1 - start);
-        std::string renumbered;
-        std::size_t last = 0;
-        for (std::sregex_iterator it(inner.begin(), inner.end(), number), stop; it != stop; ++it) {
-          renumbered += inner.substr(last, std::size_t(it->position()) - last) + std::to_string(remap.at(std::stoul(it->str())));
-          last = std::size_t(it->position() + it->length());
-        }
-        rewritten += renumbered + inner.substr(last);
-        pos = end + 1;
+      } else {
+        spdlog::warn("'{}': declares no extent (written by an earlier lodforge?); the merged extent leaves it out", file.string());
       }
-      rewritten += line.substr(pos);
-      o.out() << (first_object ? "\n" : ",\n") << rewritten;
-      first_object = false;
+      if (file == files.front()) header = std::move(head);
+    } catch (const InputError&) {
+      throw;
+    } catch (const std::exception& e) {
+      throw fail(file, e);
+    }
+  }
+  if (all[0] > all[3]) all = Extent{};
+  header["metadata"]["title"] = "lodforge, merged from " + std::to_string(files.size()) + " tiles";
+  header["metadata"]["geographicalExtent"] = all;
+  o.out() << '{';
+  for (const auto& [key, value] : header.items())
+    o.out() << (key == header.begin().key() ? "" : ",\n ") << nlohmann::json(key).dump() << ": "
+            << value.dump(-1, ' ', false, nlohmann::json::error_handler_t::replace);
+  o.out() << ",\n \"CityObjects\": {";
+  for (const fs::path& file : files) {
+    std::ifstream in(file);
+    try {
+      nlohmann::ordered_json tile = nlohmann::ordered_json::parse(in);
+      const auto& translate = tile.at("transform").at("translate");
+      const std::array<long long, 2> here{millimetres(translate.at(0).get<double>()), millimetres(translate.at(1).get<double>())};
+      if (file == files.front()) first_translate = here;
+      std::vector<std::size_t> remap;
+      for (const auto& v : tile.at("vertices")) {
+        const std::array<long long, 3> p{v.at(0).get<long long>() + here[0] - first_translate[0],
+                                         v.at(1).get<long long>() + here[1] - first_translate[1], v.at(2).get<long long>()};
+        auto [it, inserted] = index.try_emplace(p, vertices.size());
+        if (inserted) vertices.push_back(p);
+        remap.push_back(it->second);
+      }
+      for (auto& [id, object] : tile.at("CityObjects").items()) {
+        if (!ids.insert(id).second) throw std::runtime_error("the CityObject '" + id + "' is in an earlier tile too");
+        if (object.contains("geometry"))
+          for (auto& g : object["geometry"]) renumber(g.at("boundaries"), remap);
+        o.out() << (ids.size() == 1 ? "\n  " : ",\n  ") << nlohmann::json(id).dump() << ": "
+                << object.dump(-1, ' ', false, nlohmann::json::error_handler_t::replace);
+      }
+    } catch (const std::exception& e) {
+      throw fail(file, e);
     }
   }
   o.out() << "\n },\n \"vertices\": [";
@@ -241,6 +440,7 @@ void merge_gltf(const std::vector<fs::path>& files, const fs::path& target) {
   tinygltf::Model merged;
   merged.buffers.emplace_back();
   merged.scenes.emplace_back();
+  merged.scenes[0].name = "lodforge, merged from " + std::to_string(files.size()) + " tiles";
   merged.defaultScene = 0;
   std::array<double, 2> first_origin{};
   for (std::size_t k = 0; k < files.size(); ++k) {
@@ -479,25 +679,39 @@ int run_merge(int argc, char** argv) {
   verify_outputs(dir, outputs);
   fs::create_directories(dir / "merged");
   remove_stale_temporaries(dir / "merged", 0);  // of merges that were killed
-  for (const std::string& format : formats) {
-    const std::string extension = extension_of(format);
-    std::vector<fs::path> files;
-    for (const auto& output : outputs) {
-      const std::string name = output.first.filename().string();
-      if (name.size() > extension.size() && name.compare(name.size() - extension.size(), extension.size(), extension) == 0)
-        files.push_back(output.first);
+  // Every format is merged into a staging directory first and moved into merged/ only when all
+  // succeeded: a failed merge leaves nothing behind (and the files of an earlier merge as they were).
+  const fs::path staging = dir / "merged" / ("lodforge.partial-" + std::to_string(getpid()));
+  fs::create_directories(staging);
+  std::vector<std::string> written;
+  try {
+    for (const std::string& format : formats) {
+      const std::string extension = extension_of(format);
+      std::vector<fs::path> files;
+      for (const auto& output : outputs) {
+        const std::string name = output.first.filename().string();
+        if (name.size() > extension.size() && name.compare(name.size() - extension.size(), extension.size(), extension) == 0)
+          files.push_back(output.first);
+      }
+      if (files.empty()) continue;
+      const fs::path target = staging / ("lodforge" + extension);
+      if (format == "citygml") merge_citygml(files, target);
+      else if (format == "cityjson") merge_cityjson(files, target);
+      else if (format == "cityjsonseq") merge_cityjsonseq(files, target);
+      else if (format == "obj") merge_obj(files, target);
+      else if (format == "gpkg") merge_ogr(files, target, "GPKG");
+      else if (format == "geojson") merge_ogr(files, target, "GeoJSON");
+      else if (format == "gltf") merge_gltf(files, target);
+      else throw InputError("--formats: unknown format '" + format + "'");
+      written.push_back(target.filename().string());
+      spdlog::info("{}: {} tiles", (dir / "merged" / written.back()).string(), files.size());
     }
-    if (files.empty()) continue;
-    const fs::path target = dir / "merged" / ("lodforge" + extension);
-    if (format == "citygml") merge_citygml(files, target);
-    else if (format == "cityjson") merge_cityjson(files, target);
-    else if (format == "cityjsonseq") merge_cityjsonseq(files, target);
-    else if (format == "obj") merge_obj(files, target);
-    else if (format == "gpkg") merge_ogr(files, target, "GPKG");
-    else if (format == "geojson") merge_ogr(files, target, "GeoJSON");
-    else if (format == "gltf") merge_gltf(files, target);
-    else throw InputError("--formats: unknown format '" + format + "'");
-    spdlog::info("{}: {} tiles", target.string(), files.size());
+    for (const std::string& name : written) fs::rename(staging / name, dir / "merged" / name);
+    fs::remove(staging);
+  } catch (...) {
+    std::error_code ec;
+    fs::remove_all(staging, ec);
+    throw;
   }
   return 0;
 }

@@ -65,7 +65,7 @@ int remove_stale_temporaries(const std::filesystem::path& directory, double min_
     std::error_code time_error;
     const auto written = std::filesystem::last_write_time(entry.path(), time_error);
     if (time_error || std::chrono::duration<double>(now - written).count() < min_age_seconds) continue;
-    if (std::filesystem::remove(entry.path(), time_error)) ++removed;
+    if (std::filesystem::remove_all(entry.path(), time_error) > 0) ++removed;  // (a killed merge's staging directory too)
   }
   return removed;
 }

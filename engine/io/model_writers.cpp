@@ -460,6 +460,7 @@ class GltfWriter : public ModelWriter {
     for (const Block& b : blocks_) append(b.positions.data(), b.positions.size() * sizeof(float));
     for (const Block& b : blocks_) append(b.indices.data(), b.indices.size() * sizeof(std::uint32_t));
     tinygltf::Scene scene;
+    scene.name = tile_;  // (a scene without nodes and name would be written as null, which no reader takes)
     if (!blocks_.empty()) {
       tinygltf::Buffer buffer;
       buffer.data = bytes;
