@@ -3,7 +3,9 @@
 #include <benchmark/benchmark.h>
 
 #include <filesystem>
+#include <charconv>
 #include <gdal_priv.h>
+#include <libxml/xmlwriter.h>
 #include <unistd.h>
 
 #include "corners/corners.hpp"
@@ -205,6 +207,94 @@ void BM_Writer(benchmark::State& state, const std::string& format) {
   state.counters["buildings"] = double(state.range(0));
 }
 
+// Issue 17: the same CityGML through libxml2's xmlTextWriter (indented, every text escaped by
+// libxml2), to weigh it against BM_Writer/citygml, our stream writer: the same elements, the same
+// three-decimal coordinates.
+void BM_CityGmlLibxml2(benchmark::State& state) {
+  const PolygonWithHoles footprint = regularize_building(building(500), 0.25, CoreOptions{}).footprint;
+  const Solid solid = extrude(footprint, 2, 12);
+  const std::string path = "/tmp/lodforge_bench_xml_" + std::to_string(::getpid()) + ".gml";
+  const auto x = [](const char* s) { return reinterpret_cast<const xmlChar*>(s); };
+  std::string pos;
+  const auto number = [&pos](double v) {
+    char buffer[64];
+    const auto r = std::to_chars(buffer, buffer + sizeof buffer, v, std::chars_format::fixed, 3);
+    pos.append(buffer, r.ptr);
+  };
+  for (auto _ : state) {
+    xmlTextWriterPtr w = xmlNewTextWriterFilename(path.c_str(), 0);
+    xmlTextWriterSetIndent(w, 1);
+    xmlTextWriterSetIndentString(w, x("  "));
+    xmlTextWriterStartDocument(w, "1.0", "UTF-8", nullptr);
+    xmlTextWriterStartElement(w, x("core:CityModel"));
+    for (const char* ns : {"xmlns:core", "xmlns:bldg", "xmlns:gen", "xmlns:gml"}) xmlTextWriterWriteAttribute(w, x(ns), x("http://www.opengis.net/x"));
+    xmlTextWriterWriteElement(w, x("gml:name"), x("lodforge tile r0000_c0000"));
+    const auto polygon = [&](const Face& f) {
+      xmlTextWriterStartElement(w, x("gml:Polygon"));
+      for (std::size_t r = 0; r < f.rings.size(); ++r) {
+        xmlTextWriterStartElement(w, x(r == 0 ? "gml:exterior" : "gml:interior"));
+        xmlTextWriterStartElement(w, x("gml:LinearRing"));
+        pos.clear();
+        for (std::size_t i = 0; i <= f.rings[r].size(); ++i) {
+          const Vec3& p = f.rings[r][i % f.rings[r].size()];
+          if (i) pos += ' ';
+          number(p.x());
+          pos += ' ';
+          number(p.y());
+          pos += ' ';
+          number(p.z());
+        }
+        xmlTextWriterWriteElement(w, x("gml:posList"), x(pos.c_str()));
+        xmlTextWriterEndElement(w);
+        xmlTextWriterEndElement(w);
+      }
+      xmlTextWriterEndElement(w);
+    };
+    for (int i = 0; i < state.range(0); ++i) {
+      xmlTextWriterStartElement(w, x("core:cityObjectMember"));
+      xmlTextWriterStartElement(w, x("bldg:Building"));
+      xmlTextWriterWriteAttribute(w, x("gml:id"), x(("lodforge_b" + std::to_string(i)).c_str()));
+      for (const auto& [name, value] : {std::pair{"status", "ok"}, {"regularizer", "deformation_original"}, {"tile", "r0000_c0000"}}) {
+        xmlTextWriterStartElement(w, x("gen:stringAttribute"));
+        xmlTextWriterWriteAttribute(w, x("name"), x(name));
+        xmlTextWriterWriteElement(w, x("gen:value"), x(value));
+        xmlTextWriterEndElement(w);
+      }
+      xmlTextWriterStartElement(w, x("bldg:measuredHeight"));
+      xmlTextWriterWriteAttribute(w, x("uom"), x("m"));
+      xmlTextWriterWriteString(w, x("10.000"));
+      xmlTextWriterEndElement(w);
+      xmlTextWriterStartElement(w, x("bldg:lod0FootPrint"));
+      xmlTextWriterStartElement(w, x("gml:MultiSurface"));
+      xmlTextWriterStartElement(w, x("gml:surfaceMember"));
+      Face base;
+      for (const Ring* r = &footprint.outer; r; r = nullptr) {
+        Ring3 ring;
+        for (const Vec2& p : *r) ring.emplace_back(p.x(), p.y(), 2.0);
+        base.rings.push_back(ring);
+      }
+      polygon(base);
+      xmlTextWriterEndElement(w);
+      xmlTextWriterEndElement(w);
+      xmlTextWriterEndElement(w);
+      xmlTextWriterStartElement(w, x("bldg:lod1Solid"));
+      xmlTextWriterStartElement(w, x("gml:Solid"));
+      xmlTextWriterStartElement(w, x("gml:exterior"));
+      xmlTextWriterStartElement(w, x("gml:CompositeSurface"));
+      for (const Face& f : solid.faces) {
+        xmlTextWriterStartElement(w, x("gml:surfaceMember"));
+        polygon(f);
+        xmlTextWriterEndElement(w);
+      }
+      for (int k = 0; k < 6; ++k) xmlTextWriterEndElement(w);  // CompositeSurface ... cityObjectMember
+    }
+    xmlTextWriterEndDocument(w);
+    xmlFreeTextWriter(w);
+  }
+  std::filesystem::remove(path);
+  state.counters["buildings"] = double(state.range(0));
+}
+
 BENCHMARK(BM_Contour)->Arg(100)->Arg(500)->Arg(2000)->Arg(10000)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_Ransac)->Arg(100)->Arg(500)->Arg(2000)->Arg(10000)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_Mrf)->Arg(100)->Arg(500)->Arg(2000)->Arg(10000)->Unit(benchmark::kMillisecond);
@@ -215,6 +305,7 @@ BENCHMARK_CAPTURE(BM_Writer, citygml, std::string("citygml"))->Arg(100)->Arg(100
 BENCHMARK_CAPTURE(BM_Writer, cityjson, std::string("cityjson"))->Arg(100)->Arg(1000)->Unit(benchmark::kMillisecond);
 BENCHMARK_CAPTURE(BM_Writer, obj, std::string("obj"))->Arg(100)->Arg(1000)->Unit(benchmark::kMillisecond);
 BENCHMARK_CAPTURE(BM_Writer, gpkg, std::string("gpkg"))->Arg(100)->Arg(1000)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_CityGmlLibxml2)->Arg(100)->Arg(1000)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_Smoothing)->Arg(100)->Arg(500)->Arg(2000)->Arg(10000)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_WholeChainOriginalRoute)->Arg(100)->Arg(500)->Arg(2000)->Arg(10000)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_Triangulation)->Arg(100)->Arg(500)->Arg(2000)->Unit(benchmark::kMillisecond);
