@@ -46,7 +46,7 @@ nlohmann::json report_of(const fs::path& path) { return nlohmann::json::parse(sl
 // The report without what depends on timing or where it ran: seconds, blocks decoded (fewer with
 // a larger cache or more threads), the job's path and the shard.
 nlohmann::json without_timings(nlohmann::json report) {
-  for (const char* key : {"seconds", "core_seconds", "stage_seconds", "blocks_decoded", "job", "shard"}) report.erase(key);
+  for (const char* key : {"seconds", "core_seconds", "stage_seconds", "blocks_decoded", "job", "shard", "slowest_buildings"}) report.erase(key);
   for (auto& tile : report.at("per_tile")) tile.erase("seconds");
   return report;
 }

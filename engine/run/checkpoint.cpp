@@ -19,7 +19,7 @@ namespace fs = std::filesystem;
 namespace {
 
 constexpr std::uint32_t kMagic = 0x4c4f4446;  // "LODF"
-constexpr std::uint32_t kVersion = 2;  // 2: a checksum of the payload in the header
+constexpr std::uint32_t kVersion = 3;  // 2: a checksum of the payload in the header; 3: each building's regularization seconds
 
 class Writer {
  public:
@@ -237,6 +237,7 @@ void CheckpointStore::save_buildings(const std::string& tile, std::uint64_t key,
     w.pod<std::uint8_t>(b.ok);
     w.text(b.stage);
     w.text(b.reason);
+    w.pod<double>(b.seconds);  // (for the report's slowest buildings after a resumed run)
   }
   write_atomically(path("buildings", tile), w.str(), key);
 }
@@ -255,6 +256,7 @@ std::optional<std::vector<BuildingOutput>> CheckpointStore::load_buildings(const
       b.ok = r->pod<std::uint8_t>() != 0;
       b.stage = r->text();
       b.reason = r->text();
+      b.seconds = r->pod<double>();
     }
     if (!r->at_end()) return std::nullopt;
     return value;

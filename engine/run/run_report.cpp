@@ -50,6 +50,18 @@ void account(const std::string& summary, const std::string& tile, int tile_index
   }
 }
 
+// Slowest first; equal times by id and tile (the report's order does not depend on the tiles' order).
+bool slower(const Totals::Slow& a, const Totals::Slow& b) {
+  return a.seconds != b.seconds ? a.seconds > b.seconds : a.id != b.id ? a.id < b.id : a.tile < b.tile;
+}
+
+// Keeps the kSlowest slowest, sorted.
+void keep_slowest(std::vector<Totals::Slow>& slow) {
+  const std::size_t keep = std::min(slow.size(), Totals::kSlowest);
+  std::partial_sort(slow.begin(), slow.begin() + long(keep), slow.end(), slower);
+  slow.resize(keep);
+}
+
 // The entries in the order of their tiles (stable: a tile's own entries keep their order).
 template <class T>
 std::vector<T> in_tile_order(std::vector<std::pair<int, T>> entries) {
@@ -114,6 +126,8 @@ void record_tile(Totals& totals, const RunPlan& plan, const TileResult& result, 
   (r->skipped ? totals.tiles_skipped : totals.tiles_processed)++;
   totals.contours_reused += r->contours_reused;
   if (!r->buildings_reused) for (const BuildingOutput& b : r->buildings) totals.core_seconds += b.seconds;
+  for (const BuildingOutput& b : r->buildings) totals.slowest.push_back({b.seconds, b.id, r->name});
+  keep_slowest(totals.slowest);
   totals.contour_seconds += r->contour_seconds;
   totals.heights_seconds += r->heights_seconds;
   totals.write_seconds += r->write_seconds;
@@ -186,7 +200,8 @@ void write_index_and_report(const Totals& totals, const RunPlan& plan, const std
                             {"geometry", {{"type", "Polygon"}, {"coordinates", Json::array({ring})}}}});
   }
   write_text_atomically(out_dir / ("tile_index" + suffix + ".geojson"), tile_index_text(hex(plan.job_key), features));
-  Json failed = Json::array(), too_large = Json::array(), per_tile = Json::array();
+  Json failed = Json::array(), too_large = Json::array(), per_tile = Json::array(), slowest = Json::array();
+  for (const Totals::Slow& b : totals.slowest) slowest.push_back({{"id", b.id}, {"tile", b.tile}, {"seconds", b.seconds}});
   for (const Totals::Failed& f : in_tile_order(totals.failed))
     failed.push_back({{"id", std::stoll(f.id)}, {"tile", f.tile}, {"stage", f.stage}, {"reason", f.reason}});
   for (const std::string& t : in_tile_order(totals.too_large)) too_large.push_back(t);
@@ -212,6 +227,7 @@ void write_index_and_report(const Totals& totals, const RunPlan& plan, const std
                     {"blocks_decoded", totals.blocks_decoded},
                     {"failed_buildings", failed},
                     {"too_large_buildings", too_large},
+                    {"slowest_buildings", slowest},
                     {"per_tile", per_tile}};
   write_text_atomically(out_dir / ("report" + suffix + ".json"), readable(report));
   spdlog::info("{} tiles ({} computed, {} resumed from {}), {} buildings: {} ok, {} fallback, {} with LOD1; {} small components dropped{}; {:.1f} s",
@@ -272,6 +288,7 @@ void merge_run_reports(const std::vector<fs::path>& parts, const fs::path& targe
   Json merged;
   std::vector<std::pair<std::string, Json>> failed, per_tile;  // (tile name, entry)
   std::vector<std::pair<std::string, Json>> too_large;
+  std::vector<Totals::Slow> slowest;
   for (const fs::path& p : parts) {
     const Json report = read_json(p, "lodforge run report");
     try {
@@ -281,6 +298,8 @@ void merge_run_reports(const std::vector<fs::path>& parts, const fs::path& targe
       else add_numbers(merged, report);
       for (const Json& f : report.at("failed_buildings")) failed.emplace_back(f.at("tile").get<std::string>(), f);
       for (const Json& t : report.at("per_tile")) per_tile.emplace_back(t.at("tile").get<std::string>(), t);
+      for (const Json& b : report.value("slowest_buildings", Json::array()))
+        slowest.push_back({b.at("seconds").get<double>(), b.at("id").get<std::int64_t>(), b.at("tile").get<std::string>()});
       // "... around tile rRRRR_cCCCC ...": in tile order too.
       for (const Json& t : report.at("too_large_buildings")) {
         const std::string text = t.get<std::string>();
@@ -302,6 +321,10 @@ void merge_run_reports(const std::vector<fs::path>& parts, const fs::path& targe
   merged["failed_buildings"] = listed(failed);
   merged["too_large_buildings"] = listed(too_large);
   merged["per_tile"] = listed(per_tile);
+  keep_slowest(slowest);
+  Json slow = Json::array();
+  for (const Totals::Slow& b : slowest) slow.push_back({{"id", b.id}, {"tile", b.tile}, {"seconds", b.seconds}});
+  merged["slowest_buildings"] = slow;
   write_text_atomically(target, readable(merged));
 }
 

@@ -2,6 +2,7 @@
 #pragma once
 #include <array>
 #include <cstddef>
+#include <cstdint>
 #include <filesystem>
 #include <optional>
 #include <string>
@@ -38,6 +39,13 @@ struct Totals {
     TileOutputs outputs;                         // its files with their fingerprints
     std::array<std::array<double, 2>, 4> ring;  // the tile's corners in map coordinates, counter-clockwise
   };
+  struct Slow {
+    double seconds = 0;
+    std::int64_t id = 0;
+    std::string tile;
+  };
+  std::vector<Slow> slowest;  // the slowest buildings' regularizations, slowest first (at most kSlowest)
+  static constexpr std::size_t kSlowest = 20;
   std::vector<std::pair<int, Failed>> failed;
   std::vector<std::pair<int, std::string>> too_large;
   std::vector<std::pair<int, TileLine>> tile_lines;
