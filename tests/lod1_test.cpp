@@ -704,6 +704,77 @@ TEST_F(ModelFiles, MergedTilesEqualOneTileAndValidate) {
           EXPECT_LE(v[c], box[c + 3] + 1e-3);
         }
   }
+  // The whole area at a glance (issue 17): overview.tif, a georeferenced COG on the segmentation's
+  // grid (no finer than it), with every building's whole outline drawn: a coloured pixel within
+  // two of each footprint vertex, tiles' borders or not; the same bytes from a second merge.
+  {
+    GDALAllRegister();
+    GDALDataset* seg = static_cast<GDALDataset*>(GDALOpen((data + "/delft-ahn3-bgt/derived/top_class_50cm.tif").c_str(), GA_ReadOnly));
+    GDALDataset* overview = static_cast<GDALDataset*>(GDALOpen((merged / "overview.tif").c_str(), GA_ReadOnly));
+    ASSERT_NE(seg, nullptr);
+    ASSERT_NE(overview, nullptr);
+    const char* layout = overview->GetMetadataItem("LAYOUT", "IMAGE_STRUCTURE");
+    EXPECT_STREQ(layout ? layout : "", "COG");
+    double a[6], b[6];
+    seg->GetGeoTransform(a);
+    overview->GetGeoTransform(b);
+    // The segmentation's pixels (Delft is smaller than 4,096 of them), its extent grown by whole
+    // pixels to hold the footprints that reach past its edge.
+    for (int k : {1, 2, 4, 5}) EXPECT_DOUBLE_EQ(a[k], b[k]) << k;
+    const double columns = (a[0] - b[0]) / a[1], rows = (a[3] - b[3]) / a[5];
+    EXPECT_NEAR(columns, std::round(columns), 1e-6);
+    EXPECT_NEAR(rows, std::round(rows), 1e-6);
+    EXPECT_GE(columns, 0);
+    EXPECT_GE(rows, 0);
+    EXPECT_GE(overview->GetRasterXSize(), seg->GetRasterXSize() + columns);
+    EXPECT_GE(overview->GetRasterYSize(), seg->GetRasterYSize() + rows);
+    ASSERT_NE(overview->GetSpatialRef(), nullptr);
+    EXPECT_STREQ(overview->GetSpatialRef()->GetAuthorityCode(nullptr), "28992");
+    const int w = overview->GetRasterXSize(), h = overview->GetRasterYSize();
+    std::vector<std::uint8_t> rgb(std::size_t(3) * w * h);
+    ASSERT_EQ(overview->RasterIO(GF_Read, 0, 0, w, h, rgb.data(), w, h, GDT_Byte, 3, nullptr, 3, 3 * w, 1, nullptr), CE_None);
+    GDALClose(overview);
+    GDALClose(seg);
+    const auto coloured = [&](int x, int y) {
+      const std::uint8_t* p = &rgb[3 * (std::size_t(y) * w + x)];
+      return p[0] > 150 && std::min(p[1], p[2]) < 120;  // red, yellow or magenta: not the grey hillshade
+    };
+    GDALDataset* d = static_cast<GDALDataset*>(GDALOpenEx((merged / "lodforge.gpkg").c_str(), GDAL_OF_VECTOR, nullptr, nullptr, nullptr));
+    ASSERT_NE(d, nullptr);
+    int vertices = 0, drawn = 0;
+    for (auto& f : *d->GetLayerByName("footprints")) {
+      const OGRPolygon* polygon = f->GetGeometryRef()->toPolygon();
+      for (const OGRPoint& v : *polygon->getExteriorRing()) {
+        const int x = int((v.getX() - b[0]) / b[1]), y = int((v.getY() - b[3]) / b[5]);
+        bool near = false;
+        for (int dy = -2; dy <= 2; ++dy)
+          for (int dx = -2; dx <= 2; ++dx) near = near || (x + dx >= 0 && y + dy >= 0 && x + dx < w && y + dy < h && coloured(x + dx, y + dy));
+        ++vertices;
+        drawn += near;
+      }
+    }
+    GDALClose(d);
+    EXPECT_GT(vertices, 200);
+    EXPECT_EQ(drawn, vertices);
+    // report.html: well-formed HTML with the run's numbers, every failed building and the picture.
+    const nlohmann::json report = nlohmann::json::parse(slurp_file(dir / "tiled_out" / "report.json"));
+    const std::string html = slurp_file(merged / "report.html");
+    const Output lint = shell("xmllint --html --noout " + (merged / "report.html").string());
+    EXPECT_EQ(lint.code, 0) << lint.output;
+    EXPECT_NE(html.find("<tr><th>buildings</th><td class=\"n\">" + report.at("buildings").dump() + "</td></tr>"), std::string::npos);
+    EXPECT_NE(html.find("<img width=\"" + std::to_string(w) + "\" height=\"" + std::to_string(h) + "\""), std::string::npos);
+    EXPECT_NE(html.find("src=\"data:image/jpeg;base64,"), std::string::npos);
+    EXPECT_NE(html.find("<h2>Failed buildings (" + std::to_string(report.at("failed_buildings").size()) + ")</h2>"), std::string::npos);
+    for (const auto& failed : report.at("failed_buildings"))
+      EXPECT_NE(html.find("<tr><td class=\"n\">" + failed.at("id").dump() + "</td>"), std::string::npos) << failed;
+    EXPECT_EQ(report.at("slowest_buildings").size(), 20u);
+    const std::string first = slurp_file(merged / "overview.tif");
+    ASSERT_EQ(shell(std::string(LODFORGE_BINARY) + " merge " + (dir / "tiled_out").string() + " --formats obj").code, 0);
+    EXPECT_TRUE(slurp_file(merged / "overview.tif") == first);
+    ASSERT_EQ(shell(std::string(LODFORGE_BINARY) + " merge " + (dir / "whole_out").string() + " --overview-px 0").code, 0);
+    EXPECT_FALSE(fs::exists(dir / "whole_out" / "merged" / "overview.tif"));
+    EXPECT_FALSE(fs::exists(dir / "whole_out" / "merged" / "report.html"));
+  }
   if (schemas.empty()) GTEST_SKIP() << test::kNoSchemas;  // (everything above was checked)
 }
 

@@ -29,6 +29,7 @@
 #include "io/footprint_writer.hpp"
 #include "io/model_writers.hpp"
 #include "run/checkpoint.hpp"
+#include "run/overview.hpp"
 #include "run/run_report.hpp"
 
 namespace lodforge {
@@ -657,13 +658,23 @@ void verify_outputs(const fs::path& dir, const std::vector<std::pair<fs::path, s
 
 int run_merge(int argc, char** argv) {
   Args args("merge", "Combines the per-tile files of a run (all shards) into one file per format in OUT_DIR/merged/,\n"
-                     "and the shards' tile indexes and run reports into OUT_DIR/tile_index.geojson and OUT_DIR/report.json.\nusage: lodforge merge OUT_DIR [options]");
+                     "and the shards' tile indexes and run reports into OUT_DIR/tile_index.geojson and OUT_DIR/report.json;\n"
+                     "writes merged/overview.tif (the whole area: a DSM hillshade with every building's outline coloured by\n"
+                     "status, a Cloud-Optimized GeoTIFF) and merged/report.html (the run's numbers, failed and slowest buildings).\n"
+                     "usage: lodforge merge OUT_DIR [options]");
   args.positional("dir", "OUT_DIR", "the run's output directory")
-      .value("formats", "F[,F...]", "formats to merge (default: every format found)");
+      .value("formats", "F[,F...]", "formats to merge (default: every format found)")
+      .value("overview-px", "N", "the longest side of merged/overview.tif in pixels (default 4096); 0: no overview.tif and report.html");
   args.parse(argc, argv, 2);
   if (args.has("help")) { std::cout << args.help(); return 0; }
   if (!args.has("dir")) throw UsageError("give the run's output directory: lodforge merge OUT_DIR");
   const fs::path dir = *args.get("dir");
+  int overview_px = 4096;
+  if (auto n = args.get("overview-px")) {
+    if (n->empty() || n->size() > 6 || n->find_first_not_of("0123456789") != std::string::npos)
+      throw UsageError("--overview-px '" + *n + "': expected a whole number of pixels, e.g. 4096 (0: no overview)");
+    overview_px = std::stoi(*n);
+  }
   if (!fs::is_directory(dir / "tiles")) throw InputError("'" + dir.string() + "': no tiles/ directory; is it a lodforge run's output.dir?");
   std::vector<std::string> formats = model_formats();
   if (auto f = args.get("formats")) {
@@ -705,6 +716,28 @@ int run_merge(int argc, char** argv) {
       else throw InputError("--formats: unknown format '" + format + "'");
       written.push_back(target.filename().string());
       spdlog::info("{}: {} tiles", (dir / "merged" / written.back()).string(), files.size());
+    }
+    if (overview_px > 0) {
+      std::vector<fs::path> gpkg_tiles;
+      for (const auto& output : outputs)
+        if (output.first.extension() == ".gpkg") gpkg_tiles.push_back(output.first);
+      if (gpkg_tiles.empty()) spdlog::warn("the run wrote no GeoPackage tiles (output.formats): the overview shows no outlines");
+      const fs::path report = dir / "report.json";
+      std::string job;
+      if (std::ifstream in(report); in)
+        if (const nlohmann::json r = nlohmann::json::parse(in, nullptr, false); r.is_object() && r.contains("job") && r["job"].is_string())
+          job = r["job"].get<std::string>();
+      const Overview overview = write_overview(job, gpkg_tiles, staging / "overview.tif", overview_px);
+      written.push_back("overview.tif");
+      if (fs::exists(report)) {
+        write_report_html(report, overview, staging / "report.html");
+        written.push_back("report.html");
+      } else {
+        spdlog::warn("'{}': missing, so no report.html", report.string());
+      }
+      spdlog::info("{}: {} x {} pixels of {:.3g} m, {} outlines; {}", (dir / "merged" / "overview.tif").string(), overview.width,
+                   overview.height, overview.pixel_size, overview.ok + overview.fallback + overview.lod0_only,
+                   (dir / "merged" / "report.html").string());
     }
     for (const std::string& name : written) fs::rename(staging / name, dir / "merged" / name);
     fs::remove(staging);
