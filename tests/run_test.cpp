@@ -141,6 +141,33 @@ TEST_F(SynthRun, OutputsAreByteIdenticalForOneAndTwoThreads) {
   EXPECT_EQ(without_timings(report_of(dir / "small_cache_out" / "report.json")), without_timings(report_of(dir / "h1_out" / "report.json")));
 }
 
+// Issue 17: a GeoPackage's last change is the same for every file of a run (identical runs give
+// identical bytes): SOURCE_DATE_EPOCH when set (the reproducible-builds convention), else
+// 2000-01-01; a SOURCE_DATE_EPOCH that is not a number stops the run before any output.
+TEST_F(SynthRun, GeoPackagesRecordSourceDateEpochAsTheirLastChange) {
+  const auto last_change = [](const fs::path& gpkg) {
+    GDALAllRegister();
+    GDALDataset* d = static_cast<GDALDataset*>(GDALOpenEx(gpkg.c_str(), GDAL_OF_VECTOR, nullptr, nullptr, nullptr));
+    if (!d) return std::string("cannot open");
+    OGRLayer* rows = d->ExecuteSQL("SELECT DISTINCT last_change FROM gpkg_contents", nullptr, nullptr);
+    std::string text;
+    for (auto& row : *rows) text += std::string(text.empty() ? "" : ",") + row->GetFieldAsString(0);
+    d->ReleaseResultSet(rows);
+    GDALClose(d);
+    return text;
+  };
+  Result r = lodforge("run " + job("plain", seg, 100).string());
+  ASSERT_EQ(r.code, 0) << r.output;
+  EXPECT_EQ(last_change(dir / "plain_out" / "tiles" / "r0000_c0000.gpkg"), "2000/01/01 00:00:00+00");
+  r = test::shell("SOURCE_DATE_EPOCH=1700000000 " + std::string(LODFORGE_BINARY) + " run " + job("dated", seg, 100).string());
+  ASSERT_EQ(r.code, 0) << r.output;
+  EXPECT_EQ(last_change(dir / "dated_out" / "tiles" / "r0000_c0000.gpkg"), "2023/11/14 22:13:20+00");  // (as GDAL's SQL gives a date)
+  r = test::shell("SOURCE_DATE_EPOCH=yesterday " + std::string(LODFORGE_BINARY) + " run " + job("bad", seg, 100).string());
+  EXPECT_EQ(r.code, 1) << r.output;
+  EXPECT_NE(r.output.find("SOURCE_DATE_EPOCH 'yesterday': expected whole seconds since 1970-01-01"), std::string::npos) << r.output;
+  EXPECT_FALSE(fs::exists(dir / "bad_out"));
+}
+
 // Issue 15: lodforge replaces only files it can prove it wrote. A user's files beside the tiles
 // stay; a directory or a foreign file at a tile's output name stops the run before any work.
 TEST_F(SynthRun, OnlyLodforgesOwnFilesAreReplaced) {

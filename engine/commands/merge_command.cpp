@@ -540,7 +540,7 @@ void merge_ogr_into(const std::vector<fs::path>& files, const fs::path& target, 
 // GeoPackage / GeoJSON through OGR: the first tile's layer definition, every feature appended.
 void merge_ogr(const std::vector<fs::path>& files, const fs::path& target, const std::string& driver_name) {
   GDALAllRegister();
-  CPLSetConfigOption("OGR_CURRENT_DATE", "2000-01-01T00:00:00.000Z");
+  set_gpkg_timestamp();  // byte-identical GeoPackages
   // No SpatiaLite set-up for each GeoPackage opened (~1 ms a file; no SQL is run here).
   CPLSetConfigOption("SPATIALITE_LOAD", "NO");
   const fs::path temp = target.parent_path() / (target.stem().string() + ".partial-" + std::to_string(getpid()) + target.extension().string());

@@ -130,6 +130,7 @@ int run_job(int argc, char** argv) {
   std::vector<std::string> overrides = args.all("set");
   if (auto t = args.get("threads")) overrides.push_back("threads=" + *t);
   const Job job = load_job(job_path, overrides);
+  const std::string gpkg_time = set_gpkg_timestamp();  // the GeoPackages' last change (the same bytes for the same run)
   const Shard shard = args.get("shard") ? parse_shard(*args.get("shard")) : Shard{};
   const std::string progress_mode = args.has("quiet") ? "none" : args.get("progress").value_or("auto");
   if (progress_mode != "auto" && progress_mode != "bar" && progress_mode != "json" && progress_mode != "none")
@@ -215,7 +216,7 @@ int run_job(int argc, char** argv) {
   const std::string heights_options = options_text(key_job.stages.heights) + file_identity(job.inputs.dsm.path) + file_identity(job.inputs.dtm.path);
   // Building ids are first-pixel indices, so the footprints also depend on the raster's width.
   const std::string core_options = job.regularizer + "\n" + options_text(key_job.stages.core) + "\nwidth " + std::to_string(seg.size.width);
-  const std::uint64_t job_key = fnv1a(file_identity(job.inputs.segmentation.path) + "\n" + file_identity(job.inputs.dsm.path) + "\n" +
+  const std::uint64_t job_key = fnv1a(gpkg_time + "\n" + file_identity(job.inputs.segmentation.path) + "\n" + file_identity(job.inputs.dsm.path) + "\n" +
                                       file_identity(job.inputs.dtm.path) + "\n" + file_identity(job.inputs.orthophoto.path) + "\n" + options_text(key_job) + "\n" +
                                       std::to_string(grid.tile_px) + "/" + std::to_string(halo_px) + "/" + std::to_string(max_window_px));
   std::string transform_text;
@@ -257,7 +258,6 @@ int run_job(int argc, char** argv) {
     }
   }
 
-  CPLSetConfigOption("OGR_CURRENT_DATE", "2000-01-01T00:00:00.000Z");  // byte-identical GeoPackages
   // The block budget: three quarters for the decoded blocks the threads share, a quarter for
   // GDAL's own cache (strips read in parts, blocks over 4 MB read in squares; the blocks of a tiled
   // raster are read whole, past GDAL's cache, and never take room there).

@@ -1,5 +1,7 @@
 #include "eval/metrics.hpp"
 
+#include <nlohmann/json.hpp>
+
 #include "io/ogr_polygon.hpp"
 
 #include <algorithm>
@@ -291,15 +293,25 @@ EvalResult evaluate(const std::vector<PolygonWithHoles>& predicted_in, const std
 }
 
 std::string eval_json(const EvalResult& r) {
-  std::ostringstream s;
-  s.precision(6);
-  s << "{\"predicted\": " << r.predicted << ", \"truth\": " << r.truth << ", \"matched\": " << r.matched
-    << ", \"overall_iou\": " << r.overall_iou << ", \"precision\": " << r.precision << ", \"recall\": " << r.recall
-    << ", \"f1\": " << r.f1 << ", \"mean_iou\": " << r.mean_iou << ", \"c_iou\": " << r.c_iou << ", \"n_ratio\": " << r.n_ratio
-    << ", \"polis_m\": " << r.polis << ", \"hausdorff_mean_m\": " << r.hausdorff_mean << ", \"hausdorff_p95_m\": " << r.hausdorff_p95
-    << ", \"max_tangent_angle_deg\": " << r.max_tangent_angle_deg << ", \"corner_share_5deg\": " << r.corner_share_5deg << ", \"blob_iou\": " << r.blob_iou
-    << ", \"right_angle_share\": " << r.right_angle_share << ", \"truth_right_angle_share\": " << r.truth_right_angle_share << "}";
-  return s.str();
+  const nlohmann::ordered_json j{{"predicted", r.predicted},
+                                 {"truth", r.truth},
+                                 {"matched", r.matched},
+                                 {"overall_iou", r.overall_iou},
+                                 {"precision", r.precision},
+                                 {"recall", r.recall},
+                                 {"f1", r.f1},
+                                 {"mean_iou", r.mean_iou},
+                                 {"c_iou", r.c_iou},
+                                 {"n_ratio", r.n_ratio},
+                                 {"polis_m", r.polis},
+                                 {"hausdorff_mean_m", r.hausdorff_mean},
+                                 {"hausdorff_p95_m", r.hausdorff_p95},
+                                 {"max_tangent_angle_deg", r.max_tangent_angle_deg},
+                                 {"corner_share_5deg", r.corner_share_5deg},
+                                 {"blob_iou", r.blob_iou},
+                                 {"right_angle_share", r.right_angle_share},
+                                 {"truth_right_angle_share", r.truth_right_angle_share}};
+  return j.dump();  // (a non-finite number, none expected, would be written as null)
 }
 
 std::string eval_table(const EvalResult& r) {

@@ -1,5 +1,8 @@
 #include "io/footprint_writer.hpp"
 
+#include <cstdlib>
+#include <ctime>
+
 #include <filesystem>
 #include <gdal_priv.h>
 #include <ogrsf_frmts.h>
@@ -59,6 +62,23 @@ struct FootprintFileWriter::Impl {
 char** rfc7946_layer_options() {
   static const char* options[] = {"RFC7946=YES", "COORDINATE_PRECISION=7", nullptr};
   return const_cast<char**>(options);
+}
+
+std::string set_gpkg_timestamp() {
+  std::string text = "2000-01-01T00:00:00.000Z";
+  if (const char* epoch = std::getenv("SOURCE_DATE_EPOCH"); epoch && *epoch) {
+    const std::string value = epoch;
+    if (value.size() > 12 || value.find_first_not_of("0123456789") != std::string::npos)
+      throw InputError("SOURCE_DATE_EPOCH '" + value + "': expected whole seconds since 1970-01-01 (the environment's, for the GeoPackages' last change)");
+    const std::time_t t = std::time_t(std::stoll(value));
+    std::tm utc{};
+    gmtime_r(&t, &utc);
+    char buffer[40];
+    std::strftime(buffer, sizeof buffer, "%Y-%m-%dT%H:%M:%S.000Z", &utc);
+    text = buffer;
+  }
+  CPLSetConfigOption("OGR_CURRENT_DATE", text.c_str());
+  return text;
 }
 
 FootprintFileWriter::FootprintFileWriter(const std::string& path, const FootprintLayer& layer) : impl_(new Impl) {

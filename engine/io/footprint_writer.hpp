@@ -35,6 +35,12 @@ struct FootprintLayer {
 // (about 1 cm), no crs member. (A CSL list, null-terminated, for CreateLayer.)
 char** rfc7946_layer_options();
 
+// The time GeoPackages record as their last change (OGR_CURRENT_DATE), the same for every file
+// of a run so that identical runs give identical bytes: SOURCE_DATE_EPOCH (seconds since 1970, the
+// reproducible-builds convention) when the environment sets it, else 2000-01-01T00:00:00Z.
+// Returns the ISO 8601 text set; InputError when SOURCE_DATE_EPOCH is not a whole number.
+std::string set_gpkg_timestamp();
+
 // Checks up front that path can be written (directory exists and is writable, extension known).
 void check_output_path(const std::string& path);
 
