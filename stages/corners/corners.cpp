@@ -73,6 +73,42 @@ bool bends_consistently(const Ring& ring, int first, int count, const Line& line
   return spread > 0 && (straight - bent) >= min_explained * spread;
 }
 
+// The open polyline smoothed along its length: each inner point moved to the value at it of a
+// parabola in arc length fitted to the points within two sigma of it (Gaussian weights of width
+// sigma, each point weighted by the edges around it; the window symmetric about the point, so
+// narrowed towards the ends, which stay fixed). A local parabola keeps an arc's radius where a
+// moving mean would shrink it, and averages out a wobble shorter than the window.
+std::vector<Vec2> smoothed_open(const std::vector<Vec2>& points, double sigma) {
+  const std::size_t n = points.size();
+  if (sigma <= 0 || n < 3) return points;
+  std::vector<double> at(n, 0.0), weight(n, 0.0);  // arc length, half the edges around each point
+  for (std::size_t i = 1; i < n; ++i) {
+    const double len = (points[i] - points[i - 1]).norm();
+    at[i] = at[i - 1] + len;
+    weight[i - 1] += 0.5 * len;
+    weight[i] += 0.5 * len;
+  }
+  std::vector<Vec2> out = points;
+  std::size_t lo = 0, hi = 0;
+  for (std::size_t i = 1; i + 1 < n; ++i) {
+    const double radius = std::min({2 * sigma, at[i], at[n - 1] - at[i]});
+    while (at[lo] < at[i] - radius) ++lo;
+    if (hi < lo) hi = lo;
+    while (hi + 1 < n && at[hi + 1] <= at[i] + radius) ++hi;
+    Eigen::Matrix3d normal = Eigen::Matrix3d::Zero();
+    Eigen::Matrix<double, 3, 2> rhs = Eigen::Matrix<double, 3, 2>::Zero();
+    for (std::size_t j = lo; j <= hi; ++j) {
+      const double u = (at[j] - at[i]) / sigma, w = weight[j] * std::exp(-0.5 * u * u);
+      const Eigen::Vector3d basis(1.0, u, u * u);
+      normal += w * basis * basis.transpose();
+      rhs += w * basis * Eigen::RowVector2d(points[j].x(), points[j].y());
+    }
+    const Eigen::Matrix<double, 3, 2> c = normal.ldlt().solve(rhs);
+    if (c.allFinite() && hi > lo + 2) out[i] = Vec2(c(0, 0), c(0, 1));
+  }
+  return out;
+}
+
 // True when the run's contour departs from its line by more than curve_px, and curve_noise_factor
 // times the building's boundary noise, on average over two consecutive windows of curve_window_px
 // and curve_window_m, both to the same side: a boundary wobble averages out over a window or
@@ -181,6 +217,81 @@ void snap_to_lattice(const Ring& ring, const std::vector<std::pair<int, int>>& r
   }
 }
 
+// True when the line lies exactly on the lattice (turned onto it, or fitted with it).
+bool on_lattice(const Line& line, const Vec2& lattice) {
+  return nearest_lattice_axis(line.normal, lattice).dot(line.normal) > 1 - 1e-12;
+}
+
+// Consecutive runs, one off the lattice at least, that zigzag about one line of the lattice become
+// one wall on that line: a wall that wobbles gets its flanks labeled with the directions of their
+// slopes, and its crests with the wall's own. A window of runs joins when the line from its start
+// to its end is within max_deg of the lattice and its contour lies about the best line of that
+// lattice direction within max_rms (RMS, by length) and max_dev (everywhere). Each off-lattice run
+// in turn grows the largest such window around it, to the right first; at least 4 runs are left.
+// Two consecutive runs off the lattice within square_deg of square to each other stop a window.
+void merge_zigzags(const Ring& ring, std::vector<std::pair<int, int>>& runs, std::vector<Line>& lines, const Vec2& lattice,
+                   double max_deg, double max_rms, double max_dev, double square_deg) {
+  if (max_deg <= 0 || max_rms <= 0) return;
+  const double min_cos = std::cos(max_deg * M_PI / 180.0), square_cos = std::sin(square_deg * M_PI / 180.0);
+  const int size = int(ring.size());
+  constexpr int kMaxWindow = 64;  // runs in one window at most (bounds the work on long rings)
+  // The lattice normal of the window [a, a + count) of runs, when its chord is near the lattice and
+  // its contour lies within the bounds about that line.
+  const auto fits = [&](std::size_t a, int count, Vec2* normal) {
+    const int first = runs[a].first;
+    int edges = 0;
+    for (int k = 0; k < count; ++k) edges += runs[(a + k) % runs.size()].second;
+    // Two consecutive walls off the lattice and square to each other are a second lattice (the
+    // teeth of a staggered row of houses), not a wobble, whose flanks are not square.
+    for (int k = 0; k + 1 < count; ++k) {
+      const Line& p = lines[(a + k) % runs.size()];
+      const Line& q = lines[(a + k + 1) % runs.size()];
+      if (!on_lattice(p, lattice) && !on_lattice(q, lattice) && std::abs(p.normal.dot(q.normal)) < square_cos) return false;
+    }
+    const Vec2 chord = ring[(first + edges) % size] - ring[first];
+    if (chord.norm() <= 0) return false;
+    const Vec2 across(-chord.y() / chord.norm(), chord.x() / chord.norm());
+    const Vec2 target = nearest_lattice_axis(across, lattice);
+    if (std::abs(target.dot(across)) < min_cos) return false;
+    const Line line = fit_line(ring, first, edges, target);
+    double sum = 0, total = 0;
+    for (int k = 0; k < edges; ++k) {
+      const int i = (first + k) % size;
+      const Vec2 e = edge_vector(ring, std::size_t(i));
+      const double d = line.normal.dot(ring[i] + 0.5 * e) - line.offset, len = e.norm();
+      if (std::abs(line.normal.dot(ring[i]) - line.offset) > max_dev) return false;
+      sum += len * d * d;
+      total += len;
+    }
+    if (total <= 0 || std::sqrt(sum / total) > max_rms) return false;
+    *normal = target;
+    return true;
+  };
+  for (std::size_t r = 0; r < runs.size() && runs.size() > 4;) {
+    if (on_lattice(lines[r], lattice)) { ++r; continue; }
+    // The largest window around r: grown to the right, then to the left, while it fits.
+    std::size_t a = r;
+    int count = 1;
+    Vec2 normal(0, 0), found(0, 0);
+    while (count < kMaxWindow && int(runs.size()) - count > 3 && fits(a, count + 1, &found)) ++count, normal = found;
+    while (count < kMaxWindow && int(runs.size()) - count > 3) {
+      const std::size_t before = (a + runs.size() - 1) % runs.size();
+      if (!fits(before, count + 1, &found)) break;
+      a = before, ++count, normal = found;
+    }
+    if (count < 2) { ++r; continue; }
+    for (int k = 1; k < count; ++k) runs[a].second += runs[(a + k) % runs.size()].second;
+    lines[a] = fit_line(ring, runs[a].first, runs[a].second, normal);
+    for (int k = 1; k < count; ++k) {  // erase the absorbed runs (they follow a, cyclically)
+      const std::size_t i = (a + 1) % runs.size();
+      runs.erase(runs.begin() + long(i));
+      lines.erase(lines.begin() + long(i));
+      if (i < a) --a;
+    }
+    r = 0;  // (indices moved; runs on the lattice are passed over quickly)
+  }
+}
+
 // Walls with one direction whose offsets differ by less than `tolerance` become one wall (its
 // line fitted to them): consecutive ones (collinear walls made one), and two joined by a riser no
 // longer than twice the tolerance (a step smaller than the noise is the noise's).
@@ -209,11 +320,6 @@ void merge_parallel(const Ring& ring, std::vector<std::pair<int, int>>& runs, st
       merged = true;
     }
   }
-}
-
-// True when the line lies exactly on the lattice (turned onto it, or fitted with it).
-bool on_lattice(const Line& line, const Vec2& lattice) {
-  return nearest_lattice_axis(line.normal, lattice).dot(line.normal) > 1 - 1e-12;
 }
 
 // An oblique run shorter than max_cut between two square walls of the lattice is a corner that
@@ -271,6 +377,8 @@ Ring extract_corners(const Ring& ring, const std::vector<int>& labels, const std
   for (auto [first, count] : runs) lines.push_back(fit_line(ring, first, count, directions[own[first]]));
   if (context.lattice.squaredNorm() > 0) {
     snap_to_lattice(ring, runs, lines, context.lattice, o, pixel_size, noise);
+    merge_zigzags(ring, runs, lines, context.lattice, o.zigzag_max_deg, std::max(pixel_size, o.zigzag_rms_noise * noise),
+                  std::max(2 * pixel_size, o.zigzag_max_noise * noise), o.parallel_angle_deg);
     merge_parallel(ring, runs, lines, std::max(o.merge_offset_m, o.merge_noise * noise), pixel_size);
     drop_corner_cuts(ring, runs, lines, context.lattice, o.max_cut_m);
   }
@@ -285,11 +393,13 @@ Ring extract_corners(const Ring& ring, const std::vector<int>& labels, const std
   const double parallel_sin = std::sin(o.parallel_angle_deg * M_PI / 180.0);
   const double square_sin = std::cos(o.parallel_angle_deg * M_PI / 180.0);  // within that of 90 degrees
   const double curve_tolerance = std::max(pixel_size, o.curve_tolerance_noise * noise);
+  const double curve_window = std::max(o.curve_window_px * pixel_size, o.curve_window_m);
   Ring out;
   for (int r = 0; r < n; ++r) {
     if (curved[r]) {  // the run's own contour, simplified, between its ends
       std::vector<Vec2> points;
       for (int k = 0; k <= runs[r].second; ++k) points.push_back(ring[(runs[r].first + k) % ring.size()]);
+      points = smoothed_open(points, o.curve_smoothing * curve_window);
       const std::vector<char> keep = douglas_peucker_open(points, curve_tolerance);
       for (std::size_t k = 1; k + 1 < points.size(); ++k) if (keep[k]) out.push_back(points[k]);
     }

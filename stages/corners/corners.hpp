@@ -26,6 +26,10 @@ struct CornerOptions {
   double curve_window_m = 4.0;       // ... and at least this (m)
   double curve_min_explained = 0.3;  // ... and a parabola explains this share of its spread about a line
   double curve_tolerance_noise = 0.5;  // a curve's contour is simplified to a pixel and this many times the noise
+  double zigzag_max_deg = 15;   // runs zigzagging about a lattice line within this angle ...
+  double zigzag_rms_noise = 2;  // ... and this many times the noise (RMS) ...
+  double zigzag_max_noise = 3;  // ... and this (everywhere) become one wall
+  double curve_smoothing = 0.5;  // ... after a Gaussian smoothing along it of this many curve windows (sigma)
   double snap_max_deg = 10.0;        // a straight wall within this of the building's lattice ...
   double snap_shift_m = 0.0;         // ... is turned onto it when its ends move by at most this (m) ...
   double snap_noise = 2.0;           // ... or this many times its direction's uncertainty at its ends
@@ -54,6 +58,10 @@ struct CornerOptions {
     v("curve_window_m", curve_window_m, "... and their least length (m)", Check::at_least(0));
     v("curve_min_explained", curve_min_explained, "... and a parabola along the run explains at least this share of its contour's spread about a straight line: an arc bends one way all along, a wobble of several half-waves along a long wall does not (0 = off)", Check::between(0, 1));
     v("curve_tolerance_noise", curve_tolerance_noise, "a curved wall's contour is simplified by Douglas-Peucker to a pixel or this many times the boundary noise, the larger", Check::at_least(0));
+    v("zigzag_max_deg", zigzag_max_deg, "consecutive runs, one off the building's lattice at least, whose contour zigzags about one line of the lattice become one wall on it (a wobbling wall, its flanks labeled with their slopes): the line from their start to their end within this angle of the lattice (degrees, 0 = off) ...", Check::between(0, 45));
+    v("zigzag_rms_noise", zigzag_rms_noise, "... their contour within this many times the boundary noise of that line, RMS (at least a pixel) ...", Check::at_least(0));
+    v("zigzag_max_noise", zigzag_max_noise, "... and within this many times the noise everywhere (at least two pixels)", Check::at_least(0));
+    v("curve_smoothing", curve_smoothing, "... after it is smoothed along its length by a Gaussian whose sigma is this many curve windows (the window of the curve test, curve_window_px and curve_window_m), so that the wobble on a curved wall is not traced, its bend kept; the window narrows towards the run's ends, which stay where they are (0 = off)", Check::between(0, 4));
     v("snap_max_deg", snap_max_deg, "a straight wall within this angle of the building's lattice (its main direction and quarter turns of it) is turned onto the lattice when that moves its ends little (degrees, 0 = off)", Check::between(0, 45));
     v("snap_shift_m", snap_shift_m, "... by at most this (m) ...", Check::at_least(0));
     v("snap_noise", snap_noise, "... or by at most this many times the uncertainty of its fitted direction at its ends (noise * sqrt(3 * snap_correlation_m / length))", Check::at_least(0));
