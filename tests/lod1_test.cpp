@@ -75,6 +75,16 @@ TEST(Heights, StatisticsAndNodata) {
   HeightOptions o;
   Heights h = building_heights(square, dsm, nullptr, o);
   ASSERT_TRUE(h.ok) << h.reason;
+  EXPECT_NEAR(h.roof, 12.0, 1e-9);  // the default: the 70th percentile (3DBAG's LoD1.2)
+  // The statistics 3DBAG publishes, whatever the LOD1 statistic.
+  EXPECT_NEAR(h.roof_min, 12.0, 1e-9);
+  EXPECT_NEAR(h.roof_50p, 12.0, 1e-9);
+  EXPECT_NEAR(h.roof_70p, 12.0, 1e-9);
+  EXPECT_NEAR(h.roof_max, 40.0, 1e-9);
+  EXPECT_EQ(h.dsm_cells, 400);
+  EXPECT_NEAR(h.dsm_coverage, 1.0, 1e-12);
+  o.roof = "mean";
+  h = building_heights(square, dsm, nullptr, o);
   EXPECT_EQ(h.roof_samples, 400);
   EXPECT_NEAR(h.roof, (399 * 12.0 + 40.0) / 400, 1e-9);  // the paper's mean
   EXPECT_NEAR(h.ground, 2.0, 1e-9);                      // the ring around it, no DTM
@@ -87,6 +97,18 @@ TEST(Heights, StatisticsAndNodata) {
   const HeightRaster dtm = constant_raster(1.5f, -9999, false);
   h = building_heights(square, dsm, &dtm, o);
   EXPECT_NEAR(h.ground, 1.5, 1e-9);
+  // A quarter of the roof without data: the coverage says so, the statistics use the rest.
+  for (int y = 10; y < 20; ++y)
+    for (int x = 10; x < 20; ++x) dsm.valid.at<uint8_t>(y, x) = 0;
+  h = building_heights(square, dsm, &dtm, o);
+  ASSERT_TRUE(h.ok) << h.reason;
+  EXPECT_EQ(h.dsm_cells, 400);
+  EXPECT_EQ(h.roof_samples, 300);
+  EXPECT_NEAR(h.dsm_coverage, 0.75, 1e-12);
+  EXPECT_NEAR(h.roof_max, 40.0, 1e-9);
+  // Percentiles by linear interpolation: 70 % of 10 values 1..10 lie at or below 7.3.
+  std::vector<float> ten{10, 9, 8, 7, 6, 5, 4, 3, 2, 1};
+  EXPECT_NEAR(percentile(ten, 70.0), 7.3, 1e-6);
 }
 
 std::string delft(const std::string& name) { return test::test_data() + "/delft-ahn3-bgt/" + name; }
@@ -124,6 +146,7 @@ TEST(Heights, AgreeWith3dfierOnTheDelftFootprints) {
   const HeightRaster dtm = HeightWindowReader(delft("derived/dtm_50cm.tif")).read(all, grid);
   HeightOptions o;
   o.roof = "percentile";  // 3dfier's 90th percentile
+  o.roof_percentile = 90;
   std::ifstream csv(delft("reference/reference_lod1_heights_3dfier.csv"));
   std::string line;
   std::getline(csv, line);
@@ -203,7 +226,7 @@ TEST_F(ModelFiles, DelftOutputsValidateAgainstTheOfficialSchemasAndEveryShellIsC
                                   << "  dsm: {path: " << data << "/delft-ahn3-bgt/derived/dsm_50cm.tif}\n"
                                   << "  dtm: {path: " << data << "/delft-ahn3-bgt/derived/dtm_50cm.tif}\n"
                                   << "tiling: {tile_size_m: 64}\noutput: {dir: out, quicklook: true}\nwork_dir: work\n"
-                                  << "stages: {heights: {roof: percentile}}\n";
+                                  << "stages: {heights: {roof: percentile, roof_percentile: 90}}\n";
   const Output run = shell(std::string(LODFORGE_BINARY) + " run " + (dir / "job.yaml").string());
   ASSERT_EQ(run.code, 0) << run.output;
   const std::string report = slurp_file(dir / "out" / "report.json");
@@ -668,6 +691,33 @@ TEST_F(ModelFiles, MergedTilesEqualOneTileAndValidate) {
     }
     EXPECT_EQ(n, 55);
     GDALClose(d);
+  }
+  // Heights as 3DBAG publishes them (issue 18), in the GeoPackage and in CityJSON: the LOD1 roof
+  // is the 70th percentile by default, between the minimum and the maximum; the volume is the
+  // block's; the coverage a share.
+  {
+    GDALDataset* d = static_cast<GDALDataset*>(GDALOpenEx((merged / "lodforge.gpkg").c_str(), GDAL_OF_VECTOR, nullptr, nullptr, nullptr));
+    ASSERT_NE(d, nullptr);
+    long with_heights = 0;
+    for (auto& f : *d->GetLayerByName("footprints")) {
+      if (f->IsFieldNull(f->GetFieldIndex("roof_height"))) continue;
+      ++with_heights;
+      const double roof = f->GetFieldAsDouble("roof_height"), ground = f->GetFieldAsDouble("ground_height");
+      EXPECT_DOUBLE_EQ(roof, f->GetFieldAsDouble("roof_70p"));
+      EXPECT_LE(f->GetFieldAsDouble("roof_min"), f->GetFieldAsDouble("roof_50p"));
+      EXPECT_LE(f->GetFieldAsDouble("roof_50p"), f->GetFieldAsDouble("roof_70p"));
+      EXPECT_LE(f->GetFieldAsDouble("roof_70p"), f->GetFieldAsDouble("roof_max"));
+      EXPECT_NEAR(f->GetFieldAsDouble("volume_lod1"), f->GetFieldAsDouble("area_m2") * (roof - ground), 1e-6 * f->GetFieldAsDouble("volume_lod1"));
+      EXPECT_GT(f->GetFieldAsDouble("dsm_coverage"), 0.0);
+      EXPECT_LE(f->GetFieldAsDouble("dsm_coverage"), 1.0);
+      EXPECT_GE(f->GetFieldAsInteger("dsm_cells"), 1);
+    }
+    GDALClose(d);
+    EXPECT_EQ(with_heights, 55);
+    const nlohmann::json objects = nlohmann::json::parse(slurp_file(merged / "lodforge.city.json")).at("CityObjects");
+    for (const auto& [id, object] : objects.items())
+      for (const char* name : {"ground_height", "roof_height", "roof_min", "roof_50p", "roof_70p", "roof_max", "volume_lod1", "dsm_coverage", "dsm_cells"})
+        EXPECT_TRUE(object.at("attributes").contains(name)) << id << " " << name;
   }
   // The merged files name the run, not their first tile.
   EXPECT_NE(gml.find("<gml:name>lodforge, merged from "), std::string::npos);

@@ -59,6 +59,11 @@ struct FootprintFileWriter::Impl {
   }
 };
 
+const std::vector<std::string>& height_statistic_names() {
+  static const std::vector<std::string> names{"roof_min", "roof_50p", "roof_70p", "roof_max", "volume_lod1", "dsm_coverage", "dsm_cells"};
+  return names;
+}
+
 char** rfc7946_layer_options() {
   static const char* options[] = {"RFC7946=YES", "COORDINATE_PRECISION=7", nullptr};
   return const_cast<char**>(options);
@@ -140,6 +145,7 @@ FootprintFileWriter::FootprintFileWriter(const std::string& path, const Footprin
     if (layer.write_heights) {
       field("ground_height", OFTReal);
       field("roof_height", OFTReal);
+      for (const std::string& name : height_statistic_names()) field(name.c_str(), name == "dsm_cells" ? OFTInteger : OFTReal);
     }
     field("vertex_count", OFTInteger);
     field("area_m2", OFTReal);
@@ -180,9 +186,15 @@ void FootprintFileWriter::add(const FootprintRecord& r) {
   if (layer.write_heights && r.has_heights) {
     feature.SetField("roof_height", r.roof_height);
     feature.SetField("ground_height", r.ground_height);
+    for (std::size_t i = 0; i < height_statistic_names().size() && i < r.height_statistics.size(); ++i) {
+      const std::string& name = height_statistic_names()[i];
+      if (name == "dsm_cells") feature.SetField(name.c_str(), int(r.height_statistics[i]));
+      else feature.SetField(name.c_str(), r.height_statistics[i]);
+    }
   } else if (layer.write_heights) {
     feature.SetFieldNull(feature.GetFieldIndex("roof_height"));
     feature.SetFieldNull(feature.GetFieldIndex("ground_height"));
+    for (const std::string& name : height_statistic_names()) feature.SetFieldNull(feature.GetFieldIndex(name.c_str()));
   }
   int vertices = int(r.polygon.outer.size());
   for (const Ring& h : r.polygon.holes) vertices += int(h.size());

@@ -116,6 +116,14 @@ class CityGmlWriter : public ModelWriter {
     attribute("tile", m.tile);
     if (m.has_lod1) {
       o << "      <gen:doubleAttribute name=\"ground_height\"><gen:value>" << m.ground << "</gen:value></gen:doubleAttribute>\n";
+      o << "      <gen:doubleAttribute name=\"roof_height\"><gen:value>" << m.roof << "</gen:value></gen:doubleAttribute>\n";
+      for (std::size_t i = 0; i < height_statistic_names().size() && i < m.height_statistics.size(); ++i) {
+        const std::string& name = height_statistic_names()[i];
+        if (name == "dsm_cells")
+          o << "      <gen:intAttribute name=\"" << name << "\"><gen:value>" << std::llround(m.height_statistics[i]) << "</gen:value></gen:intAttribute>\n";
+        else
+          o << "      <gen:doubleAttribute name=\"" << name << "\"><gen:value>" << m.height_statistics[i] << "</gen:value></gen:doubleAttribute>\n";
+      }
       o << "      <bldg:measuredHeight uom=\"m\">" << (m.roof - m.ground) << "</bldg:measuredHeight>\n";
     }
     const double z = m.has_lod1 ? m.ground : 0.0;
@@ -209,7 +217,14 @@ void write_city_object(std::ostream& o, const BuildingModel& m, CityJsonVertices
     << "\", \"tile\": \"" << m.tile << "\"";
   if (!m.stage.empty()) o << ", \"failed_stage\": \"" << json_text(m.stage) << "\"";
   if (!m.reason.empty()) o << ", \"reason\": \"" << json_text(m.reason) << "\"";
-  if (m.has_lod1) o << ", \"measuredHeight\": " << (m.roof - m.ground) << ", \"ground_height\": " << m.ground << ", \"roof_height\": " << m.roof;
+  if (m.has_lod1) {
+    o << ", \"measuredHeight\": " << (m.roof - m.ground) << ", \"ground_height\": " << m.ground << ", \"roof_height\": " << m.roof;
+    for (std::size_t i = 0; i < height_statistic_names().size() && i < m.height_statistics.size(); ++i) {
+      o << ", \"" << height_statistic_names()[i] << "\": ";
+      if (height_statistic_names()[i] == "dsm_cells") o << std::llround(m.height_statistics[i]);
+      else o << m.height_statistics[i];
+    }
+  }
   o << "}, \"geometry\": [";
   const double z = m.has_lod1 ? m.ground : 0.0;
   o << "{\"type\": \"MultiSurface\", \"lod\": \"0\", \"boundaries\": [[";
@@ -397,6 +412,7 @@ class FootprintModelWriter : public ModelWriter {
     r.has_heights = m.has_lod1;
     r.roof_height = m.roof;
     r.ground_height = m.ground;
+    r.height_statistics = m.height_statistics;
     if (m.has_lod1) r.lod1_faces = m.solid.faces;
     file_.add(r);
   }

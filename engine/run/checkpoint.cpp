@@ -19,7 +19,7 @@ namespace fs = std::filesystem;
 namespace {
 
 constexpr std::uint32_t kMagic = 0x4c4f4446;  // "LODF"
-constexpr std::uint32_t kVersion = 3;  // 2: a checksum of the payload in the header; 3: each building's regularization seconds
+constexpr std::uint32_t kVersion = 4;  // 2: a checksum of the payload in the header; 3: each building's regularization seconds; 4: the heights' statistics
 
 class Writer {
  public:

@@ -1,3 +1,4 @@
+#include "geometry/polygon.hpp"
 #include "run/tile_worker.hpp"
 
 #include <algorithm>
@@ -84,7 +85,9 @@ std::string make_summary(const TileResult& r) {
 std::string serialize_heights(const std::vector<Heights>& heights) {
   std::ostringstream s;
   s.precision(17);
-  for (const Heights& h : heights) s << h.ok << '\t' << h.roof << '\t' << h.ground << '\t' << h.roof_samples << '\t' << h.ground_samples << '\t' << h.reason << '\n';
+  for (const Heights& h : heights)
+    s << h.ok << '\t' << h.roof << '\t' << h.ground << '\t' << h.roof_samples << '\t' << h.ground_samples << '\t' << h.roof_min << '\t'
+      << h.roof_50p << '\t' << h.roof_70p << '\t' << h.roof_max << '\t' << h.dsm_coverage << '\t' << h.dsm_cells << '\t' << h.reason << '\n';
   return s.str();
 }
 
@@ -97,7 +100,8 @@ std::optional<std::vector<Heights>> parse_heights(const std::string& text, std::
     Heights h;
     std::string ok;
     std::getline(f, ok, '\t');
-    f >> h.roof >> h.ground >> h.roof_samples >> h.ground_samples;
+    f >> h.roof >> h.ground >> h.roof_samples >> h.ground_samples >> h.roof_min >> h.roof_50p >> h.roof_70p >> h.roof_max >> h.dsm_coverage >> h.dsm_cells;
+    if (!f) return std::nullopt;  // (written by another version: computed again)
     f.get();
     std::getline(f, h.reason);
     h.ok = ok == "1";
@@ -120,6 +124,8 @@ BuildingModel model_of(const BuildingOutput& b, const Heights* h, const std::str
     m.has_lod1 = true;
     m.ground = h->ground;
     m.roof = h->roof;
+    m.height_statistics = {h->roof_min, h->roof_50p, h->roof_70p, h->roof_max, area(b.footprint) * (h->roof - h->ground),
+                           h->dsm_coverage, double(h->dsm_cells)};
   } else if (h) {
     if (b.ok) m.stage = "heights";
     m.reason += (m.reason.empty() ? "" : "; ") + std::string("heights: ") + h->reason;

@@ -68,9 +68,15 @@ Heights measure_heights(const PolygonWithHoles& footprint, const HeightRaster& d
 
   std::vector<float> roof = samples(dsm, box, inside);
   h.roof_samples = int(roof.size());
+  h.dsm_cells = cv::countNonZero(inside);
+  h.dsm_coverage = h.dsm_cells > 0 ? double(h.roof_samples) / h.dsm_cells : 0.0;
   if (roof.empty()) { h.reason = "no valid DSM value inside the footprint"; return h; }
   if (o.roof == "mean") h.roof = std::accumulate(roof.begin(), roof.end(), 0.0) / double(roof.size());
   else h.roof = percentile(roof, o.roof == "median" ? 50.0 : o.roof_percentile);
+  h.roof_min = *std::min_element(roof.begin(), roof.end());
+  h.roof_max = *std::max_element(roof.begin(), roof.end());
+  h.roof_50p = percentile(roof, 50.0);
+  h.roof_70p = percentile(roof, 70.0);
 
   std::vector<float> ground;
   if (dtm) {

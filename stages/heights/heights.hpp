@@ -1,5 +1,6 @@
-// Stage 8: a building's roof and ground heights from the DSM (and DTM). Roof: the mean DSM
-// height inside the footprint (the paper), or its median or a percentile (3dfier uses the 90th).
+// Stage 8: a building's roof and ground heights from the DSM (and DTM). Roof: a percentile of the
+// DSM heights inside the footprint (3DBAG's LoD1.2: the 70th; 3dfier: the 90th), or their mean
+// (the paper) or median; beside it the statistics 3DBAG publishes (minimum, 50th, 70th, maximum).
 // Ground: a low percentile of the DTM inside the footprint, or without a DTM of the DSM in a
 // ring around the building. Nodata is ignored; too few values is a stated failure.
 #pragma once
@@ -13,15 +14,15 @@
 namespace lodforge {
 
 struct HeightOptions {
-  std::string roof = "mean";    // mean | median | percentile
-  double roof_percentile = 90;  // when roof = percentile
+  std::string roof = "percentile";  // mean | median | percentile
+  double roof_percentile = 70;     // when roof = percentile (3DBAG's LoD1.2)
   double ground_percentile = 10;
   double ring_inner_m = 1.0, ring_outer_m = 4.0;  // ground ring around the building without a DTM
 
   template <class V>
   void visit(V& v) {
-    v("roof", roof, "roof height statistic of the DSM inside the footprint: mean (the paper), median or percentile", Check::one_of({"mean", "median", "percentile"}));
-    v("roof_percentile", roof_percentile, "percentile used when roof = percentile (3dfier: 90)", Check::between(0, 100));
+    v("roof", roof, "LOD1 roof height: a statistic of the DSM inside the footprint: percentile (3DBAG), mean (the paper) or median", Check::one_of({"mean", "median", "percentile"}));
+    v("roof_percentile", roof_percentile, "percentile used when roof = percentile (3DBAG's LoD1.2: 70; 3dfier: 90)", Check::between(0, 100));
     v("ground_percentile", ground_percentile, "percentile of the DTM inside the footprint (or of the DSM ring around it) taken as ground", Check::between(0, 100));
     v("ring_inner_m", ring_inner_m, "without a DTM: inner distance of the ground ring around the building (m)", Check::at_least(0));
     v("ring_outer_m", ring_outer_m, "without a DTM: outer distance of the ground ring (m)", Check::above(0));
@@ -37,8 +38,12 @@ struct HeightRaster {
 
 struct Heights {
   bool ok = false;
-  double roof = 0, ground = 0;
-  int roof_samples = 0, ground_samples = 0;
+  double roof = 0, ground = 0;  // the LOD1 roof (the `roof` statistic) and the ground
+  int roof_samples = 0, ground_samples = 0;  // DSM cells with data inside the footprint; ground cells
+  // What 3DBAG publishes besides: the DSM's minimum, 50th, 70th percentile and maximum inside the
+  // footprint, and the share of its cells inside the footprint that have data (of dsm_cells).
+  double roof_min = 0, roof_50p = 0, roof_70p = 0, roof_max = 0, dsm_coverage = 0;
+  int dsm_cells = 0;  // the DSM's cells inside the footprint, with data or not
   std::string reason;  // when !ok
 };
 
