@@ -42,6 +42,6 @@ std::string schemas();
 // Why a schema validation was skipped, and how to run it.
 inline constexpr const char* kNoSchemas =
     "no CityGML 2.0 / CityJSON 2.0 schemas found: set LODFORGE_SCHEMAS to a directory holding citygml2-schemas/ "
-    "and cityjson2-schemas/ (the official schemas) to validate the outputs against them";
+    "and cityjson2-schemas/ (the official schemas; scripts/get-schemas.sh fetches them) to validate the outputs against them";
 
 }  // namespace lodforge::test
