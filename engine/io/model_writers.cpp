@@ -24,6 +24,20 @@ namespace lodforge {
 
 namespace fs = std::filesystem;
 
+std::string xml_escape(const std::string& s) {
+  std::string out;
+  for (char c : s) {
+    switch (c) {
+      case '&': out += "&amp;"; break;
+      case '<': out += "&lt;"; break;
+      case '>': out += "&gt;"; break;
+      case '"': out += "&quot;"; break;
+      default: out += c;
+    }
+  }
+  return out;
+}
+
 const std::vector<std::string>& model_formats() {
   static const std::vector<std::string> formats{"citygml", "cityjson", "cityjsonseq", "obj", "gpkg", "geojson", "gltf"};
   return formats;
@@ -74,19 +88,6 @@ Face lifted(const PolygonWithHoles& footprint, double z) {
   return face;
 }
 
-std::string xml_escape(const std::string& s) {
-  std::string out;
-  for (char c : s) {
-    switch (c) {
-      case '&': out += "&amp;"; break;
-      case '<': out += "&lt;"; break;
-      case '>': out += "&gt;"; break;
-      case '"': out += "&quot;"; break;
-      default: out += c;
-    }
-  }
-  return out;
-}
 
 // CityGML 2.0: bldg:Building with lod0FootPrint, lod1Solid and measuredHeight.
 class CityGmlWriter : public ModelWriter {

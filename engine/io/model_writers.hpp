@@ -23,6 +23,9 @@ struct BuildingModel {
   std::string status, stage, reason, regularizer;
 };
 
+// Text for XML (or HTML) content and attribute values: & < > " escaped.
+std::string xml_escape(const std::string& s);
+
 // The 3D box of some models: min x, y, z, max x, y, z (CityJSON's geographicalExtent order).
 using Extent = std::array<double, 6>;
 Extent extent_of(const std::vector<BuildingModel>& models);

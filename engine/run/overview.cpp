@@ -19,6 +19,7 @@
 #include "geometry/geotransform.hpp"
 #include "io/atomic_file.hpp"
 #include "io/errors.hpp"
+#include "io/model_writers.hpp"
 #include "io/ogr_polygon.hpp"
 #include "io/quicklook.hpp"
 #include "io/raster.hpp"
@@ -111,19 +112,6 @@ GDALDataset* in_memory(const cv::Mat& image, const GeoTransform& frame, const st
   return memory;
 }
 
-std::string html_escape(const std::string& s) {
-  std::string out;
-  for (char c : s) {
-    switch (c) {
-      case '&': out += "&amp;"; break;
-      case '<': out += "&lt;"; break;
-      case '>': out += "&gt;"; break;
-      case '"': out += "&quot;"; break;
-      default: out += c;
-    }
-  }
-  return out;
-}
 
 }  // namespace
 
@@ -269,7 +257,7 @@ void write_report_html(const fs::path& report_json, const Overview& overview, co
        ".key { display: inline-block; width: 1.5em; height: 0.6em; margin: 0 0.4em 0 1.2em; }\n"
        ".picture { overflow: auto; max-height: 90vh; border: 1px solid #ccc; }\n"
        "</style>\n</head>\n<body>\n<h1>lodforge run report</h1>\n";
-  o += "<p>Job <code>" + html_escape(r.value("job", "")) + "</code>, shard " + html_escape(r.value("shard", "")) + ". Wall time " +
+  o += "<p>Job <code>" + xml_escape(r.value("job", "")) + "</code>, shard " + xml_escape(r.value("shard", "")) + ". Wall time " +
        seconds(r.value("seconds", nlohmann::json(0))) + " s.</p>\n";
   o += "<h2>Numbers</h2>\n<table>\n";
   const auto row = [&o](const std::string& name, const std::string& value) { o += "<tr><th>" + name + "</th><td class=\"n\">" + value + "</td></tr>\n"; };
@@ -286,7 +274,7 @@ void write_report_html(const fs::path& report_json, const Overview& overview, co
   row("buildings too large for a window", number("too_large"));
   const nlohmann::json stages = r.value("stage_seconds", nlohmann::json::object());
   for (const auto& [stage, value] : stages.items())
-    row("one-core seconds, " + html_escape(stage), seconds(value));
+    row("one-core seconds, " + xml_escape(stage), seconds(value));
   o += "</table>\n";
   o += "<h2>Overview</h2>\n";
   if (overview.jpeg.empty()) {
@@ -318,15 +306,15 @@ void write_report_html(const fs::path& report_json, const Overview& overview, co
   if (!failed.empty()) {
     o += "<table>\n<tr><th>id</th><th>tile</th><th>stage</th><th>reason</th></tr>\n";
     for (std::size_t i = 0; i < failed.size() && i < kRows; ++i)
-      o += "<tr><td class=\"n\">" + failed[i].value("id", nlohmann::json(0)).dump() + "</td><td>" + html_escape(failed[i].value("tile", "")) +
-           "</td><td>" + html_escape(failed[i].value("stage", "")) + "</td><td>" + html_escape(failed[i].value("reason", "")) + "</td></tr>\n";
+      o += "<tr><td class=\"n\">" + failed[i].value("id", nlohmann::json(0)).dump() + "</td><td>" + xml_escape(failed[i].value("tile", "")) +
+           "</td><td>" + xml_escape(failed[i].value("stage", "")) + "</td><td>" + xml_escape(failed[i].value("reason", "")) + "</td></tr>\n";
     o += "</table>\n";
     if (failed.size() > kRows) o += "<p>&hellip; and " + std::to_string(failed.size() - kRows) + " more in report.json.</p>\n";
   }
   const nlohmann::json too_large = r.value("too_large_buildings", nlohmann::json::array());
   if (!too_large.empty()) {
     o += "<h2>Buildings too large for a window (" + std::to_string(too_large.size()) + ")</h2>\n<ul>\n";
-    for (const auto& t : too_large) o += "<li>" + html_escape(t.is_string() ? t.get<std::string>() : t.dump()) + "</li>\n";
+    for (const auto& t : too_large) o += "<li>" + xml_escape(t.is_string() ? t.get<std::string>() : t.dump()) + "</li>\n";
     o += "</ul>\n";
   }
   const nlohmann::json slowest = r.value("slowest_buildings", nlohmann::json::array());
@@ -336,7 +324,7 @@ void write_report_html(const fs::path& report_json, const Overview& overview, co
     for (const auto& b : slowest) {
       char s[32];
       std::snprintf(s, sizeof s, "%.3f", b.value("seconds", 0.0));
-      o += "<tr><td class=\"n\">" + b.value("id", nlohmann::json(0)).dump() + "</td><td>" + html_escape(b.value("tile", "")) +
+      o += "<tr><td class=\"n\">" + b.value("id", nlohmann::json(0)).dump() + "</td><td>" + xml_escape(b.value("tile", "")) +
            "</td><td class=\"n\">" + s + "</td></tr>\n";
     }
     o += "</table>\n";
