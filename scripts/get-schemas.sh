@@ -20,7 +20,12 @@ if [ "${1:-}" = "--from" ]; then
   shift 2
 fi
 case "${1:-}" in -h|--help) sed -n '2,15p' "$0"; exit 0 ;; -*) echo "usage: $0 [--from MIRROR] [DIR]" >&2; exit 2 ;; esac
-target=${1:-${XDG_CACHE_HOME:-$HOME/.cache}/lodforge/schemas}
+target=${1:-${XDG_CACHE_HOME:-${HOME:?set HOME, or give DIR}/.cache}/lodforge/schemas}
+# Only a directory of schemas this script wrote (or nothing) is replaced.
+if [ -e "$target" ] && [ ! -f "$target/citygml2-schemas/catalog.xml" ] && [ -n "$(ls -A "$target" 2>/dev/null)" ]; then
+  echo "get-schemas: '$target' exists and does not hold schemas fetched here; give a new or empty directory" >&2
+  exit 1
+fi
 ogc=https://raw.githubusercontent.com/highsource/ogc-schemas/18ce89928006eee08ed7e5a6ce6ea016436a444b
 original=$ogc/schemas/src/main/resources-original
 cityjson=https://raw.githubusercontent.com/cityjson/specs/877ee49e16c82a4bc7ab598926efcb9ba1075374/schemas
@@ -109,6 +114,7 @@ url_of() {
 parent=$(dirname "$target")
 mkdir -p "$parent"
 staging=$(mktemp -d "$parent/.schemas.partial-XXXXXX")
+chmod 755 "$staging"  # (mktemp's 0700 would keep a shared cache from other users)
 trap 'rm -rf "$staging"' EXIT
 count=0
 while read -r sum path; do

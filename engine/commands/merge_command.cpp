@@ -244,7 +244,8 @@ Extent merged_extent(const std::vector<fs::path>& files) {
     const nlohmann::json* extent = nullptr;
     if (header.is_object() && header.contains("metadata") && header["metadata"].contains("geographicalExtent"))
       extent = &header["metadata"]["geographicalExtent"];
-    if (!extent || !extent->is_array() || extent->size() != 6) {
+    if (!extent || !extent->is_array() || extent->size() != 6 ||
+        !std::all_of(extent->begin(), extent->end(), [](const nlohmann::json& v) { return v.is_number(); })) {
       spdlog::warn("'{}': declares no extent (written by an earlier lodforge?); the merged extent leaves it out", file.string());
       continue;
     }
@@ -378,7 +379,7 @@ void merge_cityjson(const std::vector<fs::path>& files, const fs::path& target) 
       if (head.at("type") != "CityJSON") throw std::runtime_error("its type is not CityJSON");
       if (head.at("transform").at("scale") != nlohmann::json::array({0.001, 0.001, 0.001})) throw std::runtime_error("its scale is not 1 mm");
       const auto& extent = head["metadata"]["geographicalExtent"];
-      if (extent.is_array() && extent.size() == 6) {
+      if (extent.is_array() && extent.size() == 6 && std::all_of(extent.begin(), extent.end(), [](const auto& v) { return v.is_number(); })) {
         for (std::size_t i = 0; i < 3; ++i) {
           all[i] = std::min(all[i], extent[i].get<double>());
           all[i + 3] = std::max(all[i + 3], extent[i + 3].get<double>());
@@ -499,16 +500,17 @@ void merge_cityjsonseq(const std::vector<fs::path>& files, const fs::path& targe
     std::ifstream in(files[k]);
     std::string line;
     nlohmann::json header;
+    std::array<long long, 2> here{};
     try {
       if (!std::getline(in, line)) throw std::runtime_error("empty");
       header = nlohmann::json::parse(line);
       if (header.at("type") != "CityJSON" || header.at("transform").at("scale") != nlohmann::json::array({0.001, 0.001, 0.001}))
         throw std::runtime_error("not a lodforge CityJSONSeq header");
+      const auto& translate = header.at("transform").at("translate");
+      here = {std::llround(translate.at(0).get<double>() * 1000), std::llround(translate.at(1).get<double>() * 1000)};
     } catch (const std::exception& e) {
       throw InputError("'" + files[k].string() + "': line 1: not a lodforge CityJSONSeq tile (" + e.what() + ")");
     }
-    const auto& translate = header["transform"]["translate"];
-    const std::array<long long, 2> here{std::llround(translate.at(0).get<double>() * 1000), std::llround(translate.at(1).get<double>() * 1000)};
     if (k == 0) {
       first_translate = here;
       header["metadata"]["title"] = "lodforge, merged from " + std::to_string(files.size()) + " tiles";
@@ -671,8 +673,8 @@ int run_merge(int argc, char** argv) {
   const fs::path dir = *args.get("dir");
   int overview_px = 4096;
   if (auto n = args.get("overview-px")) {
-    if (n->empty() || n->size() > 6 || n->find_first_not_of("0123456789") != std::string::npos)
-      throw UsageError("--overview-px '" + *n + "': expected a whole number of pixels, e.g. 4096 (0: no overview)");
+    if (n->empty() || n->size() > 6 || n->find_first_not_of("0123456789") != std::string::npos || std::stoi(*n) > 32768)
+      throw UsageError("--overview-px '" + *n + "': expected a whole number of pixels up to 32768, e.g. 4096 (0: no overview)");
     overview_px = std::stoi(*n);
   }
   if (!fs::is_directory(dir / "tiles")) throw InputError("'" + dir.string() + "': no tiles/ directory; is it a lodforge run's output.dir?");
@@ -740,7 +742,8 @@ int run_merge(int argc, char** argv) {
                    (dir / "merged" / "report.html").string());
     }
     for (const std::string& name : written) fs::rename(staging / name, dir / "merged" / name);
-    fs::remove(staging);
+    std::error_code ec;
+    fs::remove_all(staging, ec);  // (anything a driver left beside its file)
   } catch (...) {
     std::error_code ec;
     fs::remove_all(staging, ec);

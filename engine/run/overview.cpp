@@ -165,6 +165,9 @@ Overview write_overview(const std::string& job_path, const std::vector<fs::path>
         c0 = std::min(c0, std::floor(q.x()) - 1), r0 = std::min(r0, std::floor(q.y()) - 1);
         c1 = std::max(c1, std::ceil(q.x()) + 1), r1 = std::max(r1, std::ceil(q.y()) + 1);
       }
+    // (an outline far off the raster, which a run does not make, grows it by max_pixels at most)
+    c0 = std::max(c0, -double(max_pixels)), r0 = std::max(r0, -double(max_pixels));
+    c1 = std::min(c1, double(width + max_pixels)), r1 = std::min(r1, double(height + max_pixels));
     const Vec2 origin = frame.to_map(c0, r0);
     frame.c[0] = origin.x();
     frame.c[3] = origin.y();
@@ -228,19 +231,33 @@ Overview write_overview(const std::string& job_path, const std::vector<fs::path>
     if (bytes) result.jpeg.assign(reinterpret_cast<const char*>(bytes), std::size_t(length));
     CPLFree(bytes);
   }
+  VSIUnlink((vsi + ".aux.xml").c_str());  // (the georeference GDAL may keep beside a JPEG)
   GDALClose(memory);
   if (!ok) throw InputError("'" + tif.string() + "': cannot write the overview: " + CPLGetLastErrorMsg());
   return result;
 }
+
+namespace {
+void write_page(const nlohmann::json& report, const Overview& overview, const fs::path& html);
+}  // namespace
 
 void write_report_html(const fs::path& report_json, const Overview& overview, const fs::path& html) {
   std::ifstream in(report_json);
   nlohmann::json r;
   try {
     r = nlohmann::json::parse(in);
+    if (!r.is_object()) throw std::runtime_error("not a JSON object");
+    write_page(r, overview, html);
+  } catch (const InputError&) {
+    throw;
   } catch (const std::exception& e) {
     throw InputError("'" + report_json.string() + "': not a lodforge run report: " + e.what());
   }
+}
+
+namespace {
+
+void write_page(const nlohmann::json& r, const Overview& overview, const fs::path& html) {
   const auto number = [&](const char* key) { return r.value(key, nlohmann::json(0)).dump(); };
   const auto seconds = [](const nlohmann::json& v) {
     char buffer[32];
@@ -332,5 +349,7 @@ void write_report_html(const fs::path& report_json, const Overview& overview, co
   o += "</body>\n</html>\n";
   write_text_atomically(html, o);
 }
+
+}  // namespace
 
 }  // namespace lodforge

@@ -250,7 +250,7 @@ void merge_zigzags(const Ring& ring, std::vector<std::pair<int, int>>& runs, std
     }
     const Vec2 chord = ring[(first + edges) % size] - ring[first];
     if (chord.norm() <= 0) return false;
-    const Vec2 across(-chord.y() / chord.norm(), chord.x() / chord.norm());
+    const Vec2 across = outward_normal(chord);  // (outward, as every line's normal: rings are oriented)
     const Vec2 target = nearest_lattice_axis(across, lattice);
     if (std::abs(target.dot(across)) < min_cos) return false;
     const Line line = fit_line(ring, first, edges, target);

@@ -37,4 +37,11 @@ if err=$("$source_dir/scripts/get-schemas.sh" --from "$work" "$work/again" 2>&1)
 fi
 case $err in *"'citygml2-schemas/citygml/building/2.0/building.xsd' is not the official file"*) ;; *) echo "FAIL: $err"; exit 1 ;; esac
 if [ -e "$work/again" ] || ls -a "$work" | grep -q partial; then echo "FAIL: a half-fetched directory was left"; exit 1; fi
+# A directory that is not one of its own is not replaced.
+mkdir -p "$work/mine" && echo keep > "$work/mine/notes.txt"
+if err=$("$source_dir/scripts/get-schemas.sh" --from "$mirror" "$work/mine" 2>&1); then echo "FAIL: a user's directory was replaced"; exit 1; fi
+case $err in *"does not hold schemas fetched here"*) ;; *) echo "FAIL: $err"; exit 1 ;; esac
+[ -f "$work/mine/notes.txt" ] || { echo "FAIL: a user's file is gone"; exit 1; }
+# Fetching again over its own directory works.
+"$source_dir/scripts/get-schemas.sh" --from "$mirror" "$work/schemas" > /dev/null
 echo "ok"
