@@ -44,6 +44,34 @@ std::string fixed3(double v) {
   return buffer;
 }
 
+// The union of the extents the tiles declare (6 numbers: min x, y, z, max x, y, z): the merged
+// file's. A tile without one (written by an earlier lodforge) is named in a warning and left out.
+class ExtentUnion {
+ public:
+  void add(const fs::path& file, const std::vector<double>& extent) {
+    if (extent.size() != 6) {
+      spdlog::warn("'{}': declares no extent (written by an earlier lodforge?); the merged extent leaves it out", file.string());
+      return;
+    }
+    for (std::size_t i = 0; i < 3; ++i) {
+      all_[i] = std::min(all_[i], extent[i]);
+      all_[i + 3] = std::max(all_[i + 3], extent[i + 3]);
+    }
+  }
+  // A CityJSON metadata's geographicalExtent, when it is 6 numbers.
+  void add(const fs::path& file, const nlohmann::ordered_json& extent) {
+    std::vector<double> values;
+    if (extent.is_array())
+      for (const auto& v : extent) if (v.is_number()) values.push_back(v.get<double>());
+    add(file, extent.is_array() && values.size() == extent.size() ? values : std::vector<double>{});
+  }
+  Extent get() const { return all_[0] > all_[3] ? Extent{} : all_; }
+
+ private:
+  static constexpr double inf = std::numeric_limits<double>::infinity();
+  Extent all_{inf, inf, inf, -inf, -inf, -inf};
+};
+
 // ---- CityGML, read with libxml2's streaming reader and written with its text writer ----
 
 using Reader = std::unique_ptr<xmlTextReader, void (*)(xmlTextReaderPtr)>;
@@ -169,8 +197,7 @@ int to_stream(void* context, const char* buffer, int length) {
 // CityGML: the first tile's root (its namespaces), one name and envelope for the run (the union
 // of the tiles' envelopes), then every tile's core:cityObjectMember elements, parsed and copied.
 void merge_citygml(const std::vector<fs::path>& files, const fs::path& target) {
-  constexpr double inf = std::numeric_limits<double>::infinity();
-  Extent all{inf, inf, inf, -inf, -inf, -inf};
+  ExtentUnion extents;
   CityGmlHead first;
   for (const fs::path& file : files) {  // the envelopes, each at the top of its file
     Reader r = open_xml(file);
@@ -179,14 +206,10 @@ void merge_citygml(const std::vector<fs::path>& files, const fs::path& target) {
       if (is_element(r.get(), gml_ns, "boundedBy")) { read_bounded_by(r.get(), file, head); break; }
       if (is_element(r.get(), citygml_core, "cityObjectMember")) break;
     }
-    if (head.corners.size() != 6) spdlog::warn("'{}': declares no extent (written by an earlier lodforge?); the merged extent leaves it out", file.string());
-    for (std::size_t i = 0; i < 3 && head.corners.size() == 6; ++i) {
-      all[i] = std::min(all[i], head.corners[i]);
-      all[i + 3] = std::max(all[i + 3], head.corners[i + 3]);
-    }
+    extents.add(file, head.corners);
     if (file == files.front()) first = std::move(head);
   }
-  if (all[0] > all[3]) all = Extent{};
+  const Extent all = extents.get();
   AtomicTextFile o(target);
   xmlOutputBufferPtr buffer = xmlOutputBufferCreateIO(to_stream, nullptr, &o.out(), nullptr);
   Writer w(xmlNewTextWriter(buffer), xmlFreeTextWriter);
@@ -232,30 +255,18 @@ void merge_citygml(const std::vector<fs::path>& files, const fs::path& target) {
 }
 
 // The union of the extents the CityJSONSeq tiles declare in their first lines (metadata's
-// geographicalExtent): the merged file's. A file without one is named in a warning and left out.
+// geographicalExtent): the merged file's.
 Extent merged_extent(const std::vector<fs::path>& files) {
-  constexpr double inf = std::numeric_limits<double>::infinity();
-  Extent all{inf, inf, inf, -inf, -inf, -inf};
+  ExtentUnion extents;
   for (const fs::path& file : files) {
     std::ifstream in(file);
     std::string line;
     std::getline(in, line);
-    const nlohmann::json header = nlohmann::json::parse(line, nullptr, false);
-    const nlohmann::json* extent = nullptr;
-    if (header.is_object() && header.contains("metadata") && header["metadata"].contains("geographicalExtent"))
-      extent = &header["metadata"]["geographicalExtent"];
-    if (!extent || !extent->is_array() || extent->size() != 6 ||
-        !std::all_of(extent->begin(), extent->end(), [](const nlohmann::json& v) { return v.is_number(); })) {
-      spdlog::warn("'{}': declares no extent (written by an earlier lodforge?); the merged extent leaves it out", file.string());
-      continue;
-    }
-    for (std::size_t i = 0; i < 3; ++i) {
-      all[i] = std::min(all[i], (*extent)[i].get<double>());
-      all[i + 3] = std::max(all[i + 3], (*extent)[i + 3].get<double>());
-    }
+    const nlohmann::ordered_json header = nlohmann::ordered_json::parse(line, nullptr, false);
+    const bool has = header.is_object() && header.contains("metadata") && header["metadata"].contains("geographicalExtent");
+    extents.add(file, has ? header["metadata"]["geographicalExtent"] : nlohmann::ordered_json());
   }
-  if (all[0] > all[3]) all = Extent{};
-  return all;
+  return extents.get();
 }
 
 long long millimetres(double metres) { return std::llround(metres * 1000.0); }
@@ -367,8 +378,7 @@ void merge_cityjson(const std::vector<fs::path>& files, const fs::path& target) 
   std::vector<std::array<long long, 3>> vertices;
   std::array<long long, 2> first_translate{};
   std::set<std::string> ids;
-  constexpr double inf = std::numeric_limits<double>::infinity();
-  Extent all{inf, inf, inf, -inf, -inf, -inf};
+  ExtentUnion extents;
   nlohmann::ordered_json header;
   const auto fail = [](const fs::path& file, const std::exception& e) {
     return InputError("'" + file.string() + "': not a lodforge CityJSON tile: " + e.what());
@@ -378,15 +388,7 @@ void merge_cityjson(const std::vector<fs::path>& files, const fs::path& target) 
       nlohmann::ordered_json head = cityjson_head(file);
       if (head.at("type") != "CityJSON") throw std::runtime_error("its type is not CityJSON");
       if (head.at("transform").at("scale") != nlohmann::json::array({0.001, 0.001, 0.001})) throw std::runtime_error("its scale is not 1 mm");
-      const auto& extent = head["metadata"]["geographicalExtent"];
-      if (extent.is_array() && extent.size() == 6 && std::all_of(extent.begin(), extent.end(), [](const auto& v) { return v.is_number(); })) {
-        for (std::size_t i = 0; i < 3; ++i) {
-          all[i] = std::min(all[i], extent[i].get<double>());
-          all[i + 3] = std::max(all[i + 3], extent[i + 3].get<double>());
-        }
-      } else {
-        spdlog::warn("'{}': declares no extent (written by an earlier lodforge?); the merged extent leaves it out", file.string());
-      }
+      extents.add(file, head["metadata"]["geographicalExtent"]);
       if (file == files.front()) header = std::move(head);
     } catch (const InputError&) {
       throw;
@@ -394,9 +396,8 @@ void merge_cityjson(const std::vector<fs::path>& files, const fs::path& target) 
       throw fail(file, e);
     }
   }
-  if (all[0] > all[3]) all = Extent{};
   header["metadata"]["title"] = "lodforge, merged from " + std::to_string(files.size()) + " tiles";
-  header["metadata"]["geographicalExtent"] = all;
+  header["metadata"]["geographicalExtent"] = extents.get();
   o.out() << '{';
   for (const auto& [key, value] : header.items())
     o.out() << (key == header.begin().key() ? "" : ",\n ") << nlohmann::json(key).dump() << ": "

@@ -2,6 +2,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "geometry/polygon.hpp"
 #include "io/ogr_polygon.hpp"
 
 #include <algorithm>
@@ -37,12 +38,6 @@ double iou(const OGRGeometry* a, const OGRGeometry* b) {
   const Geometry inter(a->Intersection(b)), uni(a->Union(b));
   const double u = area_of(uni.get());
   return u > 0 ? area_of(inter.get()) / u : 0;
-}
-
-std::size_t vertices(const PolygonWithHoles& p) {
-  std::size_t n = p.outer.size();
-  for (const Ring& h : p.holes) n += h.size();
-  return n;
 }
 
 double point_segment(const Vec2& p, const Vec2& a, const Vec2& b) {
@@ -263,7 +258,7 @@ EvalResult evaluate(const std::vector<PolygonWithHoles>& predicted_in, const std
     if (best < 0) continue;
     ++r.matched;
     ious.push_back(best_iou);
-    const double np = double(vertices(predicted[i])), ng = double(vertices(truth[best]));
+    const double np = double(vertex_count(predicted[i])), ng = double(vertex_count(truth[best]));
     c_ious.push_back(best_iou * (1.0 - std::abs(np - ng) / (np + ng)));
     ratios.push_back(np / ng);
     polises.push_back(polis(predicted[i], truth[best]));

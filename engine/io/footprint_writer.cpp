@@ -59,9 +59,10 @@ struct FootprintFileWriter::Impl {
   }
 };
 
-const std::vector<std::string>& height_statistic_names() {
-  static const std::vector<std::string> names{"roof_min", "roof_50p", "roof_70p", "roof_max", "volume_lod1", "dsm_coverage", "dsm_cells"};
-  return names;
+const std::vector<HeightStatistic>& height_statistic_fields() {
+  static const std::vector<HeightStatistic> fields{{"roof_min"}, {"roof_50p"}, {"roof_70p"}, {"roof_max"},
+                                                   {"volume_lod1"}, {"dsm_coverage"}, {"dsm_cells", true}};
+  return fields;
 }
 
 char** rfc7946_layer_options() {
@@ -145,7 +146,7 @@ FootprintFileWriter::FootprintFileWriter(const std::string& path, const Footprin
     if (layer.write_heights) {
       field("ground_height", OFTReal);
       field("roof_height", OFTReal);
-      for (const std::string& name : height_statistic_names()) field(name.c_str(), name == "dsm_cells" ? OFTInteger : OFTReal);
+      for (const HeightStatistic& h : height_statistic_fields()) field(h.name.c_str(), h.integer ? OFTInteger : OFTReal);
     }
     field("vertex_count", OFTInteger);
     field("area_m2", OFTReal);
@@ -186,19 +187,17 @@ void FootprintFileWriter::add(const FootprintRecord& r) {
   if (layer.write_heights && r.has_heights) {
     feature.SetField("roof_height", r.roof_height);
     feature.SetField("ground_height", r.ground_height);
-    for (std::size_t i = 0; i < height_statistic_names().size() && i < r.height_statistics.size(); ++i) {
-      const std::string& name = height_statistic_names()[i];
-      if (name == "dsm_cells") feature.SetField(name.c_str(), int(r.height_statistics[i]));
-      else feature.SetField(name.c_str(), r.height_statistics[i]);
+    for (std::size_t i = 0; i < height_statistic_fields().size() && i < r.height_statistics.size(); ++i) {
+      const HeightStatistic& h = height_statistic_fields()[i];
+      if (h.integer) feature.SetField(h.name.c_str(), int(std::llround(r.height_statistics[i])));
+      else feature.SetField(h.name.c_str(), r.height_statistics[i]);
     }
   } else if (layer.write_heights) {
     feature.SetFieldNull(feature.GetFieldIndex("roof_height"));
     feature.SetFieldNull(feature.GetFieldIndex("ground_height"));
-    for (const std::string& name : height_statistic_names()) feature.SetFieldNull(feature.GetFieldIndex(name.c_str()));
+    for (const HeightStatistic& h : height_statistic_fields()) feature.SetFieldNull(feature.GetFieldIndex(h.name.c_str()));
   }
-  int vertices = int(r.polygon.outer.size());
-  for (const Ring& h : r.polygon.holes) vertices += int(h.size());
-  feature.SetField("vertex_count", vertices);
+  feature.SetField("vertex_count", int(vertex_count(r.polygon)));
   feature.SetField("area_m2", area(r.polygon));
   feature.SetGeometry(to_ogr_polygon(r.polygon).get());
   if (impl_->ogr_layer->CreateFeature(&feature) != OGRERR_NONE) impl_->fail("cannot write feature " + std::to_string(r.id));

@@ -13,8 +13,12 @@ namespace lodforge {
 // The heights every format writes beside ground_height and roof_height (the LOD1 block's), as
 // 3DBAG publishes them: roof_min, roof_50p, roof_70p, roof_max (the DSM inside the footprint),
 // volume_lod1 (m^3), dsm_coverage (share of the DSM cells inside the footprint with data) and
-// dsm_cells (those cells; an integer).
-const std::vector<std::string>& height_statistic_names();
+// dsm_cells (those cells, with data or not: an integer).
+struct HeightStatistic {
+  std::string name;
+  bool integer = false;
+};
+const std::vector<HeightStatistic>& height_statistic_fields();
 
 struct FootprintRecord {
   long id = 0;
@@ -24,7 +28,7 @@ struct FootprintRecord {
   std::string kind;              // synthetic truth: the shape; run outputs: the tile
   bool has_heights = true;       // false: the heights are written as null
   double roof_height = 0, ground_height = 0;  // written when write_heights
-  std::vector<double> height_statistics;       // ... with these, named by height_statistic_names()
+  std::vector<double> height_statistics;       // ... with these, named by height_statistic_fields()
   std::vector<Face> lod1_faces;  // the LOD1 block's faces, when write_lod1 and it has one
 };
 

@@ -118,12 +118,13 @@ class CityGmlWriter : public ModelWriter {
     if (m.has_lod1) {
       o << "      <gen:doubleAttribute name=\"ground_height\"><gen:value>" << m.ground << "</gen:value></gen:doubleAttribute>\n";
       o << "      <gen:doubleAttribute name=\"roof_height\"><gen:value>" << m.roof << "</gen:value></gen:doubleAttribute>\n";
-      for (std::size_t i = 0; i < height_statistic_names().size() && i < m.height_statistics.size(); ++i) {
-        const std::string& name = height_statistic_names()[i];
-        if (name == "dsm_cells")
-          o << "      <gen:intAttribute name=\"" << name << "\"><gen:value>" << std::llround(m.height_statistics[i]) << "</gen:value></gen:intAttribute>\n";
-        else
-          o << "      <gen:doubleAttribute name=\"" << name << "\"><gen:value>" << m.height_statistics[i] << "</gen:value></gen:doubleAttribute>\n";
+      for (std::size_t i = 0; i < height_statistic_fields().size() && i < m.height_statistics.size(); ++i) {
+        const HeightStatistic& h = height_statistic_fields()[i];
+        const char* type = h.integer ? "intAttribute" : "doubleAttribute";
+        o << "      <gen:" << type << " name=\"" << h.name << "\"><gen:value>";
+        if (h.integer) o << std::llround(m.height_statistics[i]);
+        else o << m.height_statistics[i];
+        o << "</gen:value></gen:" << type << ">\n";
       }
       o << "      <bldg:measuredHeight uom=\"m\">" << (m.roof - m.ground) << "</bldg:measuredHeight>\n";
     }
@@ -220,9 +221,9 @@ void write_city_object(std::ostream& o, const BuildingModel& m, CityJsonVertices
   if (!m.reason.empty()) o << ", \"reason\": \"" << json_text(m.reason) << "\"";
   if (m.has_lod1) {
     o << ", \"measuredHeight\": " << (m.roof - m.ground) << ", \"ground_height\": " << m.ground << ", \"roof_height\": " << m.roof;
-    for (std::size_t i = 0; i < height_statistic_names().size() && i < m.height_statistics.size(); ++i) {
-      o << ", \"" << height_statistic_names()[i] << "\": ";
-      if (height_statistic_names()[i] == "dsm_cells") o << std::llround(m.height_statistics[i]);
+    for (std::size_t i = 0; i < height_statistic_fields().size() && i < m.height_statistics.size(); ++i) {
+      o << ", \"" << height_statistic_fields()[i].name << "\": ";
+      if (height_statistic_fields()[i].integer) o << std::llround(m.height_statistics[i]);
       else o << m.height_statistics[i];
     }
   }

@@ -18,7 +18,7 @@ struct BuildingModel {
   PolygonWithHoles footprint;   // LOD0
   bool has_lod1 = false;        // heights known
   double ground = 0, roof = 0;  // when has_lod1
-  std::vector<double> height_statistics;  // when has_lod1: named by height_statistic_names() (io/footprint_writer.hpp)
+  std::vector<double> height_statistics;  // when has_lod1: named by height_statistic_fields() (io/footprint_writer.hpp)
   Solid solid;                  // when has_lod1
   std::string status, stage, reason, regularizer;
 };

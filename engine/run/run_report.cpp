@@ -138,10 +138,9 @@ void record_tile(Totals& totals, const RunPlan& plan, const TileResult& result, 
   // The tile's extent, counter-clockwise as RFC 7946 wants an exterior ring.
   std::array<Vec2, 4> corners{a, Vec2(b.x(), a.y()), b, Vec2(a.x(), b.y())};
   if ((b.x() - a.x()) * (b.y() - a.y()) < 0) std::swap(corners[1], corners[3]);  // (signed area of that order < 0)
-  Totals::IndexFeature entry{r->name, r->tile % grid.cols, r->tile / grid.cols, count, {a.x(), b.y()}, outputs, {}};
+  Totals::TileRecord entry{r->name, r->tile % grid.cols, r->tile / grid.cols, count, r->skipped, r->seconds, {a.x(), b.y()}, outputs, {}};
   for (int k = 0; k < 4; ++k) entry.ring[k] = {corners[k].x(), corners[k].y()};
-  totals.index_features.emplace_back(r->tile, std::move(entry));
-  totals.tile_lines.emplace_back(r->tile, Totals::TileLine{r->name, count, r->skipped, r->seconds});
+  totals.tiles.emplace_back(r->tile, std::move(entry));
 }
 
 std::string shard_suffix(int shard_index, int shard_count) {
@@ -171,22 +170,22 @@ std::optional<TileIndex> read_tile_index(const fs::path& path) {
 void write_index_and_report(const Totals& totals, const RunPlan& plan, const std::string& job_path, int shard_index,
                             int shard_count, std::size_t tiles, double elapsed) {
   const Job& job = plan.job;
-  const std::vector<Totals::IndexFeature> index_features = in_tile_order(totals.index_features);
+  const std::vector<Totals::TileRecord> tile_records = in_tile_order(totals.tiles);
   const fs::path& out_dir = plan.out_dir;
   // The tile index and the run report (one per shard when sharded).
   const std::string suffix = shard_suffix(shard_index, shard_count);
   // The tile index is RFC 7946 GeoJSON: WGS 84 longitude and latitude (7 decimals, about 1 cm),
   // no crs member. Only an input without a CRS leaves its tiles in map coordinates.
   std::vector<std::array<double, 2>> corners;
-  for (const Totals::IndexFeature& f : index_features) corners.insert(corners.end(), f.ring.begin(), f.ring.end());
+  for (const Totals::TileRecord& f : tile_records) corners.insert(corners.end(), f.ring.begin(), f.ring.end());
   std::vector<std::array<double, 2>> lon_lat = to_lon_lat(plan.crs.wkt(), corners);
   if (lon_lat.empty() && !corners.empty())
     spdlog::warn("the tile index is in map coordinates, not WGS 84 as RFC 7946 asks: the inputs' CRS is unknown or cannot be transformed");
   const int decimals = lon_lat.empty() ? 3 : 7;
   if (lon_lat.empty()) lon_lat = corners;
   Json features = Json::array();
-  for (std::size_t i = 0; i < index_features.size(); ++i) {
-    const Totals::IndexFeature& f = index_features[i];
+  for (std::size_t i = 0; i < tile_records.size(); ++i) {
+    const Totals::TileRecord& f = tile_records[i];
     Json files = Json::array(), fingerprints = Json::array(), ring = Json::array();
     for (const auto& [file, fingerprint] : f.outputs) {
       files.push_back(file);
@@ -205,7 +204,7 @@ void write_index_and_report(const Totals& totals, const RunPlan& plan, const std
   for (const Totals::Failed& f : in_tile_order(totals.failed))
     failed.push_back({{"id", std::stoll(f.id)}, {"tile", f.tile}, {"stage", f.stage}, {"reason", f.reason}});
   for (const std::string& t : in_tile_order(totals.too_large)) too_large.push_back(t);
-  for (const Totals::TileLine& t : in_tile_order(totals.tile_lines))
+  for (const Totals::TileRecord& t : tile_records)
     per_tile.push_back({{"tile", t.tile}, {"buildings", t.buildings}, {"skipped", t.skipped}, {"seconds", t.seconds}});
   const Json report{{"job", fs::absolute(job_path).string()},
                     {"shard", std::to_string(shard_index) + "/" + std::to_string(shard_count)},

@@ -25,16 +25,12 @@ struct Totals {
   struct Failed {
     std::string id, tile, stage, reason;
   };
-  struct TileLine {
-    std::string tile;
-    std::size_t buildings = 0;
-    bool skipped = false;
-    double seconds = 0;
-  };
-  struct IndexFeature {
+  struct TileRecord {  // a tile, for the tile index and the report's per_tile list
     std::string tile;
     int col = 0, row = 0;
     std::size_t buildings = 0;
+    bool skipped = false;
+    double seconds = 0;
     std::array<double, 2> origin{};              // the tile's upper-left corner in map coordinates
     TileOutputs outputs;                         // its files with their fingerprints
     std::array<std::array<double, 2>, 4> ring;  // the tile's corners in map coordinates, counter-clockwise
@@ -48,8 +44,7 @@ struct Totals {
   static constexpr std::size_t kSlowest = 20;
   std::vector<std::pair<int, Failed>> failed;
   std::vector<std::pair<int, std::string>> too_large;
-  std::vector<std::pair<int, TileLine>> tile_lines;
-  std::vector<std::pair<int, IndexFeature>> index_features;
+  std::vector<std::pair<int, TileRecord>> tiles;
 };
 
 // Adds a finished (or resumed) tile to the totals and the index.

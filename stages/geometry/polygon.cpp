@@ -20,6 +20,12 @@ double area(const PolygonWithHoles& polygon) {
   return a;
 }
 
+std::size_t vertex_count(const PolygonWithHoles& polygon) {
+  std::size_t n = polygon.outer.size();
+  for (const Ring& hole : polygon.holes) n += hole.size();
+  return n;
+}
+
 double perimeter(const Ring& ring) {
   double length = 0.0;
   for (std::size_t i = 0; i < ring.size(); ++i) length += edge_vector(ring, i).norm();

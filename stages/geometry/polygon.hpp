@@ -1,5 +1,6 @@
 // Polygon measures, validity checks and Douglas–Peucker simplification.
 #pragma once
+#include <cstddef>
 #include <string>
 
 #include "geometry/types.hpp"
@@ -9,6 +10,7 @@ namespace lodforge {
 double signed_area(const Ring& ring);  // > 0 for counter-clockwise
 double area(const PolygonWithHoles& polygon);
 double perimeter(const Ring& ring);
+std::size_t vertex_count(const PolygonWithHoles& polygon);  // of its outer ring and holes
 bool point_in_ring(const Vec2& p, const Ring& ring);  // even-odd rule, boundary undefined
 
 // True when segments [a,b] and [c,d] share any point.

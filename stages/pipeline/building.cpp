@@ -253,12 +253,6 @@ double contour_fit(const std::vector<Ring>& rings, const PolygonWithHoles& polyg
   return total > 0 ? sum / total : 0.0;
 }
 
-std::size_t vertex_count(const PolygonWithHoles& polygon) {
-  std::size_t n = polygon.outer.size();
-  for (const Ring& hole : polygon.holes) n += hole.size();
-  return n;
-}
-
 // The contour length labeled with each direction.
 std::vector<double> labeled_support(const EdgeLabels& labels, const std::vector<std::vector<double>>& lengths,
                                     std::size_t directions) {
