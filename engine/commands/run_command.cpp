@@ -24,6 +24,7 @@
 #include "common/option_visitors.hpp"
 #include "geometry/polygon.hpp"
 #include "io/atomic_file.hpp"
+#include "io/cadastre.hpp"
 #include "io/errors.hpp"
 #include "io/footprint_writer.hpp"
 #include "io/height_reader.hpp"
@@ -190,6 +191,16 @@ int run_job(int argc, char** argv) {
   const std::string ortho_source = job.inputs.orthophoto.path.empty() ? "" : aligned_source(job.inputs.orthophoto.path, grid_spec, (fs::path(job.work_dir) / "orthophoto.aligned.vrt").string(), false);
   if (!dtm_source.empty() && dtm_source != job.inputs.dtm.path) spdlog::info("{}: resampled onto the segmentation's grid ({})", job.inputs.dtm.path, dtm_source);
   const double pixel = seg.transform.pixel_size();
+  std::unique_ptr<Cadastre> cadastre;
+  if (!job.inputs.footprints.path.empty()) {
+    const auto reading = Clock::now();
+    if (seg.crs_wkt.empty()) seg.crs_wkt = raster_crs_wkt(job.inputs.segmentation.path, "inputs.segmentation.path");
+    cadastre = std::make_unique<Cadastre>(job.inputs.footprints.path, job.inputs.footprints.layer, job.inputs.footprints.id_field,
+                                          seg.crs_wkt, seg.transform, seg.size);
+    for (const std::string& note : cadastre->notes()) spdlog::warn("inputs.footprints: {}", note);
+    spdlog::info("{}: {} footprints on the segmentation raster, read in {:.2f} s", job.inputs.footprints.path, cadastre->footprints().size(),
+                 seconds_since(reading));
+  }
   // A tile of a few pixels makes a file per tile and format without end, and no building fits it.
   constexpr double kMinTilePixels = 16;
   if (job.tiling.tile_size_m < kMinTilePixels * pixel)
@@ -212,12 +223,15 @@ int run_job(int argc, char** argv) {
   key_job.work_dir.clear();
   key_job.output.dir.clear();  // where the files go, not what they hold (a done tile's files are checked where they are)
   key_job.tiling.gdal_cache_mb = 0;  // memory, not results: resuming with another cache size reuses every tile
-  const std::string contour_options = options_text(key_job.stages.contour);
-  const std::string heights_options = options_text(key_job.stages.heights) + file_identity(job.inputs.dsm.path) + file_identity(job.inputs.dtm.path);
+  // The footprints decide which tile owns a building (contours) and how buildings are split (heights on).
+  const std::string cadastre_text = cadastre ? "\nfootprints " + hex(cadastre->hash()) : "";
+  const std::string contour_options = options_text(key_job.stages.contour) + cadastre_text;
+  const std::string heights_options = options_text(key_job.stages.heights) + file_identity(job.inputs.dsm.path) + file_identity(job.inputs.dtm.path) +
+                                      (cadastre ? options_text(key_job.stages.footprints) : "");
   // Building ids are first-pixel indices, so the footprints also depend on the raster's width.
   const std::string core_options = job.regularizer + "\n" + options_text(key_job.stages.core) + "\nwidth " + std::to_string(seg.size.width);
   const std::uint64_t job_key = fnv1a(gpkg_time + "\n" + file_identity(job.inputs.segmentation.path) + "\n" + file_identity(job.inputs.dsm.path) + "\n" +
-                                      file_identity(job.inputs.dtm.path) + "\n" + file_identity(job.inputs.orthophoto.path) + "\n" + options_text(key_job) + "\n" +
+                                      file_identity(job.inputs.dtm.path) + "\n" + file_identity(job.inputs.orthophoto.path) + "\n" + options_text(key_job) + cadastre_text + "\n" +
                                       std::to_string(grid.tile_px) + "/" + std::to_string(halo_px) + "/" + std::to_string(max_window_px));
   std::string transform_text;
   for (double c : seg.transform.c) transform_text += std::to_string(c) + ",";
@@ -276,7 +290,7 @@ int run_job(int argc, char** argv) {
   });
   const RunPlan plan{job, seg.size, seg.transform, *input_crs, pixel, grid, halo_px, max_window_px, selector,
                      dsm_source, dtm_source, ortho_source, store, contour_options, core_options, heights_options,
-                     transform_text, job_key, out_dir, &readers, &indexed_outputs};
+                     transform_text, job_key, out_dir, &readers, &indexed_outputs, cadastre.get()};
 
   // At most `tokens` tiles in flight: one per thread and one more, so that a thread finds the next
   // tile while the oldest waits to be recorded in order (each in flight holds its windows: more

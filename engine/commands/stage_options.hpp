@@ -7,6 +7,7 @@
 
 #include "contour/contour.hpp"
 #include "heights/heights.hpp"
+#include "partition/partition.hpp"
 #include "pipeline/core_options.hpp"
 
 namespace lodforge {
@@ -15,12 +16,14 @@ struct StageOptions {
   ContourOptions contour;
   CoreOptions core;
   HeightOptions heights;
+  PartitionOptions footprints;
 
   template <class V>
   void visit(V& v) {
     v.section("contour", contour);
     core.visit(v);
     v.section("heights", heights);
+    v.section("footprints", footprints);
   }
 };
 

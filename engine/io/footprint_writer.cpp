@@ -135,7 +135,11 @@ FootprintFileWriter::FootprintFileWriter(const std::string& path, const Footprin
       OGRFieldDefn def(name, type);
       if (impl_->ogr_layer->CreateField(&def) != OGRERR_NONE) impl_->fail(std::string("cannot create field ") + name);
     };
-    field("id", OFTInteger64);
+    field("id", layer.write_cadastre ? OFTString : OFTInteger64);
+    if (layer.write_cadastre) {
+      field("cadastre", OFTString);
+      field("cadastre_coverage", OFTReal);
+    }
     if (layer.write_status) {
       field("status", OFTString);
       field("stage", OFTString);
@@ -153,7 +157,7 @@ FootprintFileWriter::FootprintFileWriter(const std::string& path, const Footprin
     if (layer.write_lod1 && driver_name == "GPKG") {
       impl_->lod1_layer = impl_->dataset->CreateLayer("lod1", srs_ptr, wkbMultiPolygon25D, nullptr);
       if (!impl_->lod1_layer) impl_->fail("cannot create layer lod1");
-      for (const auto& [name, type] : {std::pair{"id", OFTInteger64}, std::pair{"ground_height", OFTReal}, std::pair{"roof_height", OFTReal}}) {
+      for (const auto& [name, type] : {std::pair{"id", layer.write_cadastre ? OFTString : OFTInteger64}, std::pair{"ground_height", OFTReal}, std::pair{"roof_height", OFTReal}}) {
         OGRFieldDefn def(name, type);
         if (impl_->lod1_layer->CreateField(&def) != OGRERR_NONE) impl_->fail(std::string("cannot create field lod1.") + name);
       }
@@ -173,7 +177,17 @@ FootprintFileWriter::~FootprintFileWriter() {
 void FootprintFileWriter::add(const FootprintRecord& r) {
   const FootprintLayer& layer = impl_->layer;
   OGRFeature feature(impl_->ogr_layer->GetLayerDefn());
-  feature.SetField("id", static_cast<GIntBig>(r.id));
+  const std::string text_id = r.cadastre_id.empty() ? std::to_string(r.id) : r.cadastre_id;
+  auto set_id = [&](OGRFeature& f) {
+    if (layer.write_cadastre) f.SetField("id", text_id.c_str());
+    else f.SetField("id", static_cast<GIntBig>(r.id));
+  };
+  set_id(feature);
+  if (layer.write_cadastre) {
+    feature.SetField("cadastre", r.cadastre.c_str());
+    if (r.coverage >= 0) feature.SetField("cadastre_coverage", r.coverage);
+    else feature.SetFieldNull(feature.GetFieldIndex("cadastre_coverage"));
+  }
   if (layer.write_status) {
     feature.SetField("status", r.status.c_str());
     // No stage or reason (a building modeled as asked): NULL, not an empty text.
@@ -200,10 +214,10 @@ void FootprintFileWriter::add(const FootprintRecord& r) {
   feature.SetField("vertex_count", int(vertex_count(r.polygon)));
   feature.SetField("area_m2", area(r.polygon));
   feature.SetGeometry(to_ogr_polygon(r.polygon).get());
-  if (impl_->ogr_layer->CreateFeature(&feature) != OGRERR_NONE) impl_->fail("cannot write feature " + std::to_string(r.id));
+  if (impl_->ogr_layer->CreateFeature(&feature) != OGRERR_NONE) impl_->fail("cannot write feature " + text_id);
   if (impl_->lod1_layer && !r.lod1_faces.empty()) {
     OGRFeature block(impl_->lod1_layer->GetLayerDefn());
-    block.SetField("id", static_cast<GIntBig>(r.id));
+    set_id(block);
     block.SetField("ground_height", r.ground_height);
     block.SetField("roof_height", r.roof_height);
     OGRMultiPolygon faces;
@@ -218,7 +232,7 @@ void FootprintFileWriter::add(const FootprintRecord& r) {
       faces.addGeometry(&polygon);
     }
     block.SetGeometry(&faces);
-    if (impl_->lod1_layer->CreateFeature(&block) != OGRERR_NONE) impl_->fail("cannot write the LOD1 block of " + std::to_string(r.id));
+    if (impl_->lod1_layer->CreateFeature(&block) != OGRERR_NONE) impl_->fail("cannot write the LOD1 block of " + text_id);
   }
 }
 

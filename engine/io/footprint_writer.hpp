@@ -30,6 +30,8 @@ struct FootprintRecord {
   double roof_height = 0, ground_height = 0;  // written when write_heights
   std::vector<double> height_statistics;       // ... with these, named by height_statistic_fields()
   std::vector<Face> lod1_faces;  // the LOD1 block's faces, when write_lod1 and it has one
+  std::string cadastre_id, cadastre;  // when write_cadastre: the id (if empty, id as text) and the relation to the cadastre
+  double coverage = -1;               // ... and the footprint's mask coverage (null when negative)
 };
 
 struct FootprintLayer {
@@ -40,6 +42,7 @@ struct FootprintLayer {
   std::string kind_field;     // name of the field holding `kind` ("kind", "tile"); empty: none
   bool write_lod1 = false;    // a GeoPackage also gets a layer "lod1": each block's faces as a MultiPolygon Z
   bool rfc7946 = false;       // GeoJSON as RFC 7946: WGS 84 longitude, latitude (7 decimals), no crs member
+  bool write_cadastre = false;  // id as text (the cadastral ID), cadastre and cadastre_coverage
 };
 
 // GDAL's GeoJSON layer creation options for RFC 7946: WGS 84 longitude, latitude to 7 decimals

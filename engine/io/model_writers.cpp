@@ -6,6 +6,7 @@
 #include <charconv>
 #include <cmath>
 #include <cstdio>
+#include <cctype>
 #include <filesystem>
 #include <fstream>
 #include <functional>
@@ -73,7 +74,18 @@ std::ostream& three_decimals(std::ostream& out) {
   return out << std::fixed;
 }
 
-std::string gml_id(std::int64_t id) { return "lodforge_b" + std::to_string(id); }
+}  // namespace
+
+std::string object_id(const BuildingModel& m) {
+  if (m.cadastre_id.empty()) return "lodforge_b" + std::to_string(m.id);
+  std::string id = m.cadastre_id;
+  for (char& c : id)
+    if (!std::isalnum(static_cast<unsigned char>(c)) && c != '_' && c != '-' && c != '.') c = '_';
+  if (!std::isalpha(static_cast<unsigned char>(id[0])) && id[0] != '_') id = "id_" + id;
+  return id;
+}
+
+namespace {
 
 // The footprint at height z, as one face.
 Face lifted(const PolygonWithHoles& footprint, double z) {
@@ -109,12 +121,17 @@ class CityGmlWriter : public ModelWriter {
   }
   void add(const BuildingModel& m) override {
     auto& o = file_.out();
-    o << "  <core:cityObjectMember>\n    <bldg:Building gml:id=\"" << gml_id(m.id) << "\">\n";
+    o << "  <core:cityObjectMember>\n    <bldg:Building gml:id=\"" << object_id(m) << "\">\n";
     attribute("status", m.status);
     if (!m.stage.empty()) attribute("failed_stage", m.stage);
     if (!m.reason.empty()) attribute("reason", m.reason);
     attribute("regularizer", m.regularizer);
     attribute("tile", m.tile);
+    if (!m.cadastre.empty()) {
+      if (!m.cadastre_id.empty()) attribute("cadastre_id", m.cadastre_id);
+      attribute("cadastre", m.cadastre);
+      if (m.coverage >= 0) o << "      <gen:doubleAttribute name=\"cadastre_coverage\"><gen:value>" << m.coverage << "</gen:value></gen:doubleAttribute>\n";
+    }
     if (m.has_lod1) {
       o << "      <gen:doubleAttribute name=\"ground_height\"><gen:value>" << m.ground << "</gen:value></gen:doubleAttribute>\n";
       o << "      <gen:doubleAttribute name=\"roof_height\"><gen:value>" << m.roof << "</gen:value></gen:doubleAttribute>\n";
@@ -219,6 +236,11 @@ void write_city_object(std::ostream& o, const BuildingModel& m, CityJsonVertices
     << "\", \"tile\": \"" << m.tile << "\"";
   if (!m.stage.empty()) o << ", \"failed_stage\": \"" << json_text(m.stage) << "\"";
   if (!m.reason.empty()) o << ", \"reason\": \"" << json_text(m.reason) << "\"";
+  if (!m.cadastre.empty()) {
+    if (!m.cadastre_id.empty()) o << ", \"cadastre_id\": \"" << json_text(m.cadastre_id) << "\"";
+    o << ", \"cadastre\": \"" << m.cadastre << "\"";
+    if (m.coverage >= 0) o << ", \"cadastre_coverage\": " << m.coverage;
+  }
   if (m.has_lod1) {
     o << ", \"measuredHeight\": " << (m.roof - m.ground) << ", \"ground_height\": " << m.ground << ", \"roof_height\": " << m.roof;
     for (std::size_t i = 0; i < height_statistic_fields().size() && i < m.height_statistics.size(); ++i) {
@@ -268,7 +290,7 @@ class CityJsonWriter : public ModelWriter {
   }
   void add(const BuildingModel& m) override {
     auto& o = file_.out();
-    o << (first_ ? "\n" : ",\n") << "  \"" << gml_id(m.id) << "\": ";
+    o << (first_ ? "\n" : ",\n") << "  \"" << object_id(m) << "\": ";
     first_ = false;
     write_city_object(o, m, vertices_);
   }
@@ -299,7 +321,7 @@ class CityJsonSeqWriter : public ModelWriter {
   void add(const BuildingModel& m) override {
     auto& o = file_.out();
     CityJsonVertices vertices(origin_);
-    const std::string id = gml_id(m.id);
+    const std::string id = object_id(m);
     o << "{\"type\": \"CityJSONFeature\", \"id\": \"" << id << "\", \"CityObjects\": {\"" << id << "\": ";
     write_city_object(o, m, vertices);
     o << "}, \"vertices\": [";
@@ -362,7 +384,7 @@ class ObjWriter : public ModelWriter {
   void add(const BuildingModel& m) override {
     if (!m.has_lod1) return;  // OBJ carries the LOD1 blocks only
     auto& o = file_.out();
-    o << "o " << gml_id(m.id) << "\n";
+    o << "o " << object_id(m) << "\n";
     object_vertices_.clear();
     for_each_mesh_polygon(m.solid, origin_, false, [&](const std::vector<Vec3>& polygon) {
       std::vector<std::size_t> ids;
@@ -416,6 +438,9 @@ class FootprintModelWriter : public ModelWriter {
     r.ground_height = m.ground;
     r.height_statistics = m.height_statistics;
     if (m.has_lod1) r.lod1_faces = m.solid.faces;
+    r.cadastre_id = m.cadastre_id;
+    r.cadastre = m.cadastre;
+    r.coverage = m.coverage;
     file_.add(r);
   }
   void finish() override { file_.finish(); }
@@ -428,6 +453,7 @@ class FootprintModelWriter : public ModelWriter {
     layer.kind_field = "tile";
     layer.write_lod1 = true;  // (GeoPackage only)
     layer.rfc7946 = true;     // (GeoJSON only)
+    layer.write_cadastre = c.cadastre;
     return layer;
   }
   FootprintFileWriter file_;
@@ -442,7 +468,7 @@ class GltfWriter : public ModelWriter {
   GltfWriter(const std::string& path, const WriterContext& c) : file_(path), origin_(c.origin), epsg_(c.epsg), tile_(c.tile) {}
   void add(const BuildingModel& m) override {
     if (!m.has_lod1) return;  // glTF carries the LOD1 blocks only
-    Block block{gml_id(m.id), {}, {}};
+    Block block{object_id(m), {}, {}};
     std::map<std::array<long long, 3>, std::uint32_t> index;  // this block's points, to the millimetre
     for_each_mesh_polygon(m.solid, origin_, true, [&](const std::vector<Vec3>& polygon) {
       std::vector<std::uint32_t> ids;

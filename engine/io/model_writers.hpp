@@ -21,7 +21,15 @@ struct BuildingModel {
   std::vector<double> height_statistics;  // when has_lod1: named by height_statistic_fields() (io/footprint_writer.hpp)
   Solid solid;                  // when has_lod1
   std::string status, stage, reason, regularizer;
+  // With inputs.footprints: the cadastre's ID (empty for a building it lacks), how the building
+  // relates to it (confirmed, not_in_footprints, not_in_mask) and the footprint's mask coverage.
+  std::string cadastre_id, cadastre;
+  double coverage = -1;
 };
+
+// A model's object ID in every format: lodforge_b<first pixel>, or its cadastral ID (made an XML
+// NCName: id_ before a leading digit, other characters as _).
+std::string object_id(const BuildingModel& model);
 
 // Text for XML (or HTML) content and attribute values: & < > " escaped.
 std::string xml_escape(const std::string& s);
@@ -36,6 +44,7 @@ struct WriterContext {
   std::string tile;
   Vec2 origin = Vec2::Zero();  // the tile's lower-left corner: OBJ and CityJSON are relative to it
   Extent extent{};             // of the file's models: CityGML's gml:boundedBy, CityJSON's geographicalExtent
+  bool cadastre = false;       // inputs.footprints given: the cadastre's attributes, a text id in GeoPackage/GeoJSON
 };
 
 class ModelWriter {

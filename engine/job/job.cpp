@@ -41,7 +41,7 @@ Job load_job(const std::string& path, const std::vector<std::string>& overrides)
     if (!p.empty() && fs::path(p).is_relative() && p.rfind("/vsi", 0) != 0) p = (base / p).lexically_normal().string();
   };
   for (std::string* p : {&job.inputs.segmentation.path, &job.inputs.dsm.path, &job.inputs.dtm.path,
-                         &job.inputs.orthophoto.path, &job.output.dir, &job.work_dir})
+                         &job.inputs.orthophoto.path, &job.inputs.footprints.path, &job.output.dir, &job.work_dir})
     resolve(*p);
   if (job.inputs.segmentation.path.empty()) errors.push_back("inputs.segmentation.path: required");
   if (job.output.formats.empty())

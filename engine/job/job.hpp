@@ -29,9 +29,20 @@ struct RasterInput {
   void visit(V& v) { v("path", path, "raster path (any GDAL format); empty: not used"); }
 };
 
+struct FootprintsInput {
+  std::string path, layer, id_field;
+  template <class V>
+  void visit(V& v) {
+    v("path", path, "cadastral footprints (any OGR polygon source: GeoPackage, Shapefile, GeoJSON, ...), reprojected to the segmentation's CRS if needed; each footprint the mask confirms becomes a building with the cadastre's ID (stages.footprints); empty: not used");
+    v("layer", layer, "the layer of path; empty: the first");
+    v("id_field", id_field, "the field holding each footprint's ID (features of one ID are one building); empty: the feature ID (FID)");
+  }
+};
+
 struct InputOptions {
   SegmentationInput segmentation;
   RasterInput dsm, dtm, orthophoto;
+  FootprintsInput footprints;
   std::string on_grid_mismatch = "resample";
 
   template <class V>
@@ -40,6 +51,7 @@ struct InputOptions {
     v.section("dsm", dsm);
     v.section("dtm", dtm);
     v.section("orthophoto", orthophoto);
+    v.section("footprints", footprints);
     v("on_grid_mismatch", on_grid_mismatch, "rasters on another grid or CRS than the segmentation: 'resample' them to its grid, or stop with an 'error'", Check::one_of({"resample", "error"}));
   }
 };

@@ -21,6 +21,11 @@ struct BuildingOutput {
   bool ok = true;
   std::string stage, reason;
   double seconds = 0;  // regularization time (checkpointed: the report lists the slowest buildings of a resumed run too)
+  // With inputs.footprints (set after the checkpoint, by the split among the footprints): as in BuildingModel.
+  std::string cadastre_id, cadastre;
+  double coverage = -1;
+  // The building's name in logs and reports: the cadastral ID, else the first-pixel index.
+  std::string display_id() const { return cadastre_id.empty() ? std::to_string(id) : cadastre_id; }
 };
 
 class CheckpointStore {

@@ -50,9 +50,16 @@ void account(const std::string& summary, const std::string& tile, int tile_index
   }
 }
 
+// A building's id in the report: a number (its first pixel, or a numeric cadastral ID), else text.
+Json id_json(const std::string& id) {
+  const bool number = !id.empty() && id.size() <= 18 && id.find_first_not_of("0123456789") == std::string::npos;
+  return number ? Json(std::stoll(id)) : Json(id);
+}
+std::string id_text(const Json& id) { return id.is_string() ? id.get<std::string>() : id.dump(); }
+
 // Slowest first; equal times by id and tile (the report's order does not depend on the tiles' order).
 bool slower(const Totals::Slow& a, const Totals::Slow& b) {
-  return a.seconds != b.seconds ? a.seconds > b.seconds : a.id != b.id ? a.id < b.id : a.tile < b.tile;
+  return a.seconds != b.seconds ? a.seconds > b.seconds : a.id != b.id ? (a.id.size() != b.id.size() ? a.id.size() < b.id.size() : a.id < b.id) : a.tile < b.tile;
 }
 
 // Keeps the kSlowest slowest, sorted.
@@ -126,7 +133,7 @@ void record_tile(Totals& totals, const RunPlan& plan, const TileResult& result, 
   (r->skipped ? totals.tiles_skipped : totals.tiles_processed)++;
   totals.contours_reused += r->contours_reused;
   if (!r->buildings_reused) for (const BuildingOutput& b : r->buildings) totals.core_seconds += b.seconds;
-  for (const BuildingOutput& b : r->buildings) totals.slowest.push_back({b.seconds, b.id, r->name});
+  for (const BuildingOutput& b : r->buildings) totals.slowest.push_back({b.seconds, b.display_id(), r->name});
   keep_slowest(totals.slowest);
   totals.contour_seconds += r->contour_seconds;
   totals.heights_seconds += r->heights_seconds;
@@ -200,9 +207,9 @@ void write_index_and_report(const Totals& totals, const RunPlan& plan, const std
   }
   write_text_atomically(out_dir / ("tile_index" + suffix + ".geojson"), tile_index_text(hex(plan.job_key), features));
   Json failed = Json::array(), too_large = Json::array(), per_tile = Json::array(), slowest = Json::array();
-  for (const Totals::Slow& b : totals.slowest) slowest.push_back({{"id", b.id}, {"tile", b.tile}, {"seconds", b.seconds}});
+  for (const Totals::Slow& b : totals.slowest) slowest.push_back({{"id", id_json(b.id)}, {"tile", b.tile}, {"seconds", b.seconds}});
   for (const Totals::Failed& f : in_tile_order(totals.failed))
-    failed.push_back({{"id", std::stoll(f.id)}, {"tile", f.tile}, {"stage", f.stage}, {"reason", f.reason}});
+    failed.push_back({{"id", id_json(f.id)}, {"tile", f.tile}, {"stage", f.stage}, {"reason", f.reason}});
   for (const std::string& t : in_tile_order(totals.too_large)) too_large.push_back(t);
   for (const Totals::TileRecord& t : tile_records)
     per_tile.push_back({{"tile", t.tile}, {"buildings", t.buildings}, {"skipped", t.skipped}, {"seconds", t.seconds}});
@@ -298,7 +305,7 @@ void merge_run_reports(const std::vector<fs::path>& parts, const fs::path& targe
       for (const Json& f : report.at("failed_buildings")) failed.emplace_back(f.at("tile").get<std::string>(), f);
       for (const Json& t : report.at("per_tile")) per_tile.emplace_back(t.at("tile").get<std::string>(), t);
       for (const Json& b : report.value("slowest_buildings", Json::array()))
-        slowest.push_back({b.at("seconds").get<double>(), b.at("id").get<std::int64_t>(), b.at("tile").get<std::string>()});
+        slowest.push_back({b.at("seconds").get<double>(), id_text(b.at("id")), b.at("tile").get<std::string>()});
       // "... around tile rRRRR_cCCCC ...": in tile order too.
       for (const Json& t : report.at("too_large_buildings")) {
         const std::string text = t.get<std::string>();
@@ -322,7 +329,7 @@ void merge_run_reports(const std::vector<fs::path>& parts, const fs::path& targe
   merged["per_tile"] = listed(per_tile);
   keep_slowest(slowest);
   Json slow = Json::array();
-  for (const Totals::Slow& b : slowest) slow.push_back({{"id", b.id}, {"tile", b.tile}, {"seconds", b.seconds}});
+  for (const Totals::Slow& b : slowest) slow.push_back({{"id", id_json(b.id)}, {"tile", b.tile}, {"seconds", b.seconds}});
   merged["slowest_buildings"] = slow;
   write_text_atomically(target, readable(merged));
 }

@@ -37,7 +37,7 @@ struct Totals {
   };
   struct Slow {
     double seconds = 0;
-    std::int64_t id = 0;
+    std::string id;  // BuildingOutput::display_id
     std::string tile;
   };
   std::vector<Slow> slowest;  // the slowest buildings' regularizations, slowest first (at most kSlowest)

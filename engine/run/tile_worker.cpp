@@ -19,11 +19,13 @@
 #include <tbb/task_arena.h>
 
 #include "io/block_cache.hpp"
+#include "io/cadastre.hpp"
 #include "io/errors.hpp"
 #include "io/height_reader.hpp"
 #include "io/model_writers.hpp"
 #include "io/quicklook.hpp"
 #include "lod1/solid.hpp"
+#include "partition/partition.hpp"
 #include "pipeline/building.hpp"
 
 namespace lodforge {
@@ -68,6 +70,85 @@ std::vector<BuildingOutput> regularize_tile(const TileBuildings& tile, const Job
   return out;
 }
 
+// With a cadastre: the tile's buildings (one per mask component, as regularized) become one per
+// footprint the mask confirms (its share of its block's outlines), one per part of a block that no
+// footprint's cell covers (not_in_footprints), and one per footprint the mask does not confirm
+// (not_in_mask, the cadastre's polygon, no LOD1). In block order; within a block, the
+// footprints in the cadastre's order, then the parts.
+std::vector<BuildingOutput> split_among_footprints(const std::vector<TileGroup>& groups, const std::vector<BuildingOutput>& blobs,
+                                                   const RunPlan& plan) {
+  const PartitionOptions& options = plan.job.stages.footprints;
+  const Cadastre& cadastre = *plan.cadastre;
+  const std::int64_t raster_pixels = std::int64_t(plan.size.width) * plan.size.height;
+  std::vector<std::vector<BuildingOutput>> per_group(groups.size());
+  within_tile([&] { tbb::parallel_for(std::size_t(0), groups.size(), [&](std::size_t g) {
+    const auto started = Clock::now();
+    const TileGroup& t = groups[g];
+    std::vector<BuildingOutput>& out = per_group[g];
+    std::vector<PolygonWithHoles> outlines;
+    BuildingOutput block;  // what the block's outlines share: status and time
+    block.id = t.id;
+    block.first_row = int(t.id / plan.size.width);
+    block.first_col = int(t.id % plan.size.width);
+    for (int b : t.buildings) {
+      const BuildingOutput& o = blobs[std::size_t(b)];
+      outlines.push_back(o.footprint);
+      block.seconds += o.seconds;
+      if (!o.ok && block.ok) { block.ok = false; block.stage = o.stage; block.reason = o.reason; }
+      else if (o.ok && block.ok && !o.reason.empty() && block.reason.empty()) block.reason = o.reason;
+    }
+    std::vector<std::vector<PolygonWithHoles>> confirmed;
+    for (std::size_t k = 0; k < t.footprints.size(); ++k)
+      if (t.coverage[k] >= options.min_coverage && !outlines.empty()) confirmed.push_back(cadastre.footprints()[std::size_t(t.footprints[k])].parts);
+    if (confirmed.empty()) {
+      for (int b : t.buildings) {
+        out.push_back(blobs[std::size_t(b)]);
+        out.back().cadastre = "not_in_footprints";
+      }
+    }
+    const Partition split = confirmed.empty() ? Partition{} : partition_outlines(outlines, confirmed, plan.transform, t.box, options, plan.job.stages.contour.min_area_m2);
+    std::size_t next_share = 0;
+    for (std::size_t k = 0; k < t.footprints.size(); ++k) {
+      const CadastralFootprint& footprint = cadastre.footprints()[std::size_t(t.footprints[k])];
+      BuildingOutput o;
+      o.id = -1 - std::int64_t(t.footprints[k]);
+      o.first_row = block.first_row;
+      o.first_col = block.first_col;
+      o.cadastre_id = footprint.id;
+      o.coverage = t.coverage[k];
+      const bool is_confirmed = t.coverage[k] >= options.min_coverage && !outlines.empty();
+      if (is_confirmed) {
+        const FootprintShare& share = split.shares[next_share++];
+        o.cadastre = "confirmed";
+        o.footprint = share.polygon.outer.empty() ? footprint.parts.front() : share.polygon;
+        o.ok = block.ok;
+        o.stage = block.stage;
+        o.reason = block.reason;
+        const std::string note = share.polygon.outer.empty() ? "the footprint lies under earlier ones; its first part is its LOD0" : share.note;
+        if (!note.empty()) o.reason += (o.reason.empty() ? "" : "; ") + note;
+        if (next_share == 1) o.seconds = block.seconds;  // (the block's regularization, counted once)
+      } else {
+        o.cadastre = "not_in_mask";
+        o.footprint = footprint.parts.front();
+      }
+      out.push_back(std::move(o));
+    }
+    for (std::size_t k = 0; k < split.rest.size(); ++k) {
+      BuildingOutput o = block;
+      o.id = t.id + std::int64_t(k) * raster_pixels;  // (beyond the raster's pixels: a block's further parts)
+      o.footprint = split.rest[k];
+      o.cadastre = "not_in_footprints";
+      o.seconds = 0;
+      out.push_back(std::move(o));
+    }
+    if (!out.empty()) out.front().seconds += std::chrono::duration<double>(Clock::now() - started).count();
+  }); });
+  std::vector<BuildingOutput> out;
+  for (auto& list : per_group)
+    for (BuildingOutput& b : list) out.push_back(std::move(b));
+  return out;
+}
+
 std::string make_summary(const TileResult& r) {
   int ok = 0, lod1 = 0;
   for (const BuildingOutput& b : r.buildings) ok += b.ok;
@@ -75,9 +156,9 @@ std::string make_summary(const TileResult& r) {
   std::ostringstream s;
   s << r.buildings.size() << ' ' << ok << ' ' << r.buildings.size() - ok << ' ' << r.dropped_small << ' ' << lod1 << '\n';
   for (const BuildingOutput& b : r.buildings)
-    if (!b.ok) s << "failed\t" << b.id << '\t' << b.stage << '\t' << b.reason << '\n';
+    if (!b.ok) s << "failed\t" << b.display_id() << '\t' << b.stage << '\t' << b.reason << '\n';
   for (std::size_t i = 0; i < r.heights.size(); ++i)
-    if (!r.heights[i].ok) s << "failed\t" << r.buildings[i].id << "\theights\t" << r.heights[i].reason << " (LOD0 only)\n";
+    if (!r.heights[i].ok && r.buildings[i].cadastre != "not_in_mask") s << "failed\t" << r.buildings[i].display_id() << "\theights\t" << r.heights[i].reason << " (LOD0 only)\n";
   for (const std::string& t : r.too_large) s << "too_large\t" << t << '\n';
   return s.str();
 }
@@ -119,6 +200,14 @@ BuildingModel model_of(const BuildingOutput& b, const Heights* h, const std::str
   m.regularizer = b.ok ? job.regularizer : "douglas_peucker";
   m.stage = b.stage;
   m.reason = b.reason;
+  m.cadastre_id = b.cadastre_id;
+  m.cadastre = b.cadastre;
+  m.coverage = b.coverage;
+  if (b.cadastre == "not_in_mask" || (b.cadastre == "confirmed" && job.stages.footprints.lod0 == "cadastre")) m.regularizer = "cadastre";
+  if (b.cadastre == "not_in_mask") {
+    m.status = "not_in_mask";
+    return m;
+  }
   if (h && h->ok) {
     m.solid = extrude(b.footprint, h->ground, h->roof);
     m.has_lod1 = true;
@@ -266,10 +355,12 @@ std::shared_ptr<TileResult> process_tile(const RunPlan& plan, int tile) {
   }
   std::uint64_t contour_key = 0;
   std::optional<TileBuildings> contours;
+  std::vector<TileGroup> groups;  // with a cadastre
   {  // the window (mask and its labels) is freed once traced: tiles in flight hold only what they need
     const MaskWindowReader& reader = plan.readers->mask(job.inputs.segmentation.path, plan.selector);
     TileWindow window;  // (OpenCV labels the components with nested parallel work: isolated too)
-    within_tile([&] { window = find_tile_window(reader, grid, tile, plan.halo_px, plan.max_window_px, job.stages.contour.connectivity); });
+    within_tile([&] { window = find_tile_window(reader, grid, tile, plan.halo_px, plan.max_window_px, job.stages.contour.connectivity,
+                                                plan.cadastre, &plan.transform); });
     contour_key = fnv1a(plan.contour_options + plan.transform_text + std::to_string(grid.tile_px), window.hash);
     contours = store.load_contours(r->name, contour_key);
     r->contours_reused = contours.has_value();
@@ -280,6 +371,7 @@ std::shared_ptr<TileResult> process_tile(const RunPlan& plan, int tile) {
       r->contour_seconds = window.label_seconds + seconds_since(traced);
       store.save_contours(r->name, contour_key, *contours);
     }
+    if (plan.cadastre) groups = tile_groups(window, grid, tile, *contours, *plan.cadastre, plan.transform);
   }
   const std::uint64_t buildings_key = fnv1a(plan.core_options, contour_key);
   std::optional<std::vector<BuildingOutput>> buildings = store.load_buildings(r->name, buildings_key);
@@ -289,6 +381,7 @@ std::shared_ptr<TileResult> process_tile(const RunPlan& plan, int tile) {
     store.save_buildings(r->name, buildings_key, *buildings);
   }
   r->buildings = std::move(*buildings);
+  if (plan.cadastre) r->buildings = split_among_footprints(groups, r->buildings, plan);
   if (!plan.dsm_source.empty()) {
     const std::uint64_t heights_key = fnv1a(plan.heights_options, buildings_key);
     std::optional<std::vector<Heights>> heights;
@@ -300,6 +393,10 @@ std::shared_ptr<TileResult> process_tile(const RunPlan& plan, int tile) {
       heights.emplace(r->buildings.size());
       std::vector<double> seconds(r->buildings.size());
       within_tile([&] { tbb::parallel_for(std::size_t(0), r->buildings.size(), [&](std::size_t i) {
+        if (r->buildings[i].cadastre == "not_in_mask") {  // (no model: the cadastre's polygon only)
+          (*heights)[i].reason = "not in the mask";
+          return;
+        }
         const PolygonWithHoles& footprint = r->buildings[i].footprint;
         const cv::Rect box = heights_box(footprint, plan.transform, plan.size, job.stages.heights);
         HeightRaster dsm;
@@ -385,12 +482,15 @@ TileOutputs write_tile_outputs(const RunPlan& plan, TileResult& result) {
       models.push_back(model_of(r->buildings[i], r->heights.empty() ? nullptr : &r->heights[i], r->name, job));
     r->write_seconds += seconds_since(modeling);
     const WriterContext context{crs_wkt, plan.crs.epsg(), r->name, plan.transform.to_map(tile_rect.x, tile_rect.y + tile_rect.height),
-                                extent_of(models)};
+                                extent_of(models), plan.cadastre != nullptr};
     std::vector<double> seconds(formats.size());
     within_tile([&] { tbb::parallel_for(std::size_t(0), formats.size(), [&](std::size_t f) {
       const auto started = Clock::now();
       const auto writer = make_model_writer(formats[f], (out_dir / planned[f]).string(), context);
-      for (const BuildingModel& m : models) writer->add(m);
+      // A footprint the mask does not confirm is listed with the footprints only, not modeled in 3D.
+      const bool footprints_only = formats[f] == "gpkg" || formats[f] == "geojson";
+      for (const BuildingModel& m : models)
+        if (footprints_only || m.status != "not_in_mask") writer->add(m);
       writer->finish();
       seconds[f] = seconds_since(started);
     }); });

@@ -19,6 +19,7 @@
 namespace lodforge {
 
 class HeightWindowReader;
+class Cadastre;
 
 // Raster readers kept open per worker thread for the whole run: GDAL's block cache belongs to
 // an open dataset, and tiles overlap by their halos, so readers closed after each tile decoded
@@ -64,6 +65,7 @@ struct RunPlan {
   ReaderPool* readers;  // per-thread open rasters, owned by the run
   // Files under out_dir that an earlier tile index lists: lodforge's own, which it may replace.
   const std::set<std::string>* indexed_outputs = nullptr;
+  const Cadastre* cadastre = nullptr;  // inputs.footprints, when given
 };
 
 struct TileResult {

@@ -1,11 +1,14 @@
 #include "run/tiles.hpp"
 
 #include <chrono>
+#include <map>
 #include <cstdio>
 #include <gdal_priv.h>
 #include <opencv2/imgproc.hpp>
 
+#include "geometry/rasterize.hpp"
 #include "io/block_cache.hpp"
+#include "io/cadastre.hpp"
 #include "io/errors.hpp"
 
 namespace lodforge {
@@ -124,8 +127,59 @@ int growth_px(int halo_px) { return std::max(1, halo_px); }
 
 }  // namespace
 
+namespace {
+
+GeoTransform window_transform(const GeoTransform& transform, const cv::Rect& window) {
+  GeoTransform local = transform;
+  local.c[0] = transform.c[0] + window.x * transform.c[1] + window.y * transform.c[2];
+  local.c[3] = transform.c[3] + window.x * transform.c[4] + window.y * transform.c[5];
+  return local;
+}
+
+// Marks the pixels of a window that a footprint covers or its boundary crosses (so that every
+// footprint on the window has a pixel, however small); returns one of them, or (-1, -1).
+cv::Point mark_footprint(cv::Mat& window_mask, const cv::Rect& window, const CadastralFootprint& footprint, const GeoTransform& transform) {
+  cv::Point seed(-1, -1);
+  const cv::Rect box = footprint.pixels & window;  // (what it covers of the window)
+  cv::Mat mask = window_mask(box - window.tl());
+  const GeoTransform local = window_transform(transform, box);
+  cv::Mat scratch = cv::Mat::zeros(mask.size(), CV_8U);
+  for (const PolygonWithHoles& p : footprint.parts) {
+    rasterize(scratch, p, local, 1, 1);  // (holes included: they only join the block)
+    for (const Ring* ring : [&] { std::vector<const Ring*> r{&p.outer}; for (const Ring& h : p.holes) r.push_back(&h); return r; }()) {
+      for (std::size_t i = 0; i < ring->size(); ++i) {
+        const Vec2 a = local.to_pixel((*ring)[i]), b = local.to_pixel((*ring)[(i + 1) % ring->size()]);
+        const int steps = int(std::ceil((b - a).norm() * 2)) + 1;
+        for (int s = 0; s <= steps; ++s) {
+          const Vec2 q = a + (b - a) * (double(s) / steps);
+          const int x = int(std::floor(q.x())), y = int(std::floor(q.y()));
+          if (x >= 0 && y >= 0 && x < mask.cols && y < mask.rows) scratch.at<uint8_t>(y, x) = 1;
+        }
+      }
+    }
+  }
+  for (int y = 0; y < scratch.rows && seed.x < 0; ++y)
+    for (int x = 0; x < scratch.cols; ++x)
+      if (scratch.at<uint8_t>(y, x)) { seed = {x + box.x - window.x, y + box.y - window.y}; break; }
+  mask.setTo(1, scratch);
+  return seed;
+}
+
+cv::Rect block_box(const TileWindow& w, int g) {
+  return {w.groups.stats.at<int>(g, cv::CC_STAT_LEFT), w.groups.stats.at<int>(g, cv::CC_STAT_TOP),
+          w.groups.stats.at<int>(g, cv::CC_STAT_WIDTH), w.groups.stats.at<int>(g, cv::CC_STAT_HEIGHT)};
+}
+
+// Does the tile own block g of the window: its first pixel in the tile, and whole in the window?
+bool owns_block(const TileWindow& w, int g, const cv::Rect& tile_rect, cv::Size raster) {
+  return g > 0 && tile_rect.contains(w.group_first[std::size_t(g)] + w.window.tl()) && !touches_inner_border(block_box(w, g), w.window, raster);
+}
+
+
+}  // namespace
+
 TileWindow find_tile_window(const MaskWindowReader& reader, const TileGrid& grid, int tile, int halo_px,
-                            int max_window_px, int connectivity) {
+                            int max_window_px, int connectivity, const Cadastre* cadastre, const GeoTransform* transform) {
   const cv::Rect bounds(0, 0, grid.raster.width, grid.raster.height);
   const cv::Rect tile_rect = grid.rect(tile);
   TileWindow out;
@@ -134,7 +188,17 @@ TileWindow find_tile_window(const MaskWindowReader& reader, const TileGrid& grid
   while (true) {
     out.mask = reader.read(out.window);
     const auto labeling = std::chrono::steady_clock::now();
-    out.components = label_components(out.mask, connectivity);
+    cv::Mat blocks = out.mask;
+    if (cadastre) {
+      // The window grows around blocks (mask and footprints together), not around the mask's components.
+      blocks = out.mask.clone();
+      out.footprint_seeds.clear();
+      for (int f : cadastre->in_window(out.window)) {
+        const cv::Point seed = mark_footprint(blocks, out.window, cadastre->footprints()[std::size_t(f)], *transform);
+        if (seed.x >= 0) out.footprint_seeds.emplace_back(f, seed);
+      }
+    }
+    out.components = label_components(blocks, cadastre ? 8 : connectivity);
     out.label_seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - labeling).count();
     const cv::Mat& stats = out.components.stats;
     const int count = out.components.count;
@@ -163,6 +227,21 @@ TileWindow find_tile_window(const MaskWindowReader& reader, const TileGrid& grid
   }
   const int rect[4] = {out.window.x, out.window.y, out.window.width, out.window.height};
   out.hash = fnv1a(out.mask.data, out.mask.total(), fnv1a(rect, sizeof rect));
+  if (cadastre) {
+    // The blocks own; the buildings in them are the mask's components.
+    out.groups = std::move(out.components);
+    out.group_first.assign(std::size_t(out.groups.count), cv::Point(-1, -1));
+    for (int y = 0; y < out.groups.labels.rows; ++y)
+      for (int x = 0; x < out.groups.labels.cols; ++x)
+        if (cv::Point& first = out.group_first[std::size_t(out.groups.labels.at<int>(y, x))]; first.x < 0) first = {x, y};
+    const auto labeling = std::chrono::steady_clock::now();
+    out.components = label_components(out.mask, connectivity);
+    out.label_seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - labeling).count();
+    for (const auto& [f, seed] : out.footprint_seeds) {
+      const int s[3] = {f, seed.x, seed.y};
+      out.hash = fnv1a(s, sizeof s, out.hash);
+    }
+  }
   return out;
 }
 
@@ -175,6 +254,7 @@ TileBuildings trace_tile(const TileWindow& w, const TileGrid& grid, int tile, co
   local.c[3] = transform.c[3] + window.x * transform.c[4] + window.y * transform.c[5];
   const cv::Size raster = grid.raster;
   const ContourResult contours = extract_contours(w.components, local, options, [&](const cv::Rect& box, const cv::Point& first) {
+    if (w.groups.count > 0) return owns_block(w, w.groups.labels.at<int>(first), tile_rect, raster);  // with a cadastre
     // Owned (first pixel in the tile) and whole (else it was reported as too large).
     return tile_rect.contains(first + window.tl()) && !touches_inner_border(box, window, raster);
   });
@@ -188,6 +268,55 @@ TileBuildings trace_tile(const TileWindow& w, const TileGrid& grid, int tile, co
   out.dropped_small = contours.dropped_small;
   out.too_large = w.too_large;
   out.window = window;
+  return out;
+}
+
+std::vector<TileGroup> tile_groups(const TileWindow& w, const TileGrid& grid, int tile, const TileBuildings& buildings,
+                                   const Cadastre& cadastre, const GeoTransform& transform) {
+  const cv::Rect tile_rect = grid.rect(tile);
+  std::map<int, TileGroup> owned;  // by label
+  auto group = [&](int g) -> TileGroup* {
+    if (!owns_block(w, g, tile_rect, grid.raster)) return nullptr;
+    auto [it, added] = owned.try_emplace(g);
+    if (added) {
+      const cv::Point first = w.group_first[std::size_t(g)] + w.window.tl();
+      it->second.id = std::int64_t(first.y) * grid.raster.width + first.x;
+      it->second.box = block_box(w, g) + w.window.tl();
+    }
+    return &it->second;
+  };
+  for (std::size_t i = 0; i < buildings.buildings.size(); ++i) {
+    const BuildingContour& b = buildings.buildings[i];
+    if (TileGroup* t = group(w.groups.labels.at<int>(b.first_row - w.window.y, b.first_col - w.window.x))) t->buildings.push_back(int(i));
+  }
+  const GeoTransform local = window_transform(transform, w.window);
+  for (const auto& [f, seed] : w.footprint_seeds) {
+    TileGroup* t = group(w.groups.labels.at<int>(seed));
+    if (!t) continue;
+    // The share of the footprint's pixels (centres inside it) that is building in the mask.
+    const CadastralFootprint& footprint = cadastre.footprints()[std::size_t(f)];
+    const cv::Rect box = (footprint.pixels & w.window) - w.window.tl();  // (whole: its block is)
+    cv::Mat inside = cv::Mat::zeros(box.size(), CV_8U);
+    for (const PolygonWithHoles& p : footprint.parts) rasterize(inside, p, window_transform(local, box), 1, 0);
+    const int pixels = cv::countNonZero(inside);
+    cv::Mat building;
+    cv::bitwise_and(inside, w.mask(box), building);
+    t->footprints.push_back(f);
+    t->coverage.push_back(pixels > 0 ? double(cv::countNonZero(building)) / pixels : double(w.mask.at<uint8_t>(seed) != 0));
+  }
+  std::vector<TileGroup> out;
+  for (auto& [g, t] : owned) out.push_back(std::move(t));
+  std::sort(out.begin(), out.end(), [](const TileGroup& a, const TileGroup& b) { return a.id < b.id; });
+  for (TileGroup& t : out) {  // (seeds come in ascending footprint order already; kept so)
+    std::vector<std::size_t> order(t.footprints.size());
+    for (std::size_t k = 0; k < order.size(); ++k) order[k] = k;
+    std::sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) { return t.footprints[a] < t.footprints[b]; });
+    std::vector<int> f;
+    std::vector<double> c;
+    for (std::size_t k : order) { f.push_back(t.footprints[k]); c.push_back(t.coverage[k]); }
+    t.footprints = std::move(f);
+    t.coverage = std::move(c);
+  }
   return out;
 }
 

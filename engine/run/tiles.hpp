@@ -56,14 +56,38 @@ struct TileWindow {
   std::uint64_t hash = 0;              // of the mask and the window, for checkpoints
   Components components;               // of the mask, for the tracing
   double label_seconds = 0;            // spent labeling them (the contour stage's first step)
+  // With a cadastre: the blocks, components of the mask and the footprints' pixels together
+  // (8-connected), which tiles own as they own buildings without one; and for each footprint
+  // in the window (by index in the cadastre) a pixel of it in the window.
+  Components groups;
+  std::vector<cv::Point> group_first;  // each block's first pixel in raster order (window pixels)
+  std::vector<std::pair<int, cv::Point>> footprint_seeds;
 };
 // The margin of a tile's first window: two halos (a building crossing a one-halo window and the
 // tile needs its box plus a halo, and reading and labeling a window again cost more than labeling
 // a wider one once), within max_window_px, and at least one halo.
 int first_window_margin(int halo_px, int tile_px, int max_window_px);
 
+class Cadastre;
+
+// cadastre (optional): the footprints, on the raster's grid transform.
 TileWindow find_tile_window(const MaskWindowReader& reader, const TileGrid& grid, int tile, int halo_px,
-                            int max_window_px, int connectivity);
+                            int max_window_px, int connectivity, const Cadastre* cadastre = nullptr,
+                            const GeoTransform* transform = nullptr);
+
+// A block of a tile with a cadastre: the buildings (mask components) in it and the footprints
+// that touch it, with the share of each footprint's pixels that is building in the mask.
+struct TileGroup {
+  std::int64_t id = 0;          // its first pixel in raster order: row * raster width + col
+  cv::Rect box;                 // raster pixels
+  std::vector<int> buildings;   // indices into TileBuildings::buildings
+  std::vector<int> footprints;  // indices into the cadastre, ascending
+  std::vector<double> coverage; // per footprint
+};
+
+// The blocks the tile owns, in raster order of their first pixels, that hold a building or a footprint.
+std::vector<TileGroup> tile_groups(const TileWindow& window, const TileGrid& grid, int tile, const TileBuildings& buildings,
+                                   const Cadastre& cadastre, const GeoTransform& transform);
 
 // Traces the buildings the tile owns in its window (contours in map coordinates).
 TileBuildings trace_tile(const TileWindow& window, const TileGrid& grid, int tile, const GeoTransform& transform,

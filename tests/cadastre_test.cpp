@@ -1,0 +1,195 @@
+// Cadastral footprints as an input (inputs.footprints): Delft's segmentation with the BGT.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <memory>
+#include <ogrsf_frmts.h>
+#include <set>
+#include <sstream>
+
+#include "eval/metrics.hpp"
+#include "geometry/polygon.hpp"
+#include "io/ogr_polygon.hpp"
+#include "support/process.hpp"
+#include "support/shapes.hpp"
+
+namespace fs = std::filesystem;
+
+namespace lodforge {
+namespace {
+
+std::string delft(const std::string& file) { return test::test_data() + "/delft-ahn3-bgt/" + file; }
+
+void write_job(const fs::path& dir, const std::string& out, double tile_m, const std::string& extra = "") {
+  std::ofstream(dir / (out + ".yaml")) << "inputs:\n  segmentation: {path: " << delft("derived/top_class_50cm.tif") << "}\n"
+                                       << "  dsm: {path: " << delft("derived/dsm_50cm.tif") << "}\n"
+                                       << "  dtm: {path: " << delft("derived/dtm_50cm.tif") << "}\n"
+                                       << "  footprints: {path: " << delft("derived/bgt_pand_buildings.geojson")
+                                       << ", id_field: identificatiebagpnd}\n"
+                                       << "tiling: {tile_size_m: " << tile_m << "}\n"
+                                       << "output: {dir: " << out << ", formats: [citygml, cityjson, gpkg]}\nwork_dir: work_" << out << "\n"
+                                       << "stages: {heights: {roof: percentile, roof_percentile: 90}}\n" << extra;
+}
+
+struct Written {
+  std::string cadastre, wkt;
+  double roof = -1, coverage = -1;
+  PolygonWithHoles polygon;
+};
+
+// Every building of a run's GeoPackages by id; an id twice fails the test.
+std::map<std::string, Written> read_run(const fs::path& out) {
+  GDALAllRegister();
+  std::map<std::string, Written> all;
+  std::vector<fs::path> files;
+  for (const auto& e : fs::directory_iterator(out / "tiles"))
+    if (e.path().extension() == ".gpkg") files.push_back(e.path());
+  std::sort(files.begin(), files.end());
+  for (const fs::path& p : files) {
+    std::unique_ptr<GDALDataset> d(static_cast<GDALDataset*>(GDALOpenEx(p.c_str(), GDAL_OF_VECTOR, nullptr, nullptr, nullptr)));
+    if (!d || !d->GetLayerByName("footprints")) {
+      ADD_FAILURE() << p << ": no footprints layer";
+      continue;
+    }
+    OGRLayer* layer = d->GetLayerByName("footprints");
+    for (auto& f : *layer) {
+      Written w;
+      w.cadastre = f->GetFieldAsString("cadastre");
+      if (!f->IsFieldNull(f->GetFieldIndex("roof_height"))) w.roof = f->GetFieldAsDouble("roof_height");
+      if (!f->IsFieldNull(f->GetFieldIndex("cadastre_coverage"))) w.coverage = f->GetFieldAsDouble("cadastre_coverage");
+      char* wkt = nullptr;
+      f->GetGeometryRef()->exportToWkt(&wkt);
+      w.wkt = wkt;
+      CPLFree(wkt);
+      w.polygon = from_ogr_polygon(*f->GetGeometryRef()->toPolygon());
+      const std::string id = f->GetFieldAsString("id");
+      EXPECT_EQ(all.count(id), 0u) << id << " written twice (" << p << ")";
+      all[id] = w;
+    }
+  }
+  return all;
+}
+
+// Delft's mask merges 160 houses into 55 blocks; with the BGT footprints as input each house the
+// mask confirms is a building with its BAG ID, its share of the block, its own heights.
+TEST(CadastreRun, DelftWithTheBgtFootprintsGivesOneBuildingPerHouseWithItsIdAndHeights) {
+  const fs::path dir = test::fresh_test_directory("cadastre_delft");
+  write_job(dir, "small_tiles", 64);
+  const test::CommandOutput run = test::lodforge("run " + (dir / "small_tiles.yaml").string() + " --progress none");
+  ASSERT_EQ(run.code, 0) << run.output;
+  const std::map<std::string, Written> buildings = read_run(dir / "small_tiles");
+
+  // Every BGT ID once: confirmed, or reported as not in the mask.
+  std::map<std::string, double> reference_roof;
+  {
+    std::ifstream csv(delft("reference/reference_lod1_heights_3dfier.csv"));
+    std::string line;
+    std::getline(csv, line);
+    while (std::getline(csv, line)) {
+      std::vector<std::string> f;
+      std::stringstream s(line);
+      for (std::string v; std::getline(s, v, ',');) f.push_back(v);
+      reference_roof[f[0]] = std::stod(f[6]);
+    }
+  }
+  ASSERT_EQ(reference_roof.size(), 160u);
+  int confirmed = 0;
+  std::vector<double> roof_error;
+  for (const auto& [id, roof] : reference_roof) {
+    const auto it = buildings.find(id);
+    ASSERT_NE(it, buildings.end()) << "BGT building " << id << " missing";
+    EXPECT_TRUE(it->second.cadastre == "confirmed" || it->second.cadastre == "not_in_mask") << id << ": " << it->second.cadastre;
+    if (it->second.cadastre != "confirmed") {
+      EXPECT_LT(it->second.coverage, 0.5) << id;
+      continue;
+    }
+    ++confirmed;
+    EXPECT_GE(it->second.coverage, 0.5) << id;
+    ASSERT_GT(it->second.roof, 0) << id;
+    roof_error.push_back(std::abs(it->second.roof - roof));
+  }
+  EXPECT_GE(confirmed, 155);
+  // 3dfier's roof (the 90th percentile over the BGT polygon): within 0.3 m (median).
+  std::nth_element(roof_error.begin(), roof_error.begin() + roof_error.size() / 2, roof_error.end());
+  EXPECT_LE(roof_error[roof_error.size() / 2], 0.3);
+
+  // Per-building F1 at IoU >= 0.5 inside the area the BGT covers (without footprints: 0.15).
+  std::vector<PolygonWithHoles> predicted;
+  double area_sum = 0;
+  auto all = std::make_unique<OGRMultiPolygon>();
+  for (const auto& [id, w] : buildings) {
+    if (w.cadastre == "not_in_mask") continue;
+    EXPECT_EQ(polygon_problem(w.polygon), "") << id;
+    predicted.push_back(w.polygon);
+    if (w.cadastre != "confirmed") continue;
+    area_sum += area(w.polygon);
+    all->addGeometryDirectly(to_ogr_polygon(w.polygon).release());
+  }
+  const std::vector<PolygonWithHoles> truth = read_polygons(delft("derived/bgt_pand_buildings.geojson"), "truth");
+  const std::vector<PolygonWithHoles> aoi = read_polygons(delft("derived/gt_coverage_aoi.geojson"), "aoi");
+  const EvalResult e = evaluate(predicted, truth, aoi.front());
+  EXPECT_GE(e.f1, 0.90) << "precision " << e.precision << " recall " << e.recall;
+  // No two houses overlap (houses sharing a wall share it exactly): their areas sum to their union's.
+  // (Not so the mask's own buildings: two outlines regularized apart may overlap by a sliver.)
+  std::unique_ptr<OGRGeometry> united(all->UnionCascaded());
+  ASSERT_TRUE(united);
+  EXPECT_NEAR(area_sum, dynamic_cast<OGRSurface*>(united.get()) ? dynamic_cast<OGRSurface*>(united.get())->get_Area()
+                                                                 : dynamic_cast<OGRGeometryCollection*>(united.get())->get_Area(), 1e-3);
+
+  // Another tiling and one thread: the same buildings, byte for byte.
+  write_job(dir, "one_tile", 300);
+  const test::CommandOutput again = test::lodforge("run " + (dir / "one_tile.yaml").string() + " --progress none --threads 1");
+  ASSERT_EQ(again.code, 0) << again.output;
+  const std::map<std::string, Written> other = read_run(dir / "one_tile");
+  ASSERT_EQ(other.size(), buildings.size());
+  for (const auto& [id, w] : buildings) {
+    ASSERT_EQ(other.count(id), 1u) << id;
+    EXPECT_EQ(other.at(id).wkt, w.wkt) << id;
+    EXPECT_EQ(other.at(id).roof, w.roof) << id;
+  }
+
+  // The 3D formats name each building by its ID and validate.
+  const std::string gml = test::slurp(dir / "one_tile" / "tiles" / "r0000_c0000.gml");
+  EXPECT_NE(gml.find("gml:id=\"id_" + reference_roof.begin()->first + "\""), std::string::npos);
+  EXPECT_NE(gml.find("<gen:stringAttribute name=\"cadastre_id\"><gen:value>" + reference_roof.begin()->first), std::string::npos);
+  const std::string schemas = test::schemas();
+  if (schemas.empty()) GTEST_SKIP() << test::kNoSchemas;
+  const test::CommandOutput xml = test::shell("XML_CATALOG_FILES=" + schemas + "/citygml2-schemas/catalog.xml xmllint --noout --nonet --schema " +
+                                              schemas + "/citygml2-schemas/citygml/profiles/base/2.0/CityGML.xsd " +
+                                              (dir / "one_tile" / "tiles" / "r0000_c0000.gml").string());
+  EXPECT_EQ(xml.code, 0) << xml.output;
+  const test::CommandOutput cj = test::shell("/usr/bin/python3 " + std::string(LODFORGE_SOURCE_DIR) + "/scripts/validate/cityjson.py " + schemas +
+                                             "/cityjson2-schemas/cityjson.min.schema.json " +
+                                             (dir / "one_tile" / "tiles" / "r0000_c0000.city.json").string());
+  EXPECT_EQ(cj.code, 0) << cj.output;
+}
+
+// A footprint source that cannot be used stops the run before any output, naming the key.
+TEST(CadastreRun, UnusableFootprintsStopTheRunNamingTheKey) {
+  const fs::path dir = test::fresh_test_directory("cadastre_errors");
+  const auto error_of = [&](const std::string& footprints) {
+    std::ofstream(dir / "job.yaml") << "inputs:\n  segmentation: {path: " << delft("derived/top_class_50cm.tif") << "}\n"
+                                    << "  footprints: " << footprints << "\noutput: {dir: out}\nwork_dir: work\n";
+    const test::CommandOutput r = test::lodforge("run " + (dir / "job.yaml").string() + " --progress none");
+    EXPECT_NE(r.code, 0);
+    EXPECT_FALSE(fs::exists(dir / "out" / "tile_index.geojson"));
+    return r.output;
+  };
+  const std::string bgt = delft("derived/bgt_pand_buildings.geojson");
+  EXPECT_NE(error_of("{path: missing.gpkg}").find("inputs.footprints.path: '" + (dir / "missing.gpkg").string() + "': file not found"),
+            std::string::npos);
+  const std::string field = error_of("{path: " + bgt + ", id_field: pand_id}");
+  EXPECT_NE(field.find("inputs.footprints.id_field: 'pand_id' is not a field of"), std::string::npos) << field;
+  EXPECT_NE(field.find("identificatiebagpnd"), std::string::npos) << field;  // (the fields it has)
+  EXPECT_NE(error_of("{path: " + bgt + ", layer: pand}").find("inputs.footprints.layer: 'pand' is not a layer of"), std::string::npos);
+  // Without a CRS (a CSV's WKT column has none).
+  std::ofstream(dir / "no_crs.csv") << "WKT,id\n\"POLYGON ((84900 447500,84910 447500,84910 447510,84900 447510,84900 447500))\",1\n";
+  const std::string no_crs = error_of("{path: " + (dir / "no_crs.csv").string() + "}");
+  EXPECT_NE(no_crs.find("has no CRS"), std::string::npos) << no_crs;
+}
+
+}  // namespace
+}  // namespace lodforge

@@ -1,0 +1,120 @@
+// A block split among the cadastral footprints it covers (stages/partition).
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <set>
+
+#include "geometry/polygon.hpp"
+#include "partition/partition.hpp"
+
+namespace lodforge {
+namespace {
+
+Ring rotated(Ring r, double degrees) {
+  const double a = degrees * M_PI / 180, c = std::cos(a), s = std::sin(a);
+  for (Vec2& p : r) p = Vec2(c * p.x() - s * p.y(), s * p.x() + c * p.y());
+  return r;
+}
+
+Ring box(double x0, double y0, double x1, double y1) { return {{x0, y0}, {x1, y0}, {x1, y1}, {x0, y1}}; }
+
+// The directed edges of a polygon's rings, as exact coordinate quadruples.
+std::set<std::array<double, 4>> edges(const PolygonWithHoles& p) {
+  std::set<std::array<double, 4>> out;
+  auto add = [&](const Ring& r) {
+    for (std::size_t i = 0; i < r.size(); ++i) {
+      const Vec2& a = r[i];
+      const Vec2& b = r[(i + 1) % r.size()];
+      out.insert({a.x(), a.y(), b.x(), b.y()});
+    }
+  };
+  add(p.outer);
+  for (const Ring& h : p.holes) add(h);
+  return out;
+}
+
+// The length of boundary two polygons share: edges of one that the other runs the other way.
+double shared_length(const PolygonWithHoles& a, const PolygonWithHoles& b) {
+  const auto eb = edges(b);
+  double length = 0;
+  for (const auto& e : edges(a))
+    if (eb.count({e[2], e[3], e[0], e[1]})) length += std::hypot(e[2] - e[0], e[3] - e[1]);
+  return length;
+}
+
+// The pixels of a polygon's box on the grid.
+cv::Rect pixel_box(const PolygonWithHoles& p, const GeoTransform& t) {
+  double x0 = 1e9, y0 = 1e9, x1 = -1e9, y1 = -1e9;
+  for (const Vec2& v : p.outer) {
+    const Vec2 q = t.to_pixel(v);
+    x0 = std::min(x0, q.x()); y0 = std::min(y0, q.y()); x1 = std::max(x1, q.x()); y1 = std::max(y1, q.y());
+  }
+  return {int(std::floor(x0)), int(std::floor(y0)), int(std::ceil(x1 - std::floor(x0))), int(std::ceil(y1 - std::floor(y0)))};
+}
+
+GeoTransform grid(double pixel) {
+  GeoTransform t;
+  t.c = {-40, pixel, 0, 40, 0, -pixel};  // 0.5 m pixels from (-40, 40), north up
+  return t;
+}
+
+// Two houses of a row, 10 m wide, sharing a party wall; the mask reaches 0.5 m past the cadastre
+// all round (roof overhangs). Turned by 30°, so that the wall runs across the pixel grid.
+TEST(Partition, TwoHousesSharingAWallShareItExactlyWithoutGapOrOverlap) {
+  for (double angle : {0.0, 30.0}) {
+    SCOPED_TRACE(angle);
+    const PolygonWithHoles outline{rotated(box(-0.5, -0.5, 20.5, 10.5), angle), {}};
+    const std::vector<std::vector<PolygonWithHoles>> footprints{{{rotated(box(0, 0, 10, 10), angle), {}}},
+                                                                 {{rotated(box(10, 0, 20, 10), angle), {}}}};
+    const GeoTransform t = grid(0.5);
+    const Partition p = partition_outlines({outline}, footprints, t, pixel_box(outline, t), PartitionOptions{}, 4.0);
+    ASSERT_EQ(p.shares.size(), 2u);
+    const PolygonWithHoles& a = p.shares[0].polygon;
+    const PolygonWithHoles& b = p.shares[1].polygon;
+    EXPECT_EQ(polygon_problem(a), "");
+    EXPECT_EQ(polygon_problem(b), "");
+    EXPECT_TRUE(p.rest.empty());
+    EXPECT_EQ(p.dropped_small, 0);
+    EXPECT_EQ(p.shares[0].note + p.shares[1].note, "");
+    // No gap, no overlap: the two shares make the outline.
+    EXPECT_NEAR(area(a) + area(b), area(outline), 1e-6);
+    // Each house keeps its half and its overhang: 10.5 m x 11 m.
+    EXPECT_NEAR(area(a), 115.5, 0.5 * 11 * 0.5);
+    EXPECT_NEAR(area(b), 115.5, 0.5 * 11 * 0.5);
+    // The party wall (10 m), and its continuation through the overhangs, is one boundary of both,
+    // vertex for vertex. (Through the overhangs it follows the pixels when it runs across them.)
+    EXPECT_GE(shared_length(a, b), 10.0 + 2 * 0.5 - 1e-9);
+    EXPECT_NEAR(shared_length(a, b), shared_length(b, a), 1e-12);
+    if (angle == 0) {
+      EXPECT_NEAR(shared_length(a, b), 11.0, 1e-9);
+      EXPECT_EQ(vertex_count(a), 4u);
+    }
+  }
+}
+
+// Mask area no footprint covers, farther than extension_m from any: a building of its own.
+// A footprint under an earlier one has nothing of its own left: it still gets a share.
+TEST(Partition, MaskBeyondTheExtensionIsABuildingOfItsOwnAndCadastreModeKeepsThePolygons) {
+  const PolygonWithHoles outline{box(0, 0, 30, 10), {}};
+  const std::vector<std::vector<PolygonWithHoles>> footprints{{{box(0, 0, 10, 10), {}}}, {{box(10, 0, 20, 10), {}}}};
+  const GeoTransform t = grid(0.5);
+  const cv::Rect pixels = pixel_box(outline, t);
+  PartitionOptions options;
+  options.extension_m = 2.0;
+  const Partition p = partition_outlines({outline}, footprints, t, pixels, options, 4.0);
+  ASSERT_EQ(p.rest.size(), 1u);
+  // The second house takes the annex to about 2 m from its wall (pixel centres within 4 px).
+  EXPECT_NEAR(area(p.rest[0]), 8.0 * 10, 0.5 * 10 + 1e-9);
+  EXPECT_NEAR(area(p.shares[1].polygon) + area(p.rest[0]), 200.0, 1e-6);
+  EXPECT_NEAR(area(p.shares[0].polygon), 100.0, 1e-9);
+
+  options.lod0 = "cadastre";
+  const Partition c = partition_outlines({outline}, footprints, t, pixels, options, 4.0);
+  ASSERT_EQ(c.shares.size(), 2u);
+  EXPECT_NEAR(area(c.shares[1].polygon), 100.0, 1e-9);  // the cadastre's polygon, not the outline's share
+  ASSERT_EQ(c.rest.size(), 1u);  // the annex beyond the extension is found all the same
+  EXPECT_NEAR(area(c.rest[0]), area(p.rest[0]), 1e-9);
+}
+
+}  // namespace
+}  // namespace lodforge
