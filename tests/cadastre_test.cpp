@@ -6,6 +6,7 @@
 #include <fstream>
 #include <map>
 #include <memory>
+#include <nlohmann/json.hpp>
 #include <ogrsf_frmts.h>
 #include <set>
 #include <sstream>
@@ -112,6 +113,11 @@ TEST(CadastreRun, DelftWithTheBgtFootprintsGivesOneBuildingPerHouseWithItsIdAndH
     roof_error.push_back(std::abs(it->second.roof - roof));
   }
   EXPECT_GE(confirmed, 155);
+  // The report counts them (a footprint not in the mask is no building).
+  const nlohmann::json report = nlohmann::json::parse(test::slurp(dir / "small_tiles" / "report.json"));
+  EXPECT_EQ(report.at("cadastre").at("confirmed"), confirmed);
+  EXPECT_EQ(report.at("cadastre").at("not_in_mask"), 160 - confirmed);
+  EXPECT_EQ(report.at("buildings").get<int>(), confirmed + report.at("cadastre").at("not_in_footprints").get<int>());
   // 3dfier's roof (the 90th percentile over the BGT polygon): within 0.3 m (median).
   std::nth_element(roof_error.begin(), roof_error.begin() + roof_error.size() / 2, roof_error.end());
   EXPECT_LE(roof_error[roof_error.size() / 2], 0.3);

@@ -739,7 +739,7 @@ int run_merge(int argc, char** argv) {
         spdlog::warn("'{}': missing, so no report.html", report.string());
       }
       spdlog::info("{}: {} x {} pixels of {:.3g} m, {} outlines; {}", (dir / "merged" / "overview.tif").string(), overview.width,
-                   overview.height, overview.pixel_size, overview.ok + overview.fallback + overview.lod0_only,
+                   overview.height, overview.pixel_size, overview.ok + overview.fallback + overview.lod0_only + overview.not_in_mask,
                    (dir / "merged" / "report.html").string());
     }
     for (const std::string& name : written) fs::rename(staging / name, dir / "merged" / name);

@@ -31,7 +31,7 @@ namespace fs = std::filesystem;
 
 namespace {
 
-enum class Status { ok, fallback, lod0_only };
+enum class Status { ok, fallback, lod0_only, not_in_mask };
 
 struct Outline {
   PolygonWithHoles footprint;
@@ -56,7 +56,8 @@ std::vector<Outline> read_outlines(const std::vector<fs::path>& tiles, std::stri
       const OGRGeometry* g = feature->GetGeometryRef();
       if (!g) continue;
       const std::string status = feature->GetFieldAsString("status"), stage = feature->GetFieldAsString("stage");
-      const Status s = status == "fallback" ? Status::fallback : stage == "heights" ? Status::lod0_only : Status::ok;
+      const Status s = status == "fallback" ? Status::fallback : status == "not_in_mask" ? Status::not_in_mask
+                                                             : stage == "heights" ? Status::lod0_only : Status::ok;
       if (wkbFlatten(g->getGeometryType()) == wkbPolygon) {
         out.push_back({from_ogr_polygon(*g->toPolygon()), s});
       } else if (wkbFlatten(g->getGeometryType()) == wkbMultiPolygon) {
@@ -189,11 +190,12 @@ Overview write_overview(const std::string& job_path, const std::vector<fs::path>
   // Whole outlines (not clipped to tiles), ok first so that the others show on top of them.
   constexpr int shift = 3;
   const int thickness = std::max(1, int(std::lround(std::max(width, height) / 1000.0)));
-  for (const Status pass : {Status::ok, Status::lod0_only, Status::fallback}) {
-    const cv::Scalar colour = pass == Status::ok ? cv::Scalar(40, 40, 230) : pass == Status::fallback ? cv::Scalar(0, 220, 255) : cv::Scalar(230, 40, 230);
+  for (const Status pass : {Status::ok, Status::lod0_only, Status::fallback, Status::not_in_mask}) {
+    const cv::Scalar colour = pass == Status::ok ? cv::Scalar(40, 40, 230) : pass == Status::fallback ? cv::Scalar(0, 220, 255)
+                              : pass == Status::lod0_only ? cv::Scalar(230, 40, 230) : cv::Scalar(230, 200, 0);
     for (const Outline& o : outlines) {
       if (o.status != pass) continue;
-      (pass == Status::ok ? result.ok : pass == Status::fallback ? result.fallback : result.lod0_only)++;
+      (pass == Status::ok ? result.ok : pass == Status::fallback ? result.fallback : pass == Status::lod0_only ? result.lod0_only : result.not_in_mask)++;
       std::vector<std::vector<cv::Point>> rings;
       const auto add = [&](const Ring& ring) {
         rings.emplace_back();
@@ -287,6 +289,12 @@ void write_page(const nlohmann::json& r, const Overview& overview, const fs::pat
   row("&nbsp;&nbsp;fallback footprint", number("fallback"));
   row("&nbsp;&nbsp;with LOD1", number("lod1"));
   row("&nbsp;&nbsp;without LOD1 (no heights)", std::to_string(buildings - lod1));
+  if (r.contains("cadastre")) {
+    const nlohmann::json& c = r.at("cadastre");
+    row("cadastral footprints confirmed by the mask", c.value("confirmed", nlohmann::json(0)).dump());
+    row("buildings not in the footprints", c.value("not_in_footprints", nlohmann::json(0)).dump());
+    row("footprints not in the mask (not modeled)", c.value("not_in_mask", nlohmann::json(0)).dump());
+  }
   row("small components dropped", number("dropped_small"));
   row("buildings too large for a window", number("too_large"));
   const nlohmann::json stages = r.value("stage_seconds", nlohmann::json::object());
@@ -309,7 +317,10 @@ void write_page(const nlohmann::json& r, const Overview& overview, const fs::pat
     o += "<p>overview.tif beside this page (a Cloud-Optimized GeoTIFF, georeferenced), background: " + overview.background + ".";
     o += "<span class=\"key\" style=\"background:#e62828\"></span>ok (" + std::to_string(overview.ok) + ")";
     o += "<span class=\"key\" style=\"background:#ffdc00\"></span>fallback (" + std::to_string(overview.fallback) + ")";
-    o += "<span class=\"key\" style=\"background:#e628e6\"></span>without LOD1 (" + std::to_string(overview.lod0_only) + ")</p>\n";
+    o += "<span class=\"key\" style=\"background:#e628e6\"></span>without LOD1 (" + std::to_string(overview.lod0_only) + ")";
+    if (overview.not_in_mask)
+      o += "<span class=\"key\" style=\"background:#00c8e6\"></span>footprint not in the mask (" + std::to_string(overview.not_in_mask) + ")";
+    o += "</p>\n";
     o += "<p><span style=\"display:inline-block;width:" + std::to_string(bar) + "px;height:6px;background:#222\"></span> " + scale + "</p>\n";
     char* base64 = CPLBase64Encode(int(overview.jpeg.size()), reinterpret_cast<const GByte*>(overview.jpeg.data()));
     o += "<div class=\"picture\"><img width=\"" + std::to_string(overview.width) + "\" height=\"" + std::to_string(overview.height) +

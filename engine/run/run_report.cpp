@@ -43,6 +43,13 @@ void account(const std::string& summary, const std::string& tile, int tile_index
       std::getline(fields, b, '\t');
       std::getline(fields, c);
       t.failed.emplace_back(tile_index, Totals::Failed{a, tile, b, c});
+    } else if (kind == "cadastre") {
+      std::size_t confirmed = 0, not_in_footprints = 0, not_in_mask = 0;
+      fields >> confirmed >> not_in_footprints >> not_in_mask;
+      t.cadastre = true;
+      t.confirmed += confirmed;
+      t.not_in_footprints += not_in_footprints;
+      t.not_in_mask += not_in_mask;
     } else if (kind == "too_large") {
       std::getline(fields, a);
       t.too_large.emplace_back(tile_index, a);
@@ -213,7 +220,7 @@ void write_index_and_report(const Totals& totals, const RunPlan& plan, const std
   for (const std::string& t : in_tile_order(totals.too_large)) too_large.push_back(t);
   for (const Totals::TileRecord& t : tile_records)
     per_tile.push_back({{"tile", t.tile}, {"buildings", t.buildings}, {"skipped", t.skipped}, {"seconds", t.seconds}});
-  const Json report{{"job", fs::absolute(job_path).string()},
+  Json report{{"job", fs::absolute(job_path).string()},
                     {"shard", std::to_string(shard_index) + "/" + std::to_string(shard_count)},
                     {"tiles", tiles},
                     {"tiles_processed", totals.tiles_processed},
@@ -226,6 +233,7 @@ void write_index_and_report(const Totals& totals, const RunPlan& plan, const std
                     {"lod1", totals.lod1},
                     {"dropped_small", totals.dropped_small},
                     {"too_large", totals.too_large.size()},
+                    {"cadastre", {{"confirmed", totals.confirmed}, {"not_in_footprints", totals.not_in_footprints}, {"not_in_mask", totals.not_in_mask}}},
                     {"seconds", elapsed},
                     {"core_seconds", totals.core_seconds},
                     {"stage_seconds", {{"contours", totals.contour_seconds}, {"regularization", totals.core_seconds},
@@ -235,11 +243,15 @@ void write_index_and_report(const Totals& totals, const RunPlan& plan, const std
                     {"too_large_buildings", too_large},
                     {"slowest_buildings", slowest},
                     {"per_tile", per_tile}};
+  if (!totals.cadastre) report.erase("cadastre");  // (no footprints given)
   write_text_atomically(out_dir / ("report" + suffix + ".json"), readable(report));
   spdlog::info("{} tiles ({} computed, {} resumed from {}), {} buildings: {} ok, {} fallback, {} with LOD1; {} small components dropped{}; {:.1f} s",
                tiles, totals.tiles_processed, totals.tiles_skipped, job.work_dir, totals.buildings, totals.ok, totals.fallback, totals.lod1,
                totals.dropped_small, totals.too_large.empty() ? "" : "; " + std::to_string(totals.too_large.size()) + " too large (see report)",
                elapsed);
+  if (totals.cadastre)
+    spdlog::info("footprints: {} confirmed by the mask, {} not in the mask (listed in the GeoPackages); {} buildings not in the footprints",
+                 totals.confirmed, totals.not_in_mask, totals.not_in_footprints);
   if (totals.tiles_processed > 0)
     spdlog::info("one-core time by stage: contours {:.1f} s, regularization {:.1f} s, heights {:.1f} s, writing {:.1f} s",
                  totals.contour_seconds, totals.core_seconds, totals.heights_seconds, totals.write_seconds);

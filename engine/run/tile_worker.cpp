@@ -149,12 +149,21 @@ std::vector<BuildingOutput> split_among_footprints(const std::vector<TileGroup>&
   return out;
 }
 
-std::string make_summary(const TileResult& r) {
-  int ok = 0, lod1 = 0;
-  for (const BuildingOutput& b : r.buildings) ok += b.ok;
+std::string make_summary(const TileResult& r, bool cadastre) {
+  // (A footprint the mask does not confirm is no building: counted apart.)
+  int buildings = 0, ok = 0, lod1 = 0, confirmed = 0, not_in_footprints = 0, not_in_mask = 0;
+  for (const BuildingOutput& b : r.buildings) {
+    not_in_mask += b.cadastre == "not_in_mask";
+    confirmed += b.cadastre == "confirmed";
+    not_in_footprints += b.cadastre == "not_in_footprints";
+    if (b.cadastre == "not_in_mask") continue;
+    ++buildings;
+    ok += b.ok;
+  }
   for (const Heights& h : r.heights) lod1 += h.ok;
   std::ostringstream s;
-  s << r.buildings.size() << ' ' << ok << ' ' << r.buildings.size() - ok << ' ' << r.dropped_small << ' ' << lod1 << '\n';
+  s << buildings << ' ' << ok << ' ' << buildings - ok << ' ' << r.dropped_small << ' ' << lod1 << '\n';
+  if (cadastre) s << "cadastre\t" << confirmed << '\t' << not_in_footprints << '\t' << not_in_mask << '\n';
   for (const BuildingOutput& b : r.buildings)
     if (!b.ok) s << "failed\t" << b.display_id() << '\t' << b.stage << '\t' << b.reason << '\n';
   for (std::size_t i = 0; i < r.heights.size(); ++i)
@@ -440,7 +449,7 @@ std::shared_ptr<TileResult> process_tile(const RunPlan& plan, int tile) {
   }
   r->dropped_small = contours->dropped_small;
   r->too_large = contours->too_large;
-  r->summary = make_summary(*r);
+  r->summary = make_summary(*r, plan.cadastre != nullptr);
   r->seconds = seconds_since(t0);
   return r;
 }
