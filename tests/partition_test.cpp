@@ -42,32 +42,15 @@ double shared_length(const PolygonWithHoles& a, const PolygonWithHoles& b) {
   return length;
 }
 
-// The pixels of a polygon's box on the grid.
-cv::Rect pixel_box(const PolygonWithHoles& p, const GeoTransform& t) {
-  double x0 = 1e9, y0 = 1e9, x1 = -1e9, y1 = -1e9;
-  for (const Vec2& v : p.outer) {
-    const Vec2 q = t.to_pixel(v);
-    x0 = std::min(x0, q.x()); y0 = std::min(y0, q.y()); x1 = std::max(x1, q.x()); y1 = std::max(y1, q.y());
-  }
-  return {int(std::floor(x0)), int(std::floor(y0)), int(std::ceil(x1 - std::floor(x0))), int(std::ceil(y1 - std::floor(y0)))};
-}
-
-GeoTransform grid(double pixel) {
-  GeoTransform t;
-  t.c = {-40, pixel, 0, 40, 0, -pixel};  // 0.5 m pixels from (-40, 40), north up
-  return t;
-}
-
 // Two houses of a row, 10 m wide, sharing a party wall; the mask reaches 0.5 m past the cadastre
-// all round (roof overhangs). Turned by 30°, so that the wall runs across the pixel grid.
+// all round (roof overhangs). Turned by 30° too: nothing depends on the axes.
 TEST(Partition, TwoHousesSharingAWallShareItExactlyWithoutGapOrOverlap) {
   for (double angle : {0.0, 30.0}) {
     SCOPED_TRACE(angle);
     const PolygonWithHoles outline{rotated(box(-0.5, -0.5, 20.5, 10.5), angle), {}};
     const std::vector<std::vector<PolygonWithHoles>> footprints{{{rotated(box(0, 0, 10, 10), angle), {}}},
                                                                  {{rotated(box(10, 0, 20, 10), angle), {}}}};
-    const GeoTransform t = grid(0.5);
-    const Partition p = partition_outlines({outline}, footprints, t, pixel_box(outline, t), PartitionOptions{}, 4.0);
+    const Partition p = partition_outlines({outline}, footprints, PartitionOptions{}, 4.0);
     ASSERT_EQ(p.shares.size(), 2u);
     const PolygonWithHoles& a = p.shares[0].polygon;
     const PolygonWithHoles& b = p.shares[1].polygon;
@@ -78,17 +61,16 @@ TEST(Partition, TwoHousesSharingAWallShareItExactlyWithoutGapOrOverlap) {
     EXPECT_EQ(p.shares[0].note + p.shares[1].note, "");
     // No gap, no overlap: the two shares make the outline.
     EXPECT_NEAR(area(a) + area(b), area(outline), 1e-6);
-    // Each house keeps its half and its overhang: 10.5 m x 11 m.
-    EXPECT_NEAR(area(a), 115.5, 0.5 * 11 * 0.5);
-    EXPECT_NEAR(area(b), 115.5, 0.5 * 11 * 0.5);
-    // The party wall (10 m), and its continuation through the overhangs, is one boundary of both,
-    // vertex for vertex. (Through the overhangs it follows the pixels when it runs across them.)
-    EXPECT_GE(shared_length(a, b), 10.0 + 2 * 0.5 - 1e-9);
-    EXPECT_NEAR(shared_length(a, b), shared_length(b, a), 1e-12);
-    if (angle == 0) {
-      EXPECT_NEAR(shared_length(a, b), 11.0, 1e-9);
-      EXPECT_EQ(vertex_count(a), 4u);
-    }
+    // Each house keeps its half and its overhang, split square to the facade at the party wall:
+    // 10.5 m x 11 m, a rectangle.
+    EXPECT_NEAR(area(a), 115.5, 1e-6);
+    EXPECT_NEAR(area(b), 115.5, 1e-6);
+    EXPECT_EQ(vertex_count(a), 4u);
+    EXPECT_EQ(vertex_count(b), 4u);
+    // The party wall (10 m) and its continuation through the overhangs is one boundary of both,
+    // vertex for vertex.
+    EXPECT_NEAR(shared_length(a, b), 11.0, 1e-9);
+    EXPECT_NEAR(shared_length(b, a), 11.0, 1e-9);
   }
 }
 
@@ -97,19 +79,18 @@ TEST(Partition, TwoHousesSharingAWallShareItExactlyWithoutGapOrOverlap) {
 TEST(Partition, MaskBeyondTheExtensionIsABuildingOfItsOwnAndCadastreModeKeepsThePolygons) {
   const PolygonWithHoles outline{box(0, 0, 30, 10), {}};
   const std::vector<std::vector<PolygonWithHoles>> footprints{{{box(0, 0, 10, 10), {}}}, {{box(10, 0, 20, 10), {}}}};
-  const GeoTransform t = grid(0.5);
-  const cv::Rect pixels = pixel_box(outline, t);
   PartitionOptions options;
   options.extension_m = 2.0;
-  const Partition p = partition_outlines({outline}, footprints, t, pixels, options, 4.0);
+  const Partition p = partition_outlines({outline}, footprints, options, 4.0);
   ASSERT_EQ(p.rest.size(), 1u);
-  // The second house takes the annex to about 2 m from its wall (pixel centres within 4 px).
-  EXPECT_NEAR(area(p.rest[0]), 8.0 * 10, 0.5 * 10 + 1e-9);
+  // The second house takes the annex to 2 m from its wall.
+  EXPECT_NEAR(area(p.rest[0]), 8.0 * 10, 1e-9);
+  EXPECT_EQ(vertex_count(p.rest[0]), 4u);
   EXPECT_NEAR(area(p.shares[1].polygon) + area(p.rest[0]), 200.0, 1e-6);
   EXPECT_NEAR(area(p.shares[0].polygon), 100.0, 1e-9);
 
   options.lod0 = "cadastre";
-  const Partition c = partition_outlines({outline}, footprints, t, pixels, options, 4.0);
+  const Partition c = partition_outlines({outline}, footprints, options, 4.0);
   ASSERT_EQ(c.shares.size(), 2u);
   EXPECT_NEAR(area(c.shares[1].polygon), 100.0, 1e-9);  // the cadastre's polygon, not the outline's share
   ASSERT_EQ(c.rest.size(), 1u);  // the annex beyond the extension is found all the same

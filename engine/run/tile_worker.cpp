@@ -106,7 +106,7 @@ std::vector<BuildingOutput> split_among_footprints(const std::vector<TileGroup>&
         out.back().cadastre = "not_in_footprints";
       }
     }
-    const Partition split = confirmed.empty() ? Partition{} : partition_outlines(outlines, confirmed, plan.transform, t.box, options, plan.job.stages.contour.min_area_m2);
+    const Partition split = confirmed.empty() ? Partition{} : partition_outlines(outlines, confirmed, options, plan.job.stages.contour.min_area_m2);
     std::size_t next_share = 0;
     for (std::size_t k = 0; k < t.footprints.size(); ++k) {
       const CadastralFootprint& footprint = cadastre.footprints()[std::size_t(t.footprints[k])];

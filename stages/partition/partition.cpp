@@ -5,10 +5,8 @@
 
 #include <algorithm>
 #include <cmath>
-#include <opencv2/imgproc.hpp>
 
 #include "geometry/polygon.hpp"
-#include "geometry/rasterize.hpp"
 
 namespace lodforge {
 
@@ -76,77 +74,67 @@ CSet set_of(const std::vector<PolygonWithHoles>& polygons) {
   return s;
 }
 
-// The pixels of the grid around box assigned to each footprint: those whose centre lies in it
-// (the earlier footprint where two overlap), and those outside every footprint whose nearest
-// footprint pixel is within extension_px. Returned as per-footprint sets of row runs (pixel
-// rectangles), leaving out the pixels inside the footprint whole (nothing to add to it).
-std::vector<CSet> extension_cells(const std::vector<std::vector<PolygonWithHoles>>& footprints, const GeoTransform& grid,
-                                  const cv::Rect& box, double extension_px) {
-  const int margin = int(std::ceil(extension_px)) + 2;
-  const cv::Rect area(box.x - margin, box.y - margin, box.width + 2 * margin, box.height + 2 * margin);
-  GeoTransform local = grid;
-  const Vec2 origin = grid.to_map(area.x, area.y);
-  local.c[0] = origin.x();
-  local.c[3] = origin.y();
-  cv::Mat labels = cv::Mat::zeros(area.size(), CV_32S), scratch(area.size(), CV_8U);
-  for (std::size_t i = footprints.size(); i-- > 0;) {  // the earlier footprint last: it wins an overlap
-    scratch.setTo(0);
-    for (const PolygonWithHoles& p : footprints[i]) rasterize(scratch, p, local, 1, 0);
-    labels.setTo(int(i) + 1, scratch);
-  }
-  const cv::Mat own = labels.clone();  // (before the extension: the pixels whose centre lies in a footprint)
-  if (extension_px > 0) {
-    cv::Mat unlabeled = labels == 0, distance, nearest;
-    cv::distanceTransform(unlabeled, distance, nearest, cv::DIST_L2, cv::DIST_MASK_5, cv::DIST_LABEL_PIXEL);
-    // The footprint of each labeled pixel, by the index distanceTransform gave it.
-    std::vector<int> footprint_of_seed(std::size_t(area.area()) + 1, 0);
-    for (int y = 0; y < area.height; ++y)
-      for (int x = 0; x < area.width; ++x)
-        if (const int l = labels.at<int>(y, x)) footprint_of_seed[std::size_t(nearest.at<int>(y, x))] = l;
-    for (int y = 0; y < area.height; ++y)
-      for (int x = 0; x < area.width; ++x)
-        if (!labels.at<int>(y, x) && distance.at<float>(y, x) <= extension_px)
-          labels.at<int>(y, x) = footprint_of_seed[std::size_t(nearest.at<int>(y, x))];
-  }
-  std::vector<CSet> cells(footprints.size());
-  std::vector<std::vector<CPolygon>> runs(footprints.size());
-  for (int y = 0; y < area.height; ++y) {
-    for (int x = 0; x < area.width;) {
-      const int l = labels.at<int>(y, x);
-      int end = x + 1;
-      while (end < area.width && labels.at<int>(y, end) == l) ++end;
-      if (l > 0) {
-        // Within the run, the pixels inside the footprint whole are skipped: those whose own centre
-        // and their 8 neighbours' lie in it.
-        auto inner = [&](int c) {
-          if (y == 0 || y + 1 == area.height || c == 0 || c + 1 == area.width) return false;
-          for (int dy = -1; dy <= 1; ++dy)
-            for (int dx = -1; dx <= 1; ++dx)
-              if (own.at<int>(y + dy, c + dx) != l) return false;
-          return true;
-        };
-        for (int c = x; c < end;) {
-          if (inner(c)) { ++c; continue; }
-          int e = c + 1;
-          while (e < end && !inner(e)) ++e;
-          Ring r{local.to_map(c, y), local.to_map(e, y), local.to_map(e, y + 1), local.to_map(c, y + 1)};
-          runs[std::size_t(l - 1)].push_back(to_cgal(r, true));
-          c = e;
-        }
-      }
-      x = end;
+// The band within distance d around the footprints' union U, split among the footprints as a
+// mitered offset splits it: each boundary edge of U sweeps a quadrilateral outward to the miter
+// points of its two vertices (on the bisectors of its neighbours' normals, at most 2 d out), and
+// the quadrilateral goes to the footprint the edge bounds. Adjacent quadrilaterals share their
+// bisector exactly, so a row's front overhang is split at the party walls' ends, square to the
+// facade, by straight lines. Inner vertices are U's own (exact), so the band meets U without a
+// sliver. Quadrilaterals that fold over (a short edge between reflex corners) are left out; where
+// two overlap, the earlier footprint keeps the overlap (in partition_outlines).
+std::vector<CSet> band_cells(const std::vector<CSet>& own, const CSet& covered, double d) {
+  std::vector<std::vector<CPolygon>> quads(own.size());
+  std::vector<CPolygonWithHoles> parts;
+  if (d > 0) covered.polygons_with_holes(std::back_inserter(parts));
+  auto sweep = [&](const CPolygon& ring) {
+    // (Outer boundaries counter-clockwise, holes clockwise: U on the left of every edge.)
+    std::vector<K::Point_2> exact(ring.vertices_begin(), ring.vertices_end());
+    const std::size_t n = exact.size();
+    if (n < 3) return;
+    std::vector<Vec2> v(n), offset(n);
+    for (std::size_t k = 0; k < n; ++k) v[k] = Vec2(CGAL::to_double(exact[k].x()), CGAL::to_double(exact[k].y()));
+    for (std::size_t k = 0; k < n; ++k) {
+      const Vec2 in = v[k] - v[(k + n - 1) % n], out = v[(k + 1) % n] - v[k];
+      const Vec2 n1 = outward_normal(in), n2 = outward_normal(out);
+      Vec2 m = n1 + n2;
+      m = m.norm() < 1e-9 ? n1 : Vec2(m.normalized());
+      const double length = d / std::max(0.5, n1.dot(m));  // the miter, at most 2 d
+      offset[k] = v[k] + m * length;
     }
+    for (std::size_t k = 0; k < n; ++k) {
+      const std::size_t l = (k + 1) % n;
+      CPolygon quad;
+      quad.push_back(exact[k]);
+      quad.push_back(K::Point_2(offset[k].x(), offset[k].y()));
+      quad.push_back(K::Point_2(offset[l].x(), offset[l].y()));
+      quad.push_back(exact[l]);
+      if (!quad.is_simple() || quad.area() == 0) continue;
+      if (!quad.is_counterclockwise_oriented()) quad.reverse_orientation();
+      // The footprint the edge bounds: the one holding a point just inside U at its middle.
+      const K::Vector_2 edge = exact[l] - exact[k];
+      const K::Point_2 probe = CGAL::midpoint(exact[k], exact[l]) + K::Vector_2(-edge.y(), edge.x()) * K::FT(1e-7);
+      for (std::size_t i = 0; i < own.size(); ++i)
+        if (own[i].oriented_side(probe) == CGAL::ON_POSITIVE_SIDE) {
+          quads[i].push_back(std::move(quad));
+          break;
+        }
+    }
+  };
+  for (const CPolygonWithHoles& part : parts) {
+    sweep(part.outer_boundary());
+    for (auto h = part.holes_begin(); h != part.holes_end(); ++h) sweep(*h);
   }
-  for (std::size_t i = 0; i < footprints.size(); ++i)
-    if (!runs[i].empty()) cells[i].join(runs[i].begin(), runs[i].end());
+  std::vector<CSet> cells(own.size());
+  for (std::size_t i = 0; i < own.size(); ++i)
+    if (!quads[i].empty()) cells[i].join(quads[i].begin(), quads[i].end());
   return cells;
 }
 
 }  // namespace
 
 Partition partition_outlines(const std::vector<PolygonWithHoles>& outlines,
-                             const std::vector<std::vector<PolygonWithHoles>>& footprints, const GeoTransform& grid,
-                             const cv::Rect& box, const PartitionOptions& options, double min_area_m2) {
+                             const std::vector<std::vector<PolygonWithHoles>>& footprints, const PartitionOptions& options,
+                             double min_area_m2) {
   Partition out;
   out.shares.resize(footprints.size());
   const CSet outline = set_of(outlines);
@@ -158,12 +146,12 @@ Partition partition_outlines(const std::vector<PolygonWithHoles>& outlines,
     own[i].difference(covered);
     covered.join(own[i]);
   }
-  const std::vector<CSet> extensions = extension_cells(footprints, grid, box, options.extension_m / grid.pixel_size());
-  CSet cells = covered;
+  const std::vector<CSet> bands = band_cells(own, covered, options.extension_m);
+  CSet cells = covered;  // what the cells so far take
   for (std::size_t i = 0; i < footprints.size(); ++i) {
     FootprintShare& share = out.shares[i];
-    CSet cell = extensions[i];
-    cell.difference(covered);
+    CSet cell = bands[i];
+    cell.difference(cells);
     cells.join(cell);
     cell.join(own[i]);
     if (options.lod0 == "cadastre") {

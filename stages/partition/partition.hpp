@@ -2,17 +2,15 @@
 // A segmentation has one class for every building, so houses sharing walls come out as one
 // block. Given the footprints of a cadastre, each footprint the mask confirms gets the part of
 // the block's regularized outline that lies in its cell: the footprint itself (earlier footprints
-// win where two overlap), grown by the nearest-footprint rule into the mask area around it that
-// no footprint covers (roof overhangs, within extension_m). The cells partition the plane, so
-// houses sharing a wall share it exactly. The outline outside every cell is the mask's own
-// (a building the cadastre lacks). Pure computation (CGAL's exact Boolean operations).
+// win where two overlap) and its part of the band within extension_m around the footprints (roof
+// overhangs), split among them as a mitered offset of their union splits it. The cells do not
+// overlap, so houses sharing a wall share it exactly. The outline outside every cell is the mask's
+// own (a building the cadastre lacks). Pure computation (CGAL's exact Boolean operations).
 #pragma once
-#include <opencv2/core/types.hpp>
 #include <string>
 #include <vector>
 
 #include "common/option.hpp"
-#include "geometry/geotransform.hpp"
 #include "geometry/types.hpp"
 
 namespace lodforge {
@@ -25,7 +23,7 @@ struct PartitionOptions {
   template <class V>
   void visit(V& v) {
     v("min_coverage", min_coverage, "with inputs.footprints: a footprint is a building when at least this share of its pixels is building in the mask; below, it is reported with cadastre: not_in_mask", Check::between(0, 1));
-    v("extension_m", extension_m, "with inputs.footprints: mask area outside every footprint within this distance of one (roof overhangs, a mask drawn wide) joins the nearest footprint; farther, it is a building of its own with cadastre: not_in_footprints (m)", Check::at_least(0));
+    v("extension_m", extension_m, "with inputs.footprints: mask area outside every footprint within this distance of them (roof overhangs, a mask drawn wide) joins the footprint whose wall it faces; farther, it is a building of its own with cadastre: not_in_footprints (m)", Check::at_least(0));
     v("lod0", lod0, "with inputs.footprints: a confirmed footprint's LOD0 is its share of the regularized outline ('regularized') or the cadastre's own polygon ('cadastre'); heights come from it either way", Check::one_of({"regularized", "cadastre"}));
   }
 };
@@ -43,10 +41,9 @@ struct Partition {
 
 // outlines: the block's regularized outlines (valid polygons). footprints: the confirmed
 // footprints, each one or more valid polygons (a multi-part footprint), earlier ones first where
-// they overlap. grid: the raster's geotransform; box: the block's pixels on it (the nearest-footprint
-// rule is decided per pixel of the raster's grid around box).
+// they overlap.
 Partition partition_outlines(const std::vector<PolygonWithHoles>& outlines,
-                             const std::vector<std::vector<PolygonWithHoles>>& footprints, const GeoTransform& grid,
-                             const cv::Rect& box, const PartitionOptions& options, double min_area_m2);
+                             const std::vector<std::vector<PolygonWithHoles>>& footprints, const PartitionOptions& options,
+                             double min_area_m2);
 
 }  // namespace lodforge
