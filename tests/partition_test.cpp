@@ -6,6 +6,9 @@
 
 #include "geometry/polygon.hpp"
 #include "partition/partition.hpp"
+#include "parts/parts.hpp"
+#include "pipeline/core_options.hpp"
+#include <opencv2/core.hpp>
 
 namespace lodforge {
 namespace {
@@ -95,6 +98,40 @@ TEST(Partition, MaskBeyondTheExtensionIsABuildingOfItsOwnAndCadastreModeKeepsThe
   EXPECT_NEAR(area(c.shares[1].polygon), 100.0, 1e-9);  // the cadastre's polygon, not the outline's share
   ASSERT_EQ(c.rest.size(), 1u);  // the annex beyond the extension is found all the same
   EXPECT_NEAR(area(c.rest[0]), area(p.rest[0]), 1e-9);
+}
+
+// LoD1.3: two houses of a row, 10 m and 14 m wide, roofs 6 m and 12 m high, one block in the
+// mask: two parts, the shared wall identical in both, together the block.
+TEST(Parts, TwoHousesOfDifferentHeightsSharingAWallBecomeTwoPartsSharingItExactly) {
+  for (double angle : {0.0, 20.0}) {
+    SCOPED_TRACE(angle);
+    HeightRaster dsm;
+    dsm.transform.c = {-10, 0.5, 0, 30, 0, -0.5};
+    dsm.values.create(100, 100, CV_32F);
+    dsm.valid = cv::Mat::ones(100, 100, CV_8U);
+    cv::RNG rng(7);
+    const Ring a = rotated(box(0, 0, 10, 10), angle), b = rotated(box(10, 0, 24, 10), angle);
+    for (int y = 0; y < 100; ++y)
+      for (int x = 0; x < 100; ++x) {
+        const Vec2 p = dsm.transform.to_map(x + 0.5, y + 0.5);
+        const double h = point_in_ring(p, a) ? 6 : point_in_ring(p, b) ? 12 : 0;
+        dsm.values.at<float>(y, x) = float(h + rng.gaussian(0.05));
+      }
+    const PolygonWithHoles block{rotated(box(0, 0, 24, 10), angle), {}};
+    const std::vector<PolygonWithHoles> parts = split_by_roof_steps(block, dsm, 0.5, CoreOptions{}, PartOptions{});
+    ASSERT_EQ(parts.size(), 2u);
+    EXPECT_EQ(polygon_problem(parts[0]), "");
+    EXPECT_EQ(polygon_problem(parts[1]), "");
+    EXPECT_NEAR(area(parts[0]) + area(parts[1]), 240.0, 1e-6);  // no gap, no overlap
+    EXPECT_NEAR(area(parts[0]), 140.0, 3.0);  // the larger first, its wall within a few decimetres
+    EXPECT_NEAR(area(parts[1]), 100.0, 3.0);
+    EXPECT_NEAR(shared_length(parts[0], parts[1]), 10.0, 0.2);
+    EXPECT_NEAR(shared_length(parts[1], parts[0]), shared_length(parts[0], parts[1]), 1e-12);
+    // One roof: no parts.
+    PartOptions high;
+    high.min_step_m = 7;
+    EXPECT_TRUE(split_by_roof_steps(block, dsm, 0.5, CoreOptions{}, high).empty());
+  }
 }
 
 }  // namespace

@@ -227,7 +227,7 @@ int run_job(int argc, char** argv) {
   const std::string cadastre_text = cadastre ? "\nfootprints " + hex(cadastre->hash()) : "";
   const std::string contour_options = options_text(key_job.stages.contour) + cadastre_text;
   const std::string heights_options = options_text(key_job.stages.heights) + file_identity(job.inputs.dsm.path) + file_identity(job.inputs.dtm.path) +
-                                      (cadastre ? options_text(key_job.stages.footprints) : "");
+                                      (cadastre ? options_text(key_job.stages.footprints) : "") + options_text(key_job.stages.parts);
   // Building ids are first-pixel indices, so the footprints also depend on the raster's width.
   const std::string core_options = job.regularizer + "\n" + options_text(key_job.stages.core) + "\nwidth " + std::to_string(seg.size.width);
   const std::uint64_t job_key = fnv1a(gpkg_time + "\n" + file_identity(job.inputs.segmentation.path) + "\n" + file_identity(job.inputs.dsm.path) + "\n" +

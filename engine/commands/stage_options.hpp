@@ -8,6 +8,7 @@
 #include "contour/contour.hpp"
 #include "heights/heights.hpp"
 #include "partition/partition.hpp"
+#include "parts/parts.hpp"
 #include "pipeline/core_options.hpp"
 
 namespace lodforge {
@@ -17,6 +18,7 @@ struct StageOptions {
   CoreOptions core;
   HeightOptions heights;
   PartitionOptions footprints;
+  PartOptions parts;
 
   template <class V>
   void visit(V& v) {
@@ -24,6 +26,7 @@ struct StageOptions {
     core.visit(v);
     v.section("heights", heights);
     v.section("footprints", footprints);
+    v.section("parts", parts);
   }
 };
 

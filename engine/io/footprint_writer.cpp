@@ -44,6 +44,7 @@ struct FootprintFileWriter::Impl {
   GDALDataset* dataset = nullptr;
   OGRLayer* ogr_layer = nullptr;
   OGRLayer* lod1_layer = nullptr;  // when layer.write_lod1 (GeoPackage only)
+  OGRLayer* parts_layer = nullptr;  // ... and the LoD1.3 parts
   bool transaction = false;
 
   [[noreturn]] void fail(const std::string& what) {
@@ -161,6 +162,15 @@ FootprintFileWriter::FootprintFileWriter(const std::string& path, const Footprin
         OGRFieldDefn def(name, type);
         if (impl_->lod1_layer->CreateField(&def) != OGRERR_NONE) impl_->fail(std::string("cannot create field lod1.") + name);
       }
+      impl_->parts_layer = impl_->dataset->CreateLayer("parts", srs_ptr, wkbPolygon, nullptr);
+      if (!impl_->parts_layer) impl_->fail("cannot create layer parts");
+      std::vector<std::pair<std::string, OGRFieldType>> fields{{"id", layer.write_cadastre ? OFTString : OFTInteger64}, {"part", OFTInteger},
+                                                              {"ground_height", OFTReal}, {"roof_height", OFTReal}};
+      for (const HeightStatistic& h : height_statistic_fields()) fields.emplace_back(h.name, h.integer ? OFTInteger : OFTReal);
+      for (const auto& [name, type] : fields) {
+        OGRFieldDefn def(name.c_str(), type);
+        if (impl_->parts_layer->CreateField(&def) != OGRERR_NONE) impl_->fail("cannot create field parts." + name);
+      }
     }
     impl_->transaction = impl_->dataset->StartTransaction() == OGRERR_NONE;  // GeoPackage yes, GeoJSON no
   } catch (...) {
@@ -234,6 +244,21 @@ void FootprintFileWriter::add(const FootprintRecord& r) {
     block.SetGeometry(&faces);
     if (impl_->lod1_layer->CreateFeature(&block) != OGRERR_NONE) impl_->fail("cannot write the LOD1 block of " + text_id);
   }
+  if (impl_->parts_layer)
+    for (std::size_t k = 0; k < r.parts.size(); ++k) {
+      OGRFeature part(impl_->parts_layer->GetLayerDefn());
+      set_id(part);
+      part.SetField("part", int(k) + 1);
+      part.SetField("ground_height", r.parts[k].ground_height);
+      part.SetField("roof_height", r.parts[k].roof_height);
+      for (std::size_t i = 0; i < height_statistic_fields().size() && i < r.parts[k].height_statistics.size(); ++i) {
+        const HeightStatistic& h = height_statistic_fields()[i];
+        if (h.integer) part.SetField(h.name.c_str(), int(std::llround(r.parts[k].height_statistics[i])));
+        else part.SetField(h.name.c_str(), r.parts[k].height_statistics[i]);
+      }
+      part.SetGeometry(to_ogr_polygon(r.parts[k].polygon).get());
+      if (impl_->parts_layer->CreateFeature(&part) != OGRERR_NONE) impl_->fail("cannot write part " + std::to_string(k + 1) + " of " + text_id);
+    }
 }
 
 void FootprintFileWriter::finish() {

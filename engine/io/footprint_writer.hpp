@@ -30,6 +30,12 @@ struct FootprintRecord {
   double roof_height = 0, ground_height = 0;  // written when write_heights
   std::vector<double> height_statistics;       // ... with these, named by height_statistic_fields()
   std::vector<Face> lod1_faces;  // the LOD1 block's faces, when write_lod1 and it has one
+  struct Part {  // a LoD1.3 part: when write_lod1, in the GeoPackage's layer "parts"
+    PolygonWithHoles polygon;
+    double ground_height = 0, roof_height = 0;
+    std::vector<double> height_statistics;
+  };
+  std::vector<Part> parts;
   std::string cadastre_id, cadastre;  // when write_cadastre: the id (if empty, id as text) and the relation to the cadastre
   double coverage = -1;               // ... and the footprint's mask coverage (null when negative)
 };
@@ -40,7 +46,7 @@ struct FootprintLayer {
   bool write_status = true;   // status, stage, reason, regularizer
   bool write_heights = false; // roof_height, ground_height
   std::string kind_field;     // name of the field holding `kind` ("kind", "tile"); empty: none
-  bool write_lod1 = false;    // a GeoPackage also gets a layer "lod1": each block's faces as a MultiPolygon Z
+  bool write_lod1 = false;    // a GeoPackage also gets a layer "lod1": each block's faces as a MultiPolygon Z, and "parts": the LoD1.3 parts
   bool rfc7946 = false;       // GeoJSON as RFC 7946: WGS 84 longitude, latitude (7 decimals), no crs member
   bool write_cadastre = false;  // id as text (the cadastral ID), cadastre and cadastre_coverage
 };

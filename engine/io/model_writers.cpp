@@ -132,31 +132,18 @@ class CityGmlWriter : public ModelWriter {
       attribute("cadastre", m.cadastre);
       if (m.coverage >= 0) o << "      <gen:doubleAttribute name=\"cadastre_coverage\"><gen:value>" << m.coverage << "</gen:value></gen:doubleAttribute>\n";
     }
-    if (m.has_lod1) {
-      o << "      <gen:doubleAttribute name=\"ground_height\"><gen:value>" << m.ground << "</gen:value></gen:doubleAttribute>\n";
-      o << "      <gen:doubleAttribute name=\"roof_height\"><gen:value>" << m.roof << "</gen:value></gen:doubleAttribute>\n";
-      for (std::size_t i = 0; i < height_statistic_fields().size() && i < m.height_statistics.size(); ++i) {
-        const HeightStatistic& h = height_statistic_fields()[i];
-        const char* type = h.integer ? "intAttribute" : "doubleAttribute";
-        o << "      <gen:" << type << " name=\"" << h.name << "\"><gen:value>";
-        if (h.integer) o << std::llround(m.height_statistics[i]);
-        else o << m.height_statistics[i];
-        o << "</gen:value></gen:" << type << ">\n";
-      }
-      o << "      <bldg:measuredHeight uom=\"m\">" << (m.roof - m.ground) << "</bldg:measuredHeight>\n";
-    }
+    if (m.has_lod1) heights(m.ground, m.roof, m.height_statistics, 6);
     const double z = m.has_lod1 ? m.ground : 0.0;
     o << "      <bldg:lod0FootPrint>\n        <gml:MultiSurface" << srs_ << " srsDimension=\"3\">\n          <gml:surfaceMember>\n";
     polygon(lifted(m.footprint, z), 12);
     o << "          </gml:surfaceMember>\n        </gml:MultiSurface>\n      </bldg:lod0FootPrint>\n";
-    if (m.has_lod1) {
-      o << "      <bldg:lod1Solid>\n        <gml:Solid" << srs_ << " srsDimension=\"3\">\n          <gml:exterior>\n            <gml:CompositeSurface>\n";
-      for (const Face& f : m.solid.faces) {
-        o << "              <gml:surfaceMember>\n";
-        polygon(f, 16);
-        o << "              </gml:surfaceMember>\n";
-      }
-      o << "            </gml:CompositeSurface>\n          </gml:exterior>\n        </gml:Solid>\n      </bldg:lod1Solid>\n";
+    if (m.has_lod1) solid(m.solid, 6);
+    for (std::size_t k = 0; k < m.parts.size(); ++k) {
+      const PartModel& p = m.parts[k];
+      o << "      <bldg:consistsOfBuildingPart>\n        <bldg:BuildingPart gml:id=\"" << object_id(m) << '-' << k + 1 << "\">\n";
+      heights(p.ground, p.roof, p.height_statistics, 10);
+      solid(p.solid, 10);
+      o << "        </bldg:BuildingPart>\n      </bldg:consistsOfBuildingPart>\n";
     }
     o << "    </bldg:Building>\n  </core:cityObjectMember>\n";
   }
@@ -168,6 +155,34 @@ class CityGmlWriter : public ModelWriter {
  private:
   void attribute(const char* name, const std::string& value) {
     file_.out() << "      <gen:stringAttribute name=\"" << name << "\"><gen:value>" << xml_escape(value) << "</gen:value></gen:stringAttribute>\n";
+  }
+  // Generic attributes ground_height, roof_height and the statistics, then bldg:measuredHeight.
+  void heights(double ground, double roof, const std::vector<double>& statistics, int indent) {
+    auto& o = file_.out();
+    const std::string pad(indent, ' ');
+    o << pad << "<gen:doubleAttribute name=\"ground_height\"><gen:value>" << ground << "</gen:value></gen:doubleAttribute>\n";
+    o << pad << "<gen:doubleAttribute name=\"roof_height\"><gen:value>" << roof << "</gen:value></gen:doubleAttribute>\n";
+    for (std::size_t i = 0; i < height_statistic_fields().size() && i < statistics.size(); ++i) {
+      const HeightStatistic& h = height_statistic_fields()[i];
+      const char* type = h.integer ? "intAttribute" : "doubleAttribute";
+      o << pad << "<gen:" << type << " name=\"" << h.name << "\"><gen:value>";
+      if (h.integer) o << std::llround(statistics[i]);
+      else o << statistics[i];
+      o << "</gen:value></gen:" << type << ">\n";
+    }
+    o << pad << "<bldg:measuredHeight uom=\"m\">" << (roof - ground) << "</bldg:measuredHeight>\n";
+  }
+  void solid(const Solid& s, int indent) {
+    auto& o = file_.out();
+    const std::string pad(indent, ' ');
+    o << pad << "<bldg:lod1Solid>\n" << pad << "  <gml:Solid" << srs_ << " srsDimension=\"3\">\n" << pad << "    <gml:exterior>\n" << pad
+      << "      <gml:CompositeSurface>\n";
+    for (const Face& f : s.faces) {
+      o << pad << "        <gml:surfaceMember>\n";
+      polygon(f, indent + 10);
+      o << pad << "        </gml:surfaceMember>\n";
+    }
+    o << pad << "      </gml:CompositeSurface>\n" << pad << "    </gml:exterior>\n" << pad << "  </gml:Solid>\n" << pad << "</bldg:lod1Solid>\n";
   }
   void polygon(const Face& f, int indent) {
     auto& o = file_.out();
@@ -219,8 +234,36 @@ class CityJsonVertices {
   std::map<std::array<long long, 3>, std::size_t> lookup_;
 };
 
-// The CityJSON object of one building ({"type": "Building", ...}), its vertices indexed in `v`.
+// The height attributes (after others): measuredHeight, ground_height, roof_height and the statistics.
+void write_height_attributes(std::ostream& o, double ground, double roof, const std::vector<double>& statistics) {
+  o << ", \"measuredHeight\": " << (roof - ground) << ", \"ground_height\": " << ground << ", \"roof_height\": " << roof;
+  for (std::size_t i = 0; i < height_statistic_fields().size() && i < statistics.size(); ++i) {
+    o << ", \"" << height_statistic_fields()[i].name << "\": ";
+    if (height_statistic_fields()[i].integer) o << std::llround(statistics[i]);
+    else o << statistics[i];
+  }
+}
+
+// A solid's "boundaries" member, its vertices indexed in `v`.
+void write_solid_boundaries(std::ostream& o, const Solid& s, CityJsonVertices& v) {
+  o << "[[";
+  for (std::size_t f = 0; f < s.faces.size(); ++f) {
+    o << (f ? ", [" : "[");
+    for (std::size_t r = 0; r < s.faces[f].rings.size(); ++r) {
+      o << (r ? ", [" : "[");
+      for (std::size_t i = 0; i < s.faces[f].rings[r].size(); ++i) o << (i ? ", " : "") << v.index(s.faces[f].rings[r][i]);
+      o << ']';
+    }
+    o << "]";
+  }
+  o << "]]";
+}
+
+// The CityJSON objects of one building: "id": {"type": "Building", ...} and its LoD1.3 parts
+// ("id-1": {"type": "BuildingPart", ...}), its vertices indexed in `v`.
 void write_city_object(std::ostream& o, const BuildingModel& m, CityJsonVertices& v) {
+  const std::string id = object_id(m);
+  o << '"' << id << "\": ";
   const auto ring3 = [&](const Ring3& r) {
     o << '[';
     for (std::size_t i = 0; i < r.size(); ++i) o << (i ? ", " : "") << v.index(r[i]);
@@ -241,14 +284,7 @@ void write_city_object(std::ostream& o, const BuildingModel& m, CityJsonVertices
     o << ", \"cadastre\": \"" << m.cadastre << "\"";
     if (m.coverage >= 0) o << ", \"cadastre_coverage\": " << m.coverage;
   }
-  if (m.has_lod1) {
-    o << ", \"measuredHeight\": " << (m.roof - m.ground) << ", \"ground_height\": " << m.ground << ", \"roof_height\": " << m.roof;
-    for (std::size_t i = 0; i < height_statistic_fields().size() && i < m.height_statistics.size(); ++i) {
-      o << ", \"" << height_statistic_fields()[i].name << "\": ";
-      if (height_statistic_fields()[i].integer) o << std::llround(m.height_statistics[i]);
-      else o << m.height_statistics[i];
-    }
-  }
+  if (m.has_lod1) write_height_attributes(o, m.ground, m.roof, m.height_statistics);
   o << "}, \"geometry\": [";
   const double z = m.has_lod1 ? m.ground : 0.0;
   o << "{\"type\": \"MultiSurface\", \"lod\": \"0\", \"boundaries\": [[";
@@ -256,18 +292,25 @@ void write_city_object(std::ostream& o, const BuildingModel& m, CityJsonVertices
   for (const Ring& h : m.footprint.holes) { o << ", "; ring(h, z); }
   o << "]]}";
   if (m.has_lod1) {
-    o << ", {\"type\": \"Solid\", \"lod\": \"1\", \"boundaries\": [[";
-    for (std::size_t f = 0; f < m.solid.faces.size(); ++f) {
-      o << (f ? ", [" : "[");
-      for (std::size_t r = 0; r < m.solid.faces[f].rings.size(); ++r) {
-        o << (r ? ", " : "");
-        ring3(m.solid.faces[f].rings[r]);
-      }
-      o << "]";
-    }
-    o << "]]}";
+    o << ", {\"type\": \"Solid\", \"lod\": \"1\", \"boundaries\": ";
+    write_solid_boundaries(o, m.solid, v);
+    o << "}";
   }
-  o << "]}";
+  o << "]";
+  if (!m.parts.empty()) {
+    o << ", \"children\": [";
+    for (std::size_t k = 0; k < m.parts.size(); ++k) o << (k ? ", " : "") << '"' << id << '-' << k + 1 << '"';
+    o << "]";
+  }
+  o << "}";
+  for (std::size_t k = 0; k < m.parts.size(); ++k) {
+    const PartModel& p = m.parts[k];
+    o << ", \"" << id << '-' << k + 1 << "\": {\"type\": \"BuildingPart\", \"parents\": [\"" << id << "\"], \"attributes\": {\"tile\": \"" << m.tile << "\"";
+    write_height_attributes(o, p.ground, p.roof, p.height_statistics);
+    o << "}, \"geometry\": [{\"type\": \"Solid\", \"lod\": \"1.3\", \"boundaries\": ";
+    write_solid_boundaries(o, p.solid, v);
+    o << "}]}";
+  }
 }
 
 // What a CityJSON file (or a CityJSONSeq's first line) starts with: type, version, transform,
@@ -290,7 +333,7 @@ class CityJsonWriter : public ModelWriter {
   }
   void add(const BuildingModel& m) override {
     auto& o = file_.out();
-    o << (first_ ? "\n" : ",\n") << "  \"" << object_id(m) << "\": ";
+    o << (first_ ? "\n  " : ",\n  ");
     first_ = false;
     write_city_object(o, m, vertices_);
   }
@@ -322,7 +365,7 @@ class CityJsonSeqWriter : public ModelWriter {
     auto& o = file_.out();
     CityJsonVertices vertices(origin_);
     const std::string id = object_id(m);
-    o << "{\"type\": \"CityJSONFeature\", \"id\": \"" << id << "\", \"CityObjects\": {\"" << id << "\": ";
+    o << "{\"type\": \"CityJSONFeature\", \"id\": \"" << id << "\", \"CityObjects\": {";
     write_city_object(o, m, vertices);
     o << "}, \"vertices\": [";
     vertices.write(o, false);
@@ -438,6 +481,7 @@ class FootprintModelWriter : public ModelWriter {
     r.ground_height = m.ground;
     r.height_statistics = m.height_statistics;
     if (m.has_lod1) r.lod1_faces = m.solid.faces;
+    for (const PartModel& p : m.parts) r.parts.push_back({p.footprint, p.ground, p.roof, p.height_statistics});
     r.cadastre_id = m.cadastre_id;
     r.cadastre = m.cadastre;
     r.coverage = m.coverage;
@@ -584,8 +628,11 @@ Extent extent_of(const std::vector<BuildingModel>& models) {
     e[0] = std::min(e[0], p.x()); e[1] = std::min(e[1], p.y()); e[2] = std::min(e[2], z_low);
     e[3] = std::max(e[3], p.x()); e[4] = std::max(e[4], p.y()); e[5] = std::max(e[5], z_high);
   };
-  for (const BuildingModel& m : models)
+  for (const BuildingModel& m : models) {
     for (const Vec2& p : m.footprint.outer) add(p, m.has_lod1 ? std::min(m.ground, m.roof) : 0.0, m.has_lod1 ? std::max(m.ground, m.roof) : 0.0);
+    for (const PartModel& part : m.parts)  // (each on its own ground, to its own roof)
+      for (const Vec2& p : part.footprint.outer) add(p, std::min(part.ground, part.roof), std::max(part.ground, part.roof));
+  }
   if (models.empty()) e = Extent{};
   return e;
 }

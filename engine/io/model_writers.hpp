@@ -12,6 +12,14 @@
 
 namespace lodforge {
 
+// A LoD1.3 part of a building (where its roof steps), with its own block.
+struct PartModel {
+  PolygonWithHoles footprint;
+  double ground = 0, roof = 0;
+  std::vector<double> height_statistics;  // named by height_statistic_fields(), as the building's
+  Solid solid;
+};
+
 struct BuildingModel {
   std::int64_t id = 0;
   std::string tile;
@@ -25,6 +33,10 @@ struct BuildingModel {
   // relates to it (confirmed, not_in_footprints, not_in_mask) and the footprint's mask coverage.
   std::string cadastre_id, cadastre;
   double coverage = -1;
+  // LoD1.3: the parts where the roof steps, tiling the footprint (none: the building is one part).
+  // CityGML BuildingParts, CityJSON BuildingPart children with "lod": "1.3", GeoPackage layer
+  // "parts"; IDs object_id(m) + "-" + their number from 1.
+  std::vector<PartModel> parts;
 };
 
 // A model's object ID in every format: lodforge_b<first pixel>, or its cadastral ID (made an XML

@@ -54,7 +54,12 @@ std::vector<PolygonWithHoles> read_polygons(const std::string& path, const std::
   auto add = [&out](const OGRPolygon* p) {
     if (p->getExteriorRing() && p->getExteriorRing()->getNumPoints() >= 4) out.push_back(from_ogr_polygon(*p));
   };
-  for (OGRLayer* layer : d->GetLayers()) {
+  // A lodforge GeoPackage holds its footprints in "footprints" beside the LOD1 blocks' faces
+  // (layer "lod1"): the footprints only, then.
+  std::vector<OGRLayer*> layers;
+  if (OGRLayer* footprints = d->GetLayerByName("footprints")) layers.push_back(footprints);
+  else for (OGRLayer* layer : d->GetLayers()) layers.push_back(layer);
+  for (OGRLayer* layer : layers) {
     if (crs_wkt && crs_wkt->empty() && layer->GetSpatialRef()) {
       char* wkt = nullptr;
       layer->GetSpatialRef()->exportToWkt(&wkt);

@@ -15,7 +15,8 @@ OGRLinearRing to_ogr_ring(const Ring& ring);  // closed (first point repeated)
 // Oriented as the core expects: outer counter-clockwise, holes clockwise.
 PolygonWithHoles from_ogr_polygon(const OGRPolygon& polygon);
 
-// Every polygon of every layer of a vector file (multipolygons split into their parts). Throws
+// Every polygon of every layer of a vector file (multipolygons split into their parts); of the
+// layer "footprints" alone when there is one (lodforge's GeoPackages: not the LOD1 faces). Throws
 // InputError naming `label` and the file when it is missing, unreadable or holds no polygon.
 // crs_wkt, when given, receives the first layer's CRS (empty if it has none).
 std::vector<PolygonWithHoles> read_polygons(const std::string& path, const std::string& label, std::string* crs_wkt = nullptr);

@@ -26,6 +26,7 @@
 #include "io/quicklook.hpp"
 #include "lod1/solid.hpp"
 #include "partition/partition.hpp"
+#include "parts/parts.hpp"
 #include "pipeline/building.hpp"
 
 namespace lodforge {
@@ -181,6 +182,56 @@ std::string serialize_heights(const std::vector<Heights>& heights) {
   return s.str();
 }
 
+// Each building's parts: a line "parts N", then per part its heights line and its rings, each a
+// line "ring x y x y ..." (the outer first).
+std::string serialize_parts(const std::vector<std::vector<BuildingPart>>& parts) {
+  std::ostringstream s;
+  s.precision(17);
+  for (const std::vector<BuildingPart>& building : parts) {
+    s << "parts " << building.size() << '\n';
+    for (const BuildingPart& p : building) {
+      s << serialize_heights({p.heights});
+      for (const Ring* ring : [&] { std::vector<const Ring*> r{&p.footprint.outer}; for (const Ring& h : p.footprint.holes) r.push_back(&h); return r; }()) {
+        s << "ring";
+        for (const Vec2& v : *ring) s << ' ' << v.x() << ' ' << v.y();
+        s << '\n';
+      }
+      s << "end\n";
+    }
+  }
+  return s.str();
+}
+
+std::optional<std::vector<Heights>> parse_heights(const std::string& text, std::size_t count);
+
+std::optional<std::vector<std::vector<BuildingPart>>> parse_parts(const std::string& text, std::size_t count) {
+  std::vector<std::vector<BuildingPart>> out;
+  std::istringstream in(text);
+  std::string line;
+  while (std::getline(in, line)) {
+    if (line.rfind("parts ", 0) != 0) return std::nullopt;
+    const std::size_t n = std::stoul(line.substr(6));
+    std::vector<BuildingPart>& building = out.emplace_back();
+    for (std::size_t k = 0; k < n; ++k) {
+      BuildingPart p;
+      if (!std::getline(in, line)) return std::nullopt;
+      const auto heights = parse_heights(line + "\n", 1);
+      if (!heights) return std::nullopt;
+      p.heights = heights->front();
+      while (std::getline(in, line) && line != "end") {
+        if (line.rfind("ring", 0) != 0) return std::nullopt;
+        std::istringstream f(line.substr(4));
+        Ring ring;
+        for (double x, y; f >> x >> y;) ring.emplace_back(x, y);
+        (p.footprint.outer.empty() ? p.footprint.outer : p.footprint.holes.emplace_back()) = std::move(ring);
+      }
+      building.push_back(std::move(p));
+    }
+  }
+  if (out.size() != count) return std::nullopt;
+  return out;
+}
+
 std::optional<std::vector<Heights>> parse_heights(const std::string& text, std::size_t count) {
   std::vector<Heights> out;
   std::istringstream in(text);
@@ -201,7 +252,12 @@ std::optional<std::vector<Heights>> parse_heights(const std::string& text, std::
   return out;
 }
 
-BuildingModel model_of(const BuildingOutput& b, const Heights* h, const std::string& tile, const Job& job) {
+// The values of height_statistic_fields() for a footprint with these heights.
+std::vector<double> height_statistics(const PolygonWithHoles& footprint, const Heights& h) {
+  return {h.roof_min, h.roof_50p, h.roof_70p, h.roof_max, area(footprint) * (h.roof - h.ground), h.dsm_coverage, double(h.dsm_cells)};
+}
+
+BuildingModel model_of(const BuildingOutput& b, const Heights* h, const std::vector<BuildingPart>* parts, const std::string& tile, const Job& job) {
   BuildingModel m;
   m.id = b.id;
   m.tile = tile;
@@ -222,8 +278,11 @@ BuildingModel model_of(const BuildingOutput& b, const Heights* h, const std::str
     m.has_lod1 = true;
     m.ground = h->ground;
     m.roof = h->roof;
-    m.height_statistics = {h->roof_min, h->roof_50p, h->roof_70p, h->roof_max, area(b.footprint) * (h->roof - h->ground),
-                           h->dsm_coverage, double(h->dsm_cells)};
+    m.height_statistics = height_statistics(b.footprint, *h);
+    if (parts)
+      for (const BuildingPart& p : *parts)
+        m.parts.push_back({p.footprint, p.heights.ground, p.heights.roof, height_statistics(p.footprint, p.heights),
+                           extrude(p.footprint, p.heights.ground, p.heights.roof)});
   } else if (h) {
     if (b.ok) m.stage = "heights";
     m.reason += (m.reason.empty() ? "" : "; ") + std::string("heights: ") + h->reason;
@@ -394,8 +453,11 @@ std::shared_ptr<TileResult> process_tile(const RunPlan& plan, int tile) {
   if (!plan.dsm_source.empty()) {
     const std::uint64_t heights_key = fnv1a(plan.heights_options, buildings_key);
     std::optional<std::vector<Heights>> heights;
+    std::optional<std::vector<std::vector<BuildingPart>>> parts;
     if (auto blob = store.load_blob("heights", r->name, heights_key)) heights = parse_heights(*blob, r->buildings.size());
-    if (!heights) {
+    if (auto blob = store.load_blob("parts", r->name, heights_key)) parts = parse_parts(*blob, r->buildings.size());
+    if (!heights || !parts) {
+      parts.emplace(r->buildings.size());
       // Each building reads just the DSM and DTM pixels its heights need (heights_box), from the
       // shared blocks: a tile holds no window of the whole tile, and blocks no building touches
       // are never decoded. (Each thread reads through its own dataset handles.)
@@ -427,12 +489,27 @@ std::shared_ptr<TileResult> process_tile(const RunPlan& plan, int tile) {
             h.reason = "lod1: invalid shell: " + problem;
           }
         }
+        // LoD1.3: the parts where the roof steps, each with its heights and a valid block (else none).
+        if (h.ok) {
+          std::vector<BuildingPart>& building_parts = (*parts)[i];
+          for (PolygonWithHoles& p : split_by_roof_steps(footprint, dsm, pixel, job.stages.core, job.stages.parts)) {
+            BuildingPart part{std::move(p), {}};
+            part.heights = building_heights(part.footprint, dsm, dtm ? &*dtm : nullptr, job.stages.heights);
+            if (!part.heights.ok || !shell_problem(extrude(part.footprint, part.heights.ground, part.heights.roof)).empty()) {
+              building_parts.clear();
+              break;
+            }
+            building_parts.push_back(std::move(part));
+          }
+        }
         seconds[i] = seconds_since(started);
       }); });
       for (double s : seconds) r->heights_seconds += s;
       store.save_blob("heights", r->name, heights_key, serialize_heights(*heights));
+      store.save_blob("parts", r->name, heights_key, serialize_parts(*parts));
     }
     r->heights = std::move(*heights);
+    r->parts = std::move(*parts);
   }
   plan.readers->finished_reading(tile);  // (a quick look may read again: decoded again if freed)
   if (job.output.quicklook && !r->buildings.empty()) {
@@ -488,7 +565,7 @@ TileOutputs write_tile_outputs(const RunPlan& plan, TileResult& result) {
     std::vector<BuildingModel> models;
     models.reserve(r->buildings.size());
     for (std::size_t i = 0; i < r->buildings.size(); ++i)
-      models.push_back(model_of(r->buildings[i], r->heights.empty() ? nullptr : &r->heights[i], r->name, job));
+      models.push_back(model_of(r->buildings[i], r->heights.empty() ? nullptr : &r->heights[i], r->parts.empty() ? nullptr : &r->parts[i], r->name, job));
     r->write_seconds += seconds_since(modeling);
     const WriterContext context{crs_wkt, plan.crs.epsg(), r->name, plan.transform.to_map(tile_rect.x, tile_rect.y + tile_rect.height),
                                 extent_of(models), plan.cadastre != nullptr};

@@ -68,6 +68,12 @@ struct RunPlan {
   const Cadastre* cadastre = nullptr;  // inputs.footprints, when given
 };
 
+// A building's LoD1.3 part: where its roof steps (stages.parts), with its own heights.
+struct BuildingPart {
+  PolygonWithHoles footprint;
+  Heights heights;
+};
+
 struct TileResult {
   int tile = 0;
   std::string name;
@@ -75,6 +81,7 @@ struct TileResult {
   bool contours_reused = false, buildings_reused = false;  // stage checkpoints found
   std::vector<BuildingOutput> buildings;
   std::vector<Heights> heights;  // per building, when a DSM is given
+  std::vector<std::vector<BuildingPart>> parts;  // ... and its LoD1.3 parts (none: one part, its LoD1.2 block)
   int dropped_small = 0;
   std::vector<std::string> too_large;
   std::string summary;  // kept in the done marker, replayed on resume

@@ -134,7 +134,7 @@ std::vector<CSet> band_cells(const std::vector<CSet>& own, const CSet& covered, 
 
 Partition partition_outlines(const std::vector<PolygonWithHoles>& outlines,
                              const std::vector<std::vector<PolygonWithHoles>>& footprints, const PartitionOptions& options,
-                             double min_area_m2) {
+                             double min_area_m2, bool absorb_rest) {
   Partition out;
   out.shares.resize(footprints.size());
   const CSet outline = set_of(outlines);
@@ -175,6 +175,7 @@ Partition partition_outlines(const std::vector<PolygonWithHoles>& outlines,
       // The outline misses the footprint's cell (or leaves only a pinched part): the cadastre's polygon.
       auto [own_parts, own_invalid] = polygons_of(own[i]);
       if (!own_parts.empty()) share.polygon = own_parts.front();
+      share.footprint_taken = true;
       share.note = "the regularized outline leaves nothing valid in the footprint's cell; the cadastre's polygon is its LOD0";
     }
   }
@@ -183,6 +184,34 @@ Partition partition_outlines(const std::vector<PolygonWithHoles>& outlines,
   auto [parts, invalid] = polygons_of(rest);
   out.dropped_small += invalid > 0;
   for (PolygonWithHoles& p : parts) {
+    if (absorb_rest) {
+      // Into the share it borders longest (half the perimeter the union loses), when the union is one polygon.
+      auto perimeter_of = [](const PolygonWithHoles& q) {
+        double l = perimeter(q.outer);
+        for (const Ring& h : q.holes) l += perimeter(h);
+        return l;
+      };
+      std::size_t best = out.shares.size();
+      double best_shared = 0;
+      PolygonWithHoles best_union;
+      for (std::size_t i = 0; i < out.shares.size(); ++i) {
+        if (out.shares[i].polygon.outer.empty()) continue;
+        CSet u = set_of({out.shares[i].polygon});
+        u.join(to_cgal(p));
+        auto [joined, joined_invalid] = polygons_of(u);
+        if (joined.size() != 1 || joined_invalid > 0) continue;
+        const double shared = (perimeter_of(out.shares[i].polygon) + perimeter_of(p) - perimeter_of(joined.front())) / 2;
+        if (shared > best_shared + 1e-9) {
+          best = i;
+          best_shared = shared;
+          best_union = std::move(joined.front());
+        }
+      }
+      if (best < out.shares.size()) {
+        out.shares[best].polygon = std::move(best_union);
+        continue;
+      }
+    }
     if (area(p) >= min_area_m2) out.rest.push_back(std::move(p));
     else ++out.dropped_small;
   }

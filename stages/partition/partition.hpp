@@ -31,6 +31,7 @@ struct PartitionOptions {
 struct FootprintShare {
   PolygonWithHoles polygon;  // empty outer ring: none (see note)
   std::string note;          // why the share is not the outline's part (cadastre polygon taken, parts dropped), else empty
+  bool footprint_taken = false;  // the outline leaves nothing valid in the cell: polygon is the footprint's own
 };
 
 struct Partition {
@@ -41,9 +42,10 @@ struct Partition {
 
 // outlines: the block's regularized outlines (valid polygons). footprints: the confirmed
 // footprints, each one or more valid polygons (a multi-part footprint), earlier ones first where
-// they overlap.
+// they overlap. absorb_rest: each part of the outlines outside every cell joins the share it
+// borders longest instead (when the two make one polygon), so the shares cover the outlines.
 Partition partition_outlines(const std::vector<PolygonWithHoles>& outlines,
                              const std::vector<std::vector<PolygonWithHoles>>& footprints, const PartitionOptions& options,
-                             double min_area_m2);
+                             double min_area_m2, bool absorb_rest = false);
 
 }  // namespace lodforge
