@@ -2,7 +2,8 @@
 # The performance benchmark (issue 7): per-stage micro-benchmarks, and end-to-end runs of
 # `lodforge run` on procedural cities of 1x, 4x and 16x area (0.5, 2 and 8 km^2 at 0.25 m) with
 # wall time, buildings per second, peak RSS, the I/O floor (a process that only reads the same
-# rasters with GDAL: build/bench/io_floor), 1 vs 2 threads, and the Douglas-Peucker regularizer.
+# rasters with GDAL: build/bench/io_floor), 1 vs 2 threads, and the Douglas-Peucker regularizer
+# with LoD1.2 alone (the engine with the cheapest modeling).
 # Regenerates the results section of docs/performance.md (between its markers). Warm page cache:
 # every raster is read once first.
 #
@@ -76,6 +77,7 @@ output: {dir: out, formats: [citygml, cityjson, obj, gpkg]}
 work_dir: work
 threads: $2
 regularizer: $1
+stages: {parts: {enabled: $([ "$1" = douglas_peucker ] && echo false || echo true)}}
 YAML
     : > "$run/times"
   done

@@ -59,6 +59,8 @@ def engine_ratio(r):
 if rows:
     out.append("### End to end: `lodforge run` on procedural cities\n")
     out.append("Seg (class), DSM and DTM at 0.25 m, 250 m tiles, CityGML + CityJSON + OBJ + GeoPackage per tile; "
+               "*deformation*: the defaults (LoD1.3 parts included: their split, regularization and fitting count in *heights*); "
+               "*douglas_peucker*: the engine with the cheapest modeling, LoD1.2 alone (`stages.parts.enabled: false`); "
                "rounds of one run of each configuration, from scratch, the run of median wall time shown (peak RSS: the highest of the runs). "
                "*I/O floor*: the wall time of a process that only reads every pixel of the three rasters with GDAL, block row by "
                "block row (`build/bench/io_floor`, median), start-up and loading GDAL included as in a run's wall time; *reads*: "
