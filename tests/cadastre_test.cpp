@@ -197,5 +197,59 @@ TEST(CadastreRun, UnusableFootprintsStopTheRunNamingTheKey) {
   EXPECT_NE(no_crs.find("has no CRS"), std::string::npos) << no_crs;
 }
 
+// A footprint of two parts far apart (one ID, a MultiPolygon) is one building, written once,
+// whatever the tiling: its parts join one block.
+TEST(CadastreRun, AMultiPartFootprintIsOneBuildingWhateverTheTiling) {
+  GDALAllRegister();
+  const fs::path dir = test::fresh_test_directory("cadastre_multipart");
+  {
+    std::unique_ptr<GDALDataset> in(static_cast<GDALDataset*>(
+        GDALOpenEx(delft("derived/bgt_pand_buildings.geojson").c_str(), GDAL_OF_VECTOR, nullptr, nullptr, nullptr)));
+    ASSERT_TRUE(in);
+    OGRLayer* source = in->GetLayer(0);
+    GDALDriver* driver = GetGDALDriverManager()->GetDriverByName("GeoJSON");
+    std::unique_ptr<GDALDataset> out(driver->Create((dir / "multi.geojson").c_str(), 0, 0, 0, GDT_Unknown, nullptr));
+    OGRLayer* layer = out->CreateLayer("pand", source->GetSpatialRef(), wkbUnknown, nullptr);
+    OGRFieldDefn field("pand_id", OFTString);
+    ASSERT_EQ(layer->CreateField(&field), OGRERR_NONE);
+    // The first and the last footprint (two blocks apart, far more than a tile's window) as one.
+    std::vector<std::unique_ptr<OGRGeometry>> geometries;
+    for (auto& f : *source) geometries.emplace_back(f->GetGeometryRef()->clone());
+    ASSERT_GT(geometries.size(), 2u);
+    for (std::size_t k = 1; k + 1 < geometries.size(); ++k) {
+      OGRFeature f(layer->GetLayerDefn());
+      f.SetField("pand_id", ("p" + std::to_string(k)).c_str());
+      f.SetGeometry(geometries[k].get());
+      ASSERT_EQ(layer->CreateFeature(&f), OGRERR_NONE);
+    }
+    OGRMultiPolygon both;
+    both.addGeometry(geometries.front().get());
+    both.addGeometry(geometries.back().get());
+    OGRFeature f(layer->GetLayerDefn());
+    f.SetField("pand_id", "both");
+    f.SetGeometry(&both);
+    ASSERT_EQ(layer->CreateFeature(&f), OGRERR_NONE);
+  }
+  std::map<std::string, std::string> first;
+  for (const double tile_m : {10.0, 300.0}) {
+    const std::string name = "tiles_" + std::to_string(int(tile_m));
+    std::ofstream(dir / (name + ".yaml")) << "inputs:\n  segmentation: {path: " << delft("derived/top_class_50cm.tif") << "}\n"
+                                          << "  footprints: {path: multi.geojson, id_field: pand_id}\n"
+                                          << "tiling: {tile_size_m: " << tile_m << ", halo_m: 1}\noutput: {dir: " << name << ", formats: [gpkg]}\n"
+                                          << "work_dir: work_" << name << "\n";
+    const test::CommandOutput run = test::lodforge("run " + (dir / (name + ".yaml")).string() + " --progress none");
+    ASSERT_EQ(run.code, 0) << run.output;
+    const std::map<std::string, Written> buildings = read_run(dir / name);  // (an ID twice fails)
+    ASSERT_EQ(buildings.count("both"), 1u) << name;
+    EXPECT_NE(buildings.at("both").cadastre, "");
+    if (first.empty()) {
+      for (const auto& [id, w] : buildings) first[id] = w.wkt;
+    } else {
+      EXPECT_EQ(buildings.size(), first.size());
+      for (const auto& [id, w] : buildings) EXPECT_EQ(first[id], w.wkt) << id;
+    }
+  }
+}
+
 }  // namespace
 }  // namespace lodforge

@@ -105,6 +105,16 @@ TEST(Lod13, RowsOfHousesOfDifferentHeightsComeBackAsPartsOfTheirBlock) {
   }
   EXPECT_EQ(parts, lod13.parts);
   EXPECT_NE(test::slurp(dir / "lod13" / "merged" / "lodforge.gml").find("<bldg:consistsOfBuildingPart>"), std::string::npos);
+
+  // Written again from the checkpoints (the parts read back from work_dir): the same files.
+  const test::CommandOutput again = test::lodforge("run " + (dir / "lod13.yaml").string() + " --progress none --set output.dir=" +
+                                                   (dir / "lod13_again").string());
+  ASSERT_EQ(again.code, 0) << again.output;
+  for (const auto& e : fs::directory_iterator(dir / "lod13" / "tiles"))
+    if (e.path().extension() == ".json" || e.path().extension() == ".gml")
+      EXPECT_EQ(test::slurp(e.path()), test::slurp(dir / "lod13_again" / "tiles" / e.path().filename())) << e.path();
+  // (The heights and parts were read back, not computed: no time in the heights stage.)
+  EXPECT_EQ(nlohmann::json::parse(test::slurp(dir / "lod13_again" / "report.json")).at("stage_seconds").at("heights"), 0.0);
 }
 
 }  // namespace

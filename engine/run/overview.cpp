@@ -334,7 +334,7 @@ void write_page(const nlohmann::json& r, const Overview& overview, const fs::pat
   if (!failed.empty()) {
     o += "<table>\n<tr><th>id</th><th>tile</th><th>stage</th><th>reason</th></tr>\n";
     for (std::size_t i = 0; i < failed.size() && i < kRows; ++i)
-      o += "<tr><td class=\"n\">" + failed[i].value("id", nlohmann::json(0)).dump() + "</td><td>" + xml_escape(failed[i].value("tile", "")) +
+      o += "<tr><td class=\"n\">" + xml_escape(failed[i].value("id", nlohmann::json(0)).dump()) + "</td><td>" + xml_escape(failed[i].value("tile", "")) +
            "</td><td>" + xml_escape(failed[i].value("stage", "")) + "</td><td>" + xml_escape(failed[i].value("reason", "")) + "</td></tr>\n";
     o += "</table>\n";
     if (failed.size() > kRows) o += "<p>&hellip; and " + std::to_string(failed.size() - kRows) + " more in report.json.</p>\n";
@@ -352,7 +352,7 @@ void write_page(const nlohmann::json& r, const Overview& overview, const fs::pat
     for (const auto& b : slowest) {
       char s[32];
       std::snprintf(s, sizeof s, "%.3f", b.value("seconds", 0.0));
-      o += "<tr><td class=\"n\">" + b.value("id", nlohmann::json(0)).dump() + "</td><td>" + xml_escape(b.value("tile", "")) +
+      o += "<tr><td class=\"n\">" + xml_escape(b.value("id", nlohmann::json(0)).dump()) + "</td><td>" + xml_escape(b.value("tile", "")) +
            "</td><td class=\"n\">" + s + "</td></tr>\n";
     }
     o += "</table>\n";

@@ -57,9 +57,10 @@ void account(const std::string& summary, const std::string& tile, int tile_index
   }
 }
 
-// A building's id in the report: a number (its first pixel, or a numeric cadastral ID), else text.
+// A building's id in the report: a number (its first pixel, or a cadastral ID of digits without a
+// leading zero), else text.
 Json id_json(const std::string& id) {
-  const bool number = !id.empty() && id.size() <= 18 && id.find_first_not_of("0123456789") == std::string::npos;
+  const bool number = !id.empty() && id.size() <= 18 && id.find_first_not_of("0123456789") == std::string::npos && (id[0] != '0' || id == "0");
   return number ? Json(std::stoll(id)) : Json(id);
 }
 std::string id_text(const Json& id) { return id.is_string() ? id.get<std::string>() : id.dump(); }

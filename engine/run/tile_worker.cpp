@@ -98,16 +98,29 @@ std::vector<BuildingOutput> split_among_footprints(const std::vector<TileGroup>&
       if (!o.ok && block.ok) { block.ok = false; block.stage = o.stage; block.reason = o.reason; }
       else if (o.ok && block.ok && !o.reason.empty() && block.reason.empty()) block.reason = o.reason;
     }
+    std::vector<char> is_confirmed(t.footprints.size());
     std::vector<std::vector<PolygonWithHoles>> confirmed;
-    for (std::size_t k = 0; k < t.footprints.size(); ++k)
-      if (t.coverage[k] >= options.min_coverage && !outlines.empty()) confirmed.push_back(cadastre.footprints()[std::size_t(t.footprints[k])].parts);
+    for (std::size_t k = 0; k < t.footprints.size(); ++k) {
+      is_confirmed[k] = t.coverage[k] >= options.min_coverage && !outlines.empty();
+      if (is_confirmed[k]) confirmed.push_back(cadastre.footprints()[std::size_t(t.footprints[k])].parts);
+    }
     if (confirmed.empty()) {
       for (int b : t.buildings) {
         out.push_back(blobs[std::size_t(b)]);
         out.back().cadastre = "not_in_footprints";
       }
     }
-    const Partition split = confirmed.empty() ? Partition{} : partition_outlines(outlines, confirmed, options, plan.job.stages.contour.min_area_m2);
+    Partition split;
+    std::string split_failure;
+    if (!confirmed.empty()) {
+      try {
+        split = partition_outlines(outlines, confirmed, options, plan.job.stages.contour.min_area_m2);
+      } catch (const std::exception& e) {  // (a failure is the block's status, never the run's end)
+        split_failure = e.what();
+        split = Partition{};
+        split.shares.resize(confirmed.size());
+      }
+    }
     std::size_t next_share = 0;
     for (std::size_t k = 0; k < t.footprints.size(); ++k) {
       const CadastralFootprint& footprint = cadastre.footprints()[std::size_t(t.footprints[k])];
@@ -117,16 +130,22 @@ std::vector<BuildingOutput> split_among_footprints(const std::vector<TileGroup>&
       o.first_col = block.first_col;
       o.cadastre_id = footprint.id;
       o.coverage = t.coverage[k];
-      const bool is_confirmed = t.coverage[k] >= options.min_coverage && !outlines.empty();
-      if (is_confirmed) {
+      if (is_confirmed[k]) {
         const FootprintShare& share = split.shares[next_share++];
         o.cadastre = "confirmed";
-        o.footprint = share.polygon.outer.empty() ? footprint.parts.front() : share.polygon;
         o.ok = block.ok;
         o.stage = block.stage;
         o.reason = block.reason;
-        const std::string note = share.polygon.outer.empty() ? "the footprint lies under earlier ones; its first part is its LOD0" : share.note;
-        if (!note.empty()) o.reason += (o.reason.empty() ? "" : "; ") + note;
+        o.footprint = share.polygon;
+        if (!share.note.empty()) o.reason += (o.reason.empty() ? "" : "; ") + share.note;
+        if (share.polygon.outer.empty()) {
+          // Nothing of its own (under earlier footprints), or the split failed: the cadastre's polygon, as a fallback.
+          o.footprint = footprint.parts.front();
+          o.ok = false;
+          o.stage = "footprints";
+          o.reason = split_failure.empty() ? "the footprint lies under earlier ones; its first part is its LOD0"
+                                           : "splitting the block among its footprints failed (" + split_failure + "); the cadastre's polygon is its LOD0";
+        }
         if (next_share == 1) o.seconds = block.seconds;  // (the block's regularization, counted once)
       } else {
         o.cadastre = "not_in_mask";
@@ -204,13 +223,16 @@ std::string serialize_parts(const std::vector<std::vector<BuildingPart>>& parts)
 
 std::optional<std::vector<Heights>> parse_heights(const std::string& text, std::size_t count);
 
+// (Anything malformed: nullopt, and the parts are computed again.)
 std::optional<std::vector<std::vector<BuildingPart>>> parse_parts(const std::string& text, std::size_t count) {
   std::vector<std::vector<BuildingPart>> out;
   std::istringstream in(text);
   std::string line;
   while (std::getline(in, line)) {
-    if (line.rfind("parts ", 0) != 0) return std::nullopt;
-    const std::size_t n = std::stoul(line.substr(6));
+    std::istringstream header(line);
+    std::string word;
+    std::size_t n = 0;
+    if (!(header >> word >> n) || word != "parts" || !(header >> std::ws).eof() || n > 100000) return std::nullopt;
     std::vector<BuildingPart>& building = out.emplace_back();
     for (std::size_t k = 0; k < n; ++k) {
       BuildingPart p;
@@ -218,13 +240,19 @@ std::optional<std::vector<std::vector<BuildingPart>>> parse_parts(const std::str
       const auto heights = parse_heights(line + "\n", 1);
       if (!heights) return std::nullopt;
       p.heights = heights->front();
-      while (std::getline(in, line) && line != "end") {
-        if (line.rfind("ring", 0) != 0) return std::nullopt;
-        std::istringstream f(line.substr(4));
+      bool ended = false;
+      while (std::getline(in, line)) {
+        if (line == "end") { ended = true; break; }
+        if (line.rfind("ring ", 0) != 0) return std::nullopt;
+        std::istringstream f(line.substr(5));
+        std::vector<double> values;
+        for (double v; f >> v;) values.push_back(v);
+        if (!f.eof() || values.size() % 2 || values.size() < 6) return std::nullopt;
         Ring ring;
-        for (double x, y; f >> x >> y;) ring.emplace_back(x, y);
+        for (std::size_t j = 0; j < values.size(); j += 2) ring.emplace_back(values[j], values[j + 1]);
         (p.footprint.outer.empty() ? p.footprint.outer : p.footprint.holes.emplace_back()) = std::move(ring);
       }
+      if (!ended || p.footprint.outer.empty()) return std::nullopt;
       building.push_back(std::move(p));
     }
   }
@@ -492,7 +520,13 @@ std::shared_ptr<TileResult> process_tile(const RunPlan& plan, int tile) {
         // LoD1.3: the parts where the roof steps, each with its heights and a valid block (else none).
         if (h.ok) {
           std::vector<BuildingPart>& building_parts = (*parts)[i];
-          for (PolygonWithHoles& p : split_by_roof_steps(footprint, dsm, pixel, job.stages.core, job.stages.parts)) {
+          std::vector<PolygonWithHoles> split;
+          try {
+            split = split_by_roof_steps(footprint, dsm, pixel, job.stages.core, job.stages.parts);
+          } catch (const std::exception&) {  // (no parts: the LoD1.2 block stands for the building)
+            split.clear();
+          }
+          for (PolygonWithHoles& p : split) {
             BuildingPart part{std::move(p), {}};
             part.heights = building_heights(part.footprint, dsm, dtm ? &*dtm : nullptr, job.stages.heights);
             if (!part.heights.ok || !shell_problem(extrude(part.footprint, part.heights.ground, part.heights.roof)).empty()) {

@@ -125,15 +125,22 @@ namespace {
 // pixel at least: with no halo, the building would never be read whole (and would be lost).
 int growth_px(int halo_px) { return std::max(1, halo_px); }
 
-}  // namespace
-
-namespace {
-
 GeoTransform window_transform(const GeoTransform& transform, const cv::Rect& window) {
   GeoTransform local = transform;
   local.c[0] = transform.c[0] + window.x * transform.c[1] + window.y * transform.c[2];
   local.c[3] = transform.c[3] + window.x * transform.c[4] + window.y * transform.c[5];
   return local;
+}
+
+// Marks the pixels the segment a-b (map coordinates) crosses.
+void mark_segment(cv::Mat& mask, const GeoTransform& local, const Vec2& from, const Vec2& to) {
+  const Vec2 a = local.to_pixel(from), b = local.to_pixel(to);
+  const int steps = int(std::ceil((b - a).norm() * 2)) + 1;
+  for (int s = 0; s <= steps; ++s) {
+    const Vec2 q = a + (b - a) * (double(s) / steps);
+    const int x = int(std::floor(q.x())), y = int(std::floor(q.y()));
+    if (x >= 0 && y >= 0 && x < mask.cols && y < mask.rows) mask.at<uint8_t>(y, x) = 1;
+  }
 }
 
 // Marks the pixels of a window that a footprint covers or its boundary crosses (so that every
@@ -146,18 +153,11 @@ cv::Point mark_footprint(cv::Mat& window_mask, const cv::Rect& window, const Cad
   cv::Mat scratch = cv::Mat::zeros(mask.size(), CV_8U);
   for (const PolygonWithHoles& p : footprint.parts) {
     rasterize(scratch, p, local, 1, 1);  // (holes included: they only join the block)
-    for (const Ring* ring : [&] { std::vector<const Ring*> r{&p.outer}; for (const Ring& h : p.holes) r.push_back(&h); return r; }()) {
-      for (std::size_t i = 0; i < ring->size(); ++i) {
-        const Vec2 a = local.to_pixel((*ring)[i]), b = local.to_pixel((*ring)[(i + 1) % ring->size()]);
-        const int steps = int(std::ceil((b - a).norm() * 2)) + 1;
-        for (int s = 0; s <= steps; ++s) {
-          const Vec2 q = a + (b - a) * (double(s) / steps);
-          const int x = int(std::floor(q.x())), y = int(std::floor(q.y()));
-          if (x >= 0 && y >= 0 && x < mask.cols && y < mask.rows) scratch.at<uint8_t>(y, x) = 1;
-        }
-      }
-    }
+    for (const Ring* ring : [&] { std::vector<const Ring*> r{&p.outer}; for (const Ring& h : p.holes) r.push_back(&h); return r; }())
+      for (std::size_t i = 0; i < ring->size(); ++i) mark_segment(scratch, local, (*ring)[i], (*ring)[(i + 1) % ring->size()]);
   }
+  // The parts of a multi-part footprint are joined, so that it lies in one block whatever the window.
+  for (std::size_t k = 1; k < footprint.parts.size(); ++k) mark_segment(scratch, local, footprint.parts[0].outer[0], footprint.parts[k].outer[0]);
   for (int y = 0; y < scratch.rows && seed.x < 0; ++y)
     for (int x = 0; x < scratch.cols; ++x)
       if (scratch.at<uint8_t>(y, x)) { seed = {x + box.x - window.x, y + box.y - window.y}; break; }
@@ -249,9 +249,7 @@ TileBuildings trace_tile(const TileWindow& w, const TileGrid& grid, int tile, co
                          const ContourOptions& options) {
   const cv::Rect tile_rect = grid.rect(tile);
   const cv::Rect window = w.window;
-  GeoTransform local = transform;
-  local.c[0] = transform.c[0] + window.x * transform.c[1] + window.y * transform.c[2];
-  local.c[3] = transform.c[3] + window.x * transform.c[4] + window.y * transform.c[5];
+  const GeoTransform local = window_transform(transform, window);
   const cv::Size raster = grid.raster;
   const ContourResult contours = extract_contours(w.components, local, options, [&](const cv::Rect& box, const cv::Point& first) {
     if (w.groups.count > 0) return owns_block(w, w.groups.labels.at<int>(first), tile_rect, raster);  // with a cadastre
@@ -281,7 +279,6 @@ std::vector<TileGroup> tile_groups(const TileWindow& w, const TileGrid& grid, in
     if (added) {
       const cv::Point first = w.group_first[std::size_t(g)] + w.window.tl();
       it->second.id = std::int64_t(first.y) * grid.raster.width + first.x;
-      it->second.box = block_box(w, g) + w.window.tl();
     }
     return &it->second;
   };
@@ -307,17 +304,7 @@ std::vector<TileGroup> tile_groups(const TileWindow& w, const TileGrid& grid, in
   std::vector<TileGroup> out;
   for (auto& [g, t] : owned) out.push_back(std::move(t));
   std::sort(out.begin(), out.end(), [](const TileGroup& a, const TileGroup& b) { return a.id < b.id; });
-  for (TileGroup& t : out) {  // (seeds come in ascending footprint order already; kept so)
-    std::vector<std::size_t> order(t.footprints.size());
-    for (std::size_t k = 0; k < order.size(); ++k) order[k] = k;
-    std::sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) { return t.footprints[a] < t.footprints[b]; });
-    std::vector<int> f;
-    std::vector<double> c;
-    for (std::size_t k : order) { f.push_back(t.footprints[k]); c.push_back(t.coverage[k]); }
-    t.footprints = std::move(f);
-    t.coverage = std::move(c);
-  }
-  return out;
+  return out;  // (each block's footprints in the cadastre's order: the seeds are, as Cadastre::in_window gives them)
 }
 
 }  // namespace lodforge

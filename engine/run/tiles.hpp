@@ -79,7 +79,6 @@ TileWindow find_tile_window(const MaskWindowReader& reader, const TileGrid& grid
 // that touch it, with the share of each footprint's pixels that is building in the mask.
 struct TileGroup {
   std::int64_t id = 0;          // its first pixel in raster order: row * raster width + col
-  cv::Rect box;                 // raster pixels
   std::vector<int> buildings;   // indices into TileBuildings::buildings
   std::vector<int> footprints;  // indices into the cadastre, ascending
   std::vector<double> coverage; // per footprint

@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 
 #include "geometry/polygon.hpp"
 
@@ -68,9 +69,12 @@ std::pair<std::vector<PolygonWithHoles>, double> polygons_of(const CSet& set) {
   return {out, invalid};
 }
 
+// (Only valid polygons enter a polygon set: CGAL takes no other. The callers' are valid; an
+// invalid one would be left out, not crash.)
 CSet set_of(const std::vector<PolygonWithHoles>& polygons) {
   CSet s;
-  for (const PolygonWithHoles& p : polygons) s.join(to_cgal(p));
+  for (const PolygonWithHoles& p : polygons)
+    if (p.outer.size() >= 3 && polygon_problem(p).empty()) s.join(to_cgal(p));
   return s;
 }
 
@@ -196,8 +200,7 @@ Partition partition_outlines(const std::vector<PolygonWithHoles>& outlines,
       PolygonWithHoles best_union;
       for (std::size_t i = 0; i < out.shares.size(); ++i) {
         if (out.shares[i].polygon.outer.empty()) continue;
-        CSet u = set_of({out.shares[i].polygon});
-        u.join(to_cgal(p));
+        CSet u = set_of({out.shares[i].polygon, p});
         auto [joined, joined_invalid] = polygons_of(u);
         if (joined.size() != 1 || joined_invalid > 0) continue;
         const double shared = (perimeter_of(out.shares[i].polygon) + perimeter_of(p) - perimeter_of(joined.front())) / 2;

@@ -37,7 +37,7 @@ struct FootprintShare {
 struct Partition {
   std::vector<FootprintShare> shares;  // one per footprint, in the footprints' order
   std::vector<PolygonWithHoles> rest;  // parts of the outlines in no footprint's cell, at least min_area_m2, largest first
-  int dropped_small = 0;               // parts of the outlines below min_area_m2 left out
+  int dropped_small = 0;               // parts of the outlines below min_area_m2 left out (and pinched parts, counted once)
 };
 
 // outlines: the block's regularized outlines (valid polygons). footprints: the confirmed

@@ -66,7 +66,6 @@ std::vector<PolygonWithHoles> split_by_roof_steps(const PolygonWithHoles& footpr
         if (l >= 0 && l != smallest->first) ++border[l];
       }
     }
-    const int from = smallest->first;
     std::vector<int> cells = std::move(smallest->second);
     regions.erase(smallest);
     if (border.empty()) {  // alone (a cell cut off by nodata): left to the parts around it
@@ -77,7 +76,6 @@ std::vector<PolygonWithHoles> split_by_roof_steps(const PolygonWithHoles& footpr
     for (int c : cells) label[std::size_t(c)] = to;
     std::vector<int>& target = regions[to];
     target.insert(target.end(), cells.begin(), cells.end());
-    (void)from;
   }
   if (regions.size() < 2) return {};
   // Each region's outline through the chain, largest first.
@@ -104,10 +102,11 @@ std::vector<PolygonWithHoles> split_by_roof_steps(const PolygonWithHoles& footpr
   const Partition split = partition_outlines({footprint}, outlines, fit, 0.0, true);
   std::vector<PolygonWithHoles> parts;
   for (const FootprintShare& share : split.shares) {
-    if (share.polygon.outer.empty() || share.footprint_taken || area(share.polygon) < 0.5 * options.min_part_area_m2) return {};
+    // (A part left in pieces, or smaller than a region may be: not a clean split.)
+    if (share.polygon.outer.empty() || !share.note.empty() || area(share.polygon) < 0.5 * options.min_part_area_m2) return {};
     parts.push_back(share.polygon);
   }
-  if (!split.rest.empty()) return {};  // (a piece no part borders: not a clean split)
+  if (!split.rest.empty() || split.dropped_small > 0) return {};  // (a piece no part borders: the parts would not tile the footprint)
   return parts;
 }
 
