@@ -195,6 +195,13 @@ TEST(CadastreRun, UnusableFootprintsStopTheRunNamingTheKey) {
   std::ofstream(dir / "no_crs.csv") << "WKT,id\n\"POLYGON ((84900 447500,84910 447500,84910 447510,84900 447510,84900 447500))\",1\n";
   const std::string no_crs = error_of("{path: " + (dir / "no_crs.csv").string() + "}");
   EXPECT_NE(no_crs.find("has no CRS"), std::string::npos) << no_crs;
+  // Two IDs that would be one object ID in the files.
+  const std::string square = R"("geometry": {"type": "Polygon", "coordinates": [[[84900, 447500], [84910, 447500], [84910, 447510], [84900, 447510], [84900, 447500]]]})";
+  std::ofstream(dir / "clash.geojson") << R"({"type": "FeatureCollection", "crs": {"type": "name", "properties": {"name": "urn:ogc:def:crs:EPSG::28992"}}, "features": [)"
+                                       << R"({"type": "Feature", "properties": {"pid": "a b"}, )" << square << "}, "
+                                       << R"({"type": "Feature", "properties": {"pid": "a_b"}, )" << square << "}]}";
+  const std::string clash = error_of("{path: " + (dir / "clash.geojson").string() + ", id_field: pid}");
+  EXPECT_NE(clash.find("the IDs 'a b' and 'a_b' of"), std::string::npos) << clash;
 }
 
 // A footprint of two parts far apart (one ID, a MultiPolygon) is one building, written once,

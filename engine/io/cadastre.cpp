@@ -9,6 +9,7 @@
 
 #include "geometry/polygon.hpp"
 #include "io/errors.hpp"
+#include "io/model_writers.hpp"
 #include "io/ogr_polygon.hpp"
 #include "run/tiles.hpp"
 
@@ -133,6 +134,14 @@ Cadastre::Cadastre(const std::string& path, const std::string& layer_name, const
     kept.push_back(std::move(c));
   }
   footprints_ = std::move(kept);
+  // Distinct IDs must stay distinct as object IDs in the files (an XML name: "a b" and "a_b" would not).
+  std::map<std::string, const std::string*> objects;
+  for (const CadastralFootprint& c : footprints_) {
+    const auto [it, added] = objects.emplace(cadastral_object_id(c.id), &c.id);
+    if (!added)
+      throw InputError("inputs.footprints.id_field: the IDs '" + *it->second + "' and '" + c.id + "' of " + where +
+                       " both become the object ID '" + it->first + "' in CityGML and CityJSON (other characters than letters, digits, _, - and . are written as _)");
+  }
   auto note = [&](long count, const std::string& what) {
     if (count) notes_.push_back(std::to_string(count) + " feature(s) of " + where + " " + what);
   };

@@ -76,13 +76,16 @@ std::ostream& three_decimals(std::ostream& out) {
 
 }  // namespace
 
-std::string object_id(const BuildingModel& m) {
-  if (m.cadastre_id.empty()) return "lodforge_b" + std::to_string(m.id);
-  std::string id = m.cadastre_id;
+std::string cadastral_object_id(const std::string& cadastre_id) {
+  std::string id = cadastre_id;
   for (char& c : id)
     if (!std::isalnum(static_cast<unsigned char>(c)) && c != '_' && c != '-' && c != '.') c = '_';
-  if (!std::isalpha(static_cast<unsigned char>(id[0])) && id[0] != '_') id = "id_" + id;
+  if (id.empty() || (!std::isalpha(static_cast<unsigned char>(id[0])) && id[0] != '_')) id = "id_" + id;
   return id;
+}
+
+std::string object_id(const BuildingModel& m) {
+  return m.cadastre_id.empty() ? "lodforge_b" + std::to_string(m.id) : cadastral_object_id(m.cadastre_id);
 }
 
 namespace {

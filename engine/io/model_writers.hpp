@@ -42,6 +42,7 @@ struct BuildingModel {
 // A model's object ID in every format: lodforge_b<first pixel>, or its cadastral ID (made an XML
 // NCName: id_ before a leading digit, other characters as _).
 std::string object_id(const BuildingModel& model);
+std::string cadastral_object_id(const std::string& cadastre_id);  // (the second case)
 
 // Text for XML (or HTML) content and attribute values: & < > " escaped.
 std::string xml_escape(const std::string& s);

@@ -46,7 +46,6 @@ void account(const std::string& summary, const std::string& tile, int tile_index
     } else if (kind == "cadastre") {
       std::size_t confirmed = 0, not_in_footprints = 0, not_in_mask = 0;
       fields >> confirmed >> not_in_footprints >> not_in_mask;
-      t.cadastre = true;
       t.confirmed += confirmed;
       t.not_in_footprints += not_in_footprints;
       t.not_in_mask += not_in_mask;
@@ -244,13 +243,13 @@ void write_index_and_report(const Totals& totals, const RunPlan& plan, const std
                     {"too_large_buildings", too_large},
                     {"slowest_buildings", slowest},
                     {"per_tile", per_tile}};
-  if (!totals.cadastre) report.erase("cadastre");  // (no footprints given)
+  if (!plan.cadastre) report.erase("cadastre");  // (no footprints given; a shard without tiles has the counts all the same)
   write_text_atomically(out_dir / ("report" + suffix + ".json"), readable(report));
   spdlog::info("{} tiles ({} computed, {} resumed from {}), {} buildings: {} ok, {} fallback, {} with LOD1; {} small components dropped{}; {:.1f} s",
                tiles, totals.tiles_processed, totals.tiles_skipped, job.work_dir, totals.buildings, totals.ok, totals.fallback, totals.lod1,
                totals.dropped_small, totals.too_large.empty() ? "" : "; " + std::to_string(totals.too_large.size()) + " too large (see report)",
                elapsed);
-  if (totals.cadastre)
+  if (plan.cadastre)
     spdlog::info("footprints: {} confirmed by the mask, {} not in the mask (listed in the GeoPackages); {} buildings not in the footprints",
                  totals.confirmed, totals.not_in_mask, totals.not_in_footprints);
   if (totals.tiles_processed > 0)

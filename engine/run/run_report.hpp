@@ -21,7 +21,6 @@ struct Totals {
   double contour_seconds = 0, heights_seconds = 0, write_seconds = 0;
   std::size_t blocks_decoded = 0;  // raster blocks decoded by the shared cache (a block freed and read again counts again)
   // With inputs.footprints: footprints the mask confirms, the mask's buildings outside them, footprints it does not confirm.
-  bool cadastre = false;
   std::size_t confirmed = 0, not_in_footprints = 0, not_in_mask = 0;
   // Each entry with its tile: tiles are recorded in the order they are processed, the files list
   // them in tile order.
