@@ -33,10 +33,15 @@ CPolygonWithHoles to_cgal(const PolygonWithHoles& polygon) {
 
 // Exact coordinates rounded the same way wherever they were computed: a vertex two results share
 // (a shared wall's end) becomes the same double in both.
+// (A coordinate whose interval is one double is that double: exact without computing it again.)
+double rounded(const K::FT& x) {
+  const std::pair<double, double> i = CGAL::to_interval(x);
+  return i.first == i.second ? i.first : CGAL::to_double(CGAL::exact(x));
+}
+
 Ring to_ring(const CPolygon& p) {
   Ring r;
-  for (auto v = p.vertices_begin(); v != p.vertices_end(); ++v)
-    r.emplace_back(CGAL::to_double(CGAL::exact(v->x())), CGAL::to_double(CGAL::exact(v->y())));
+  for (auto v = p.vertices_begin(); v != p.vertices_end(); ++v) r.emplace_back(rounded(v->x()), rounded(v->y()));
   return remove_degenerate_vertices(r, 1e-9);
 }
 

@@ -21,9 +21,21 @@ int find(std::vector<int>& parent, int a) {
 
 }  // namespace
 
-std::vector<PolygonWithHoles> split_by_roof_steps(const PolygonWithHoles& footprint, const HeightRaster& dsm, double pixel_size,
+std::vector<PolygonWithHoles> split_by_roof_steps(const PolygonWithHoles& footprint, const HeightRaster& window, double pixel_size,
                                                   const CoreOptions& core, const PartOptions& options) {
-  if (!options.enabled || dsm.values.empty()) return {};
+  if (!options.enabled || window.values.empty()) return {};
+  // The cells of the footprint's box only (the window holds a ground ring around it too).
+  double x0 = 1e300, y0 = 1e300, x1 = -1e300, y1 = -1e300;
+  for (const Vec2& v : footprint.outer) {
+    const Vec2 q = window.transform.to_pixel(v);
+    x0 = std::min(x0, q.x()); y0 = std::min(y0, q.y()); x1 = std::max(x1, q.x()); y1 = std::max(y1, q.y());
+  }
+  const cv::Rect box = cv::Rect(cv::Point(int(std::floor(x0)) - 1, int(std::floor(y0)) - 1), cv::Point(int(std::ceil(x1)) + 1, int(std::ceil(y1)) + 1)) &
+                       cv::Rect(0, 0, window.values.cols, window.values.rows);
+  if (box.empty()) return {};
+  HeightRaster dsm{window.values(box), window.valid(box), window.transform};
+  dsm.transform.c[0] = window.transform.to_map(box.x, box.y).x();
+  dsm.transform.c[3] = window.transform.to_map(box.x, box.y).y();
   const int rows = dsm.values.rows, cols = dsm.values.cols;
   cv::Mat inside = cv::Mat::zeros(rows, cols, CV_8U);
   rasterize(inside, footprint, dsm.transform);
