@@ -258,5 +258,42 @@ TEST(CadastreRun, AMultiPartFootprintIsOneBuildingWhateverTheTiling) {
   }
 }
 
+// Resuming after an edit of the cadastre: the tiles whose windows hold no changed footprint keep
+// their checkpoints, and the files equal a fresh run's with the edited cadastre.
+TEST(CadastreRun, AnEditedCadastreRedoesOnlyTheTilesItTouches) {
+  GDALAllRegister();
+  const fs::path dir = test::fresh_test_directory("cadastre_edit");
+  const std::string bgt = test::slurp(delft("derived/bgt_pand_buildings.geojson"));
+  std::ofstream(dir / "before.geojson") << bgt;
+  // The edit: the last footprint goes.
+  const std::size_t last = bgt.rfind("{ \"type\": \"Feature\"");
+  ASSERT_NE(last, std::string::npos);
+  std::string edited = bgt.substr(0, last);
+  edited.erase(edited.find_last_of(','));  // (the comma before it)
+  edited += "\n]\n}\n";
+  std::ofstream(dir / "after.geojson") << edited;
+  const auto run = [&](const std::string& footprints, const std::string& work, const std::string& out) {
+    std::ofstream(dir / "job.yaml") << "inputs:\n  segmentation: {path: " << delft("derived/top_class_50cm.tif") << "}\n"
+                                    << "  footprints: {path: " << footprints << ", id_field: identificatiebagpnd}\n"
+                                    << "tiling: {tile_size_m: 32}\noutput: {dir: " << out << ", formats: [gpkg, cityjson]}\nwork_dir: " << work << "\n"
+                                    << "stages: {parts: {enabled: false}}\n";
+    const test::CommandOutput r = test::lodforge("run " + (dir / "job.yaml").string() + " --progress none");
+    EXPECT_EQ(r.code, 0) << r.output;
+    return nlohmann::json::parse(test::slurp(dir / out / "report.json"));
+  };
+  run("before.geojson", "work", "out_before");
+  const nlohmann::json resumed = run("after.geojson", "work", "out_resumed");
+  const nlohmann::json fresh = run("after.geojson", "work_fresh", "out_fresh");
+  EXPECT_EQ(resumed.at("cadastre").at("confirmed").get<int>() + resumed.at("cadastre").at("not_in_mask").get<int>(), 159);
+  // Most tiles' contours come from the checkpoints; those around the edited footprint are traced again.
+  const int tiles = resumed.at("tiles").get<int>(), reused = resumed.at("checkpoints_reused").at("contours").get<int>();
+  EXPECT_GT(reused, tiles / 2);
+  EXPECT_LT(reused, tiles);
+  EXPECT_EQ(fresh.at("checkpoints_reused").at("contours"), 0);
+  for (const auto& e : fs::directory_iterator(dir / "out_fresh" / "tiles"))
+    if (e.path().extension() == ".json")
+      EXPECT_EQ(test::slurp(e.path()), test::slurp(dir / "out_resumed" / "tiles" / e.path().filename())) << e.path();
+}
+
 }  // namespace
 }  // namespace lodforge

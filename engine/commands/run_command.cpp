@@ -223,9 +223,10 @@ int run_job(int argc, char** argv) {
   key_job.work_dir.clear();
   key_job.output.dir.clear();  // where the files go, not what they hold (a done tile's files are checked where they are)
   key_job.tiling.gdal_cache_mb = 0;  // memory, not results: resuming with another cache size reuses every tile
-  // The footprints decide which tile owns a building (contours) and how buildings are split (heights on).
+  // The footprints decide which tile owns a building and how buildings are split: each tile's
+  // contour key has those in its window (find_tile_window), the run's key all of them.
   const std::string cadastre_text = cadastre ? "\nfootprints " + hex(cadastre->hash()) : "";
-  const std::string contour_options = options_text(key_job.stages.contour) + cadastre_text;
+  const std::string contour_options = options_text(key_job.stages.contour) + (cadastre ? "\nfootprints" : "");
   const std::string heights_options = options_text(key_job.stages.heights) + file_identity(job.inputs.dsm.path) + file_identity(job.inputs.dtm.path) +
                                       (cadastre ? options_text(key_job.stages.footprints) : "") + options_text(key_job.stages.parts);
   // Building ids are first-pixel indices, so the footprints also depend on the raster's width.

@@ -156,18 +156,20 @@ Cadastre::Cadastre(const std::string& path, const std::string& layer_name, const
   bucket_cols_ = (raster.width + bucket_px_ - 1) / bucket_px_;
   bucket_rows_ = (raster.height + bucket_px_ - 1) / bucket_px_;
   buckets_.resize(std::size_t(bucket_cols_) * bucket_rows_);
-  std::uint64_t h = fnv1a(where);
+  std::uint64_t all = fnv1a(where);
   for (std::size_t i = 0; i < footprints_.size(); ++i) {
     const cv::Rect& r = footprints_[i].pixels;
     for (int by = r.y / bucket_px_; by <= (r.y + r.height - 1) / bucket_px_; ++by)
       for (int bx = r.x / bucket_px_; bx <= (r.x + r.width - 1) / bucket_px_; ++bx) buckets_[std::size_t(by) * bucket_cols_ + bx].push_back(int(i));
-    h = fnv1a(footprints_[i].id, h);
+    std::uint64_t h = fnv1a(footprints_[i].id);
     for (const PolygonWithHoles& p : footprints_[i].parts) {
       h = fnv1a(p.outer.data(), p.outer.size() * sizeof(Vec2), h);
       for (const Ring& hole : p.holes) h = fnv1a(hole.data(), hole.size() * sizeof(Vec2), h);
     }
+    footprints_[i].hash = h;
+    all = fnv1a(&h, sizeof h, all);
   }
-  hash_ = h;
+  hash_ = all;
 }
 
 std::vector<int> Cadastre::in_window(const cv::Rect& window) const {

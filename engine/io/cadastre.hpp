@@ -15,6 +15,7 @@ struct CadastralFootprint {
   std::string id;                       // the id_field's value (or the feature's FID)
   std::vector<PolygonWithHoles> parts;  // valid, in the segmentation's CRS; several for a multipolygon or repeated ID
   cv::Rect pixels;                      // the raster pixels its parts touch (their box, clipped to the raster)
+  std::uint64_t hash = 0;               // of its ID and coordinates
 };
 
 class Cadastre {
