@@ -116,7 +116,7 @@ TEST(Parts, TwoHousesOfDifferentHeightsSharingAWallBecomeTwoPartsSharingItExactl
         dsm.values.at<float>(y, x) = float(h + rng.gaussian(0.05));
       }
     const PolygonWithHoles block{rotated(box(0, 0, 24, 10), angle), {}};
-    const std::vector<PolygonWithHoles> parts = split_by_roof_steps(block, dsm, 0.5, CoreOptions{}, PartOptions{});
+    const std::vector<PolygonWithHoles> parts = split_by_roof_steps(block, dsm, 0.5, "deformation", CoreOptions{}, PartOptions{});
     ASSERT_EQ(parts.size(), 2u);
     EXPECT_EQ(polygon_problem(parts[0]), "");
     EXPECT_EQ(polygon_problem(parts[1]), "");
@@ -127,7 +127,7 @@ TEST(Parts, TwoHousesOfDifferentHeightsSharingAWallBecomeTwoPartsSharingItExactl
     // One roof: no parts.
     PartOptions high;
     high.min_step_m = 7;
-    EXPECT_TRUE(split_by_roof_steps(block, dsm, 0.5, CoreOptions{}, high).empty());
+    EXPECT_TRUE(split_by_roof_steps(block, dsm, 0.5, "deformation", CoreOptions{}, high).empty());
   }
 }
 

@@ -8,6 +8,7 @@
 #include <ogrsf_frmts.h>
 
 #include "geometry/polygon.hpp"
+#include "geometry/rasterize.hpp"
 #include "io/errors.hpp"
 #include "io/model_writers.hpp"
 #include "io/ogr_polygon.hpp"
@@ -121,14 +122,8 @@ Cadastre::Cadastre(const std::string& path, const std::string& layer_name, const
   // Their pixels, and those wholly outside the raster left out.
   std::vector<CadastralFootprint> kept;
   for (CadastralFootprint& c : footprints_) {
-    double x0 = 1e300, y0 = 1e300, x1 = -1e300, y1 = -1e300;
-    for (const PolygonWithHoles& p : c.parts)
-      for (const Vec2& v : p.outer) {
-        const Vec2 px = transform.to_pixel(v);
-        x0 = std::min(x0, px.x()); y0 = std::min(y0, px.y()); x1 = std::max(x1, px.x()); y1 = std::max(y1, px.y());
-      }
-    const cv::Rect box(int(std::floor(x0)), int(std::floor(y0)), int(std::floor(x1)) - int(std::floor(x0)) + 1,
-                       int(std::floor(y1)) - int(std::floor(y0)) + 1);
+    cv::Rect box = pixel_box(c.parts.front(), transform);
+    for (const PolygonWithHoles& p : c.parts) box |= pixel_box(p, transform);
     c.pixels = box & bounds;
     if (c.pixels.empty()) { ++outside; continue; }
     kept.push_back(std::move(c));

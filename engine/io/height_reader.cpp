@@ -96,9 +96,7 @@ HeightRaster HeightWindowReader::read(const cv::Rect& w, const GeoTransform& gri
   const std::size_t n = r.values.total();
   for (std::size_t i = 0; i < n; ++i)
     valid[i] = uint8_t((std::abs(v[i]) <= std::numeric_limits<float>::max()) & (v[i] != no));
-  r.transform = grid;
-  r.transform.c[0] = grid.c[0] + w.x * grid.c[1] + w.y * grid.c[2];
-  r.transform.c[3] = grid.c[3] + w.x * grid.c[4] + w.y * grid.c[5];
+  r.transform = grid.window(w.x, w.y);
   return r;
 }
 

@@ -210,7 +210,7 @@ std::string serialize_parts(const std::vector<std::vector<BuildingPart>>& parts)
     s << "parts " << building.size() << '\n';
     for (const BuildingPart& p : building) {
       s << serialize_heights({p.heights});
-      for (const Ring* ring : [&] { std::vector<const Ring*> r{&p.footprint.outer}; for (const Ring& h : p.footprint.holes) r.push_back(&h); return r; }()) {
+      for (const Ring* ring : rings_of(p.footprint)) {
         s << "ring";
         for (const Vec2& v : *ring) s << ' ' << v.x() << ' ' << v.y();
         s << '\n';
@@ -221,7 +221,25 @@ std::string serialize_parts(const std::vector<std::vector<BuildingPart>>& parts)
   return s.str();
 }
 
-std::optional<std::vector<Heights>> parse_heights(const std::string& text, std::size_t count);
+std::optional<std::vector<Heights>> parse_heights(const std::string& text, std::size_t count) {
+  std::vector<Heights> out;
+  std::istringstream in(text);
+  std::string line;
+  while (std::getline(in, line)) {
+    std::istringstream f(line);
+    Heights h;
+    std::string ok;
+    std::getline(f, ok, '\t');
+    f >> h.roof >> h.ground >> h.roof_samples >> h.ground_samples >> h.roof_min >> h.roof_50p >> h.roof_70p >> h.roof_max >> h.dsm_coverage >> h.dsm_cells;
+    if (!f) return std::nullopt;  // (written by another version: computed again)
+    f.get();
+    std::getline(f, h.reason);
+    h.ok = ok == "1";
+    out.push_back(h);
+  }
+  if (out.size() != count) return std::nullopt;
+  return out;
+}
 
 // (Anything malformed: nullopt, and the parts are computed again.)
 std::optional<std::vector<std::vector<BuildingPart>>> parse_parts(const std::string& text, std::size_t count) {
@@ -255,26 +273,6 @@ std::optional<std::vector<std::vector<BuildingPart>>> parse_parts(const std::str
       if (!ended || p.footprint.outer.empty()) return std::nullopt;
       building.push_back(std::move(p));
     }
-  }
-  if (out.size() != count) return std::nullopt;
-  return out;
-}
-
-std::optional<std::vector<Heights>> parse_heights(const std::string& text, std::size_t count) {
-  std::vector<Heights> out;
-  std::istringstream in(text);
-  std::string line;
-  while (std::getline(in, line)) {
-    std::istringstream f(line);
-    Heights h;
-    std::string ok;
-    std::getline(f, ok, '\t');
-    f >> h.roof >> h.ground >> h.roof_samples >> h.ground_samples >> h.roof_min >> h.roof_50p >> h.roof_70p >> h.roof_max >> h.dsm_coverage >> h.dsm_cells;
-    if (!f) return std::nullopt;  // (written by another version: computed again)
-    f.get();
-    std::getline(f, h.reason);
-    h.ok = ok == "1";
-    out.push_back(h);
   }
   if (out.size() != count) return std::nullopt;
   return out;
@@ -522,7 +520,7 @@ std::shared_ptr<TileResult> process_tile(const RunPlan& plan, int tile) {
           std::vector<BuildingPart>& building_parts = (*parts)[i];
           std::vector<PolygonWithHoles> split;
           try {
-            split = split_by_roof_steps(footprint, dsm, pixel, job.stages.core, job.stages.parts);
+            split = split_by_roof_steps(footprint, dsm, pixel, job.regularizer, job.stages.core, job.stages.parts);
           } catch (const std::exception&) {  // (no parts: the LoD1.2 block stands for the building)
             split.clear();
           }
@@ -619,10 +617,7 @@ TileOutputs write_tile_outputs(const RunPlan& plan, TileResult& result) {
   if (!r->quicklook_background.empty()) {
     std::vector<QuicklookOutline> outlines;
     for (const BuildingOutput& b : r->buildings) outlines.push_back({b.footprint, b.ok});
-    GeoTransform t = plan.transform;
-    t.c[0] = plan.transform.to_map(tile_rect.x, tile_rect.y).x();
-    t.c[3] = plan.transform.to_map(tile_rect.x, tile_rect.y).y();
-    write_quicklook((out_dir / planned.back()).string(), r->quicklook_background, t, outlines);
+    write_quicklook((out_dir / planned.back()).string(), r->quicklook_background, plan.transform.window(tile_rect.x, tile_rect.y), outlines);
   }
   // Each file with its fingerprint, in the done marker and (by the caller) in the tile index:
   // a later run or merge trusts it only while it is unchanged.

@@ -6,6 +6,7 @@
 #include <gdal_priv.h>
 #include <opencv2/imgproc.hpp>
 
+#include "geometry/polygon.hpp"
 #include "geometry/rasterize.hpp"
 #include "io/block_cache.hpp"
 #include "io/cadastre.hpp"
@@ -125,13 +126,6 @@ namespace {
 // pixel at least: with no halo, the building would never be read whole (and would be lost).
 int growth_px(int halo_px) { return std::max(1, halo_px); }
 
-GeoTransform window_transform(const GeoTransform& transform, const cv::Rect& window) {
-  GeoTransform local = transform;
-  local.c[0] = transform.c[0] + window.x * transform.c[1] + window.y * transform.c[2];
-  local.c[3] = transform.c[3] + window.x * transform.c[4] + window.y * transform.c[5];
-  return local;
-}
-
 // Marks the pixels the segment a-b (map coordinates) crosses.
 void mark_segment(cv::Mat& mask, const GeoTransform& local, const Vec2& from, const Vec2& to) {
   const Vec2 a = local.to_pixel(from), b = local.to_pixel(to);
@@ -149,11 +143,11 @@ cv::Point mark_footprint(cv::Mat& window_mask, const cv::Rect& window, const Cad
   cv::Point seed(-1, -1);
   const cv::Rect box = footprint.pixels & window;  // (what it covers of the window)
   cv::Mat mask = window_mask(box - window.tl());
-  const GeoTransform local = window_transform(transform, box);
+  const GeoTransform local = transform.window(box.x, box.y);
   cv::Mat scratch = cv::Mat::zeros(mask.size(), CV_8U);
   for (const PolygonWithHoles& p : footprint.parts) {
     rasterize(scratch, p, local, 1, 1);  // (holes included: they only join the block)
-    for (const Ring* ring : [&] { std::vector<const Ring*> r{&p.outer}; for (const Ring& h : p.holes) r.push_back(&h); return r; }())
+    for (const Ring* ring : rings_of(p))
       for (std::size_t i = 0; i < ring->size(); ++i) mark_segment(scratch, local, (*ring)[i], (*ring)[(i + 1) % ring->size()]);
   }
   // The parts of a multi-part footprint are joined, so that it lies in one block whatever the window.
@@ -165,14 +159,9 @@ cv::Point mark_footprint(cv::Mat& window_mask, const cv::Rect& window, const Cad
   return seed;
 }
 
-cv::Rect block_box(const TileWindow& w, int g) {
-  return {w.groups.stats.at<int>(g, cv::CC_STAT_LEFT), w.groups.stats.at<int>(g, cv::CC_STAT_TOP),
-          w.groups.stats.at<int>(g, cv::CC_STAT_WIDTH), w.groups.stats.at<int>(g, cv::CC_STAT_HEIGHT)};
-}
-
 // Does the tile own block g of the window: its first pixel in the tile, and whole in the window?
 bool owns_block(const TileWindow& w, int g, const cv::Rect& tile_rect, cv::Size raster) {
-  return g > 0 && tile_rect.contains(w.group_first[std::size_t(g)] + w.window.tl()) && !touches_inner_border(block_box(w, g), w.window, raster);
+  return g > 0 && tile_rect.contains(w.group_first[std::size_t(g)] + w.window.tl()) && !touches_inner_border(component_box(w.groups, g), w.window, raster);
 }
 
 
@@ -200,13 +189,11 @@ TileWindow find_tile_window(const MaskWindowReader& reader, const TileGrid& grid
     }
     out.components = label_components(blocks, cadastre ? 8 : connectivity);
     out.label_seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - labeling).count();
-    const cv::Mat& stats = out.components.stats;
     const int count = out.components.count;
     cv::Rect grown = out.window;
     out.too_large.clear();
     for (int k = 1; k < count; ++k) {
-      const cv::Rect box(stats.at<int>(k, cv::CC_STAT_LEFT), stats.at<int>(k, cv::CC_STAT_TOP),
-                         stats.at<int>(k, cv::CC_STAT_WIDTH), stats.at<int>(k, cv::CC_STAT_HEIGHT));
+      const cv::Rect box = component_box(out.components, k);
       const cv::Rect global = box + out.window.tl();
       if ((global & tile_rect).empty() || !touches_inner_border(box, out.window, grid.raster)) continue;
       // Possibly owned by this tile and not whole: read around it, if that still fits.
@@ -251,7 +238,7 @@ TileBuildings trace_tile(const TileWindow& w, const TileGrid& grid, int tile, co
                          const ContourOptions& options) {
   const cv::Rect tile_rect = grid.rect(tile);
   const cv::Rect window = w.window;
-  const GeoTransform local = window_transform(transform, window);
+  const GeoTransform local = transform.window(window.x, window.y);
   const cv::Size raster = grid.raster;
   const ContourResult contours = extract_contours(w.components, local, options, [&](const cv::Rect& box, const cv::Point& first) {
     if (w.groups.count > 0) return owns_block(w, w.groups.labels.at<int>(first), tile_rect, raster);  // with a cadastre
@@ -288,7 +275,7 @@ std::vector<TileGroup> tile_groups(const TileWindow& w, const TileGrid& grid, in
     const BuildingContour& b = buildings.buildings[i];
     if (TileGroup* t = group(w.groups.labels.at<int>(b.first_row - w.window.y, b.first_col - w.window.x))) t->buildings.push_back(int(i));
   }
-  const GeoTransform local = window_transform(transform, w.window);
+  const GeoTransform local = transform.window(w.window.x, w.window.y);
   for (const auto& [f, seed] : w.footprint_seeds) {
     TileGroup* t = group(w.groups.labels.at<int>(seed));
     if (!t) continue;
@@ -296,7 +283,7 @@ std::vector<TileGroup> tile_groups(const TileWindow& w, const TileGrid& grid, in
     const CadastralFootprint& footprint = cadastre.footprints()[std::size_t(f)];
     const cv::Rect box = (footprint.pixels & w.window) - w.window.tl();  // (whole: its block is)
     cv::Mat inside = cv::Mat::zeros(box.size(), CV_8U);
-    for (const PolygonWithHoles& p : footprint.parts) rasterize(inside, p, window_transform(local, box), 1, 0);
+    for (const PolygonWithHoles& p : footprint.parts) rasterize(inside, p, local.window(box.x, box.y), 1, 0);
     const int pixels = cv::countNonZero(inside);
     cv::Mat building;
     cv::bitwise_and(inside, w.mask(box), building);

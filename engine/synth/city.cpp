@@ -104,22 +104,11 @@ double terrain(const Vec2& local) {
 
 }  // namespace
 
-// The pixels around a footprint (a pixel of margin), clipped to the raster; north-up transform.
-static cv::Rect pixel_box(const PolygonWithHoles& footprint, const GeoTransform& t, int cols, int rows) {
-  Vec2 lo = footprint.outer.front(), hi = lo;
-  for (const Vec2& p : footprint.outer) { lo = lo.cwiseMin(p); hi = hi.cwiseMax(p); }
-  const Vec2 a = t.to_pixel({lo.x(), hi.y()}), b = t.to_pixel({hi.x(), lo.y()});
-  return cv::Rect(cv::Point(int(std::floor(a.x())) - 1, int(std::floor(a.y())) - 1), cv::Point(int(std::ceil(b.x())) + 2, int(std::ceil(b.y())) + 2)) &
-         cv::Rect(0, 0, cols, rows);
+// The pixels around a footprint (a pixel of margin), clipped to the raster.
+static cv::Rect pixels_around(const PolygonWithHoles& footprint, const GeoTransform& t, int cols, int rows) {
+  return (pixel_box(footprint, t) + cv::Size(2, 2) - cv::Point(1, 1)) & cv::Rect(0, 0, cols, rows);
 }
 
-// The transform of a window of the raster.
-static GeoTransform shifted(const GeoTransform& t, const cv::Rect& box) {
-  GeoTransform out = t;
-  out.c[0] = t.to_map(box.x, box.y).x();
-  out.c[3] = t.to_map(box.x, box.y).y();
-  return out;
-}
 
 // The segmentation of a true 0/1 mask: rounded corners, a smooth boundary wobble, speckles.
 static cv::Mat segmentation_of(const cv::Mat& truth, const SynthOptions& o, Rng& rng) {
@@ -178,10 +167,10 @@ SynthCity generate_city(const SynthOptions& o) {
     rasterize(truth, b.footprint, city.transform);
     // The roof, in the footprint's bounding box only (a whole-raster mask per building made
     // generation quadratic in the area).
-    const cv::Rect box = pixel_box(b.footprint, city.transform, cols, rows);
+    const cv::Rect box = pixels_around(b.footprint, city.transform, cols, rows);
     if (box.empty()) continue;
     cv::Mat roof = cv::Mat::zeros(box.size(), CV_8U);
-    rasterize(roof, b.footprint, shifted(city.transform, box));
+    rasterize(roof, b.footprint, city.transform.window(box.x, box.y));
     city.dsm(box).setTo(cv::Scalar(b.roof_height), roof);
   }
   cv::Mat height_noise(rows, cols, CV_32F);
@@ -213,9 +202,9 @@ SynthCity segment_footprints(const std::vector<PolygonWithHoles>& footprints, co
   cv::Mat truth = cv::Mat::zeros(rows, cols, CV_8U);
   for (const PolygonWithHoles& f : footprints) {
     // Each footprint on its own, then OR-ed in: a hole must not erase a building standing in it.
-    const cv::Rect box = pixel_box(f, city.transform, cols, rows);
+    const cv::Rect box = pixels_around(f, city.transform, cols, rows);
     cv::Mat own = cv::Mat::zeros(box.size(), CV_8U);
-    rasterize(own, f, shifted(city.transform, box));
+    rasterize(own, f, city.transform.window(box.x, box.y));
     truth(box) |= own;
     city.buildings.push_back({f, "given", 0, 0});
   }

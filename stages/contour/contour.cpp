@@ -82,6 +82,11 @@ std::vector<Ring> trace_component(cv::Mat m) {
   return rings;
 }
 
+cv::Rect component_box(const Components& c, int k) {
+  return {c.stats.at<int>(k, cv::CC_STAT_LEFT), c.stats.at<int>(k, cv::CC_STAT_TOP), c.stats.at<int>(k, cv::CC_STAT_WIDTH),
+          c.stats.at<int>(k, cv::CC_STAT_HEIGHT)};
+}
+
 Components label_components(const cv::Mat& mask, int connectivity) {
   CV_Assert(mask.type() == CV_8U);
   Components c;
@@ -116,9 +121,7 @@ ContourResult extract_contours(const Components& components, const GeoTransform&
   const double pixel_area = transform.pixel_size() * transform.pixel_size();
   std::vector<int> order;
   for (int k = 1; k < count; ++k) {
-    const cv::Rect box(stats.at<int>(k, cv::CC_STAT_LEFT), stats.at<int>(k, cv::CC_STAT_TOP),
-                       stats.at<int>(k, cv::CC_STAT_WIDTH), stats.at<int>(k, cv::CC_STAT_HEIGHT));
-    if (keep && !keep(box, first[k])) continue;
+    if (keep && !keep(component_box(components, k), first[k])) continue;
     if (stats.at<int>(k, cv::CC_STAT_AREA) * pixel_area < options.min_area_m2) {
       ++result.dropped_small;
       continue;
@@ -131,8 +134,7 @@ ContourResult extract_contours(const Components& components, const GeoTransform&
   const double orientation = transform.c[1] * transform.c[5] - transform.c[2] * transform.c[4];
   for (int k : order) {
     BuildingContour b;
-    b.bbox = cv::Rect(stats.at<int>(k, cv::CC_STAT_LEFT), stats.at<int>(k, cv::CC_STAT_TOP),
-                      stats.at<int>(k, cv::CC_STAT_WIDTH), stats.at<int>(k, cv::CC_STAT_HEIGHT));
+    b.bbox = component_box(components, k);
     b.pixel_count = stats.at<int>(k, cv::CC_STAT_AREA);
     b.first_col = first[k].x;
     b.first_row = first[k].y;

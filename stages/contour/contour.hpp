@@ -48,6 +48,7 @@ struct Components {
   int count = 0;  // labels, background included
 };
 Components label_components(const cv::Mat& mask, int connectivity);
+cv::Rect component_box(const Components& components, int label);  // its pixels' bounding box
 
 // mask: CV_8U, non-zero = building. keep (optional) selects which components to trace; the others
 // are skipped and not counted.

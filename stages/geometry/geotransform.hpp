@@ -13,6 +13,14 @@ struct GeoTransform {
   Vec2 to_map(double col, double row) const {
     return {c[0] + col * c[1] + row * c[2], c[3] + col * c[4] + row * c[5]};
   }
+  // The transform of a window whose first pixel is (col, row) of this grid.
+  GeoTransform window(double col, double row) const {
+    GeoTransform w = *this;
+    const Vec2 origin = to_map(col, row);
+    w.c[0] = origin.x();
+    w.c[3] = origin.y();
+    return w;
+  }
   // sqrt of the pixel's area, the ground sampling distance
   double pixel_size() const { return std::sqrt(std::abs(c[1] * c[5] - c[2] * c[4])); }
   // Map (x, y) to fractional (column, row).

@@ -20,6 +20,12 @@ double area(const PolygonWithHoles& polygon) {
   return a;
 }
 
+std::vector<const Ring*> rings_of(const PolygonWithHoles& polygon) {
+  std::vector<const Ring*> out{&polygon.outer};
+  for (const Ring& h : polygon.holes) out.push_back(&h);
+  return out;
+}
+
 std::size_t vertex_count(const PolygonWithHoles& polygon) {
   std::size_t n = polygon.outer.size();
   for (const Ring& hole : polygon.holes) n += hole.size();

@@ -11,6 +11,7 @@ double signed_area(const Ring& ring);  // > 0 for counter-clockwise
 double area(const PolygonWithHoles& polygon);
 double perimeter(const Ring& ring);
 std::size_t vertex_count(const PolygonWithHoles& polygon);  // of its outer ring and holes
+std::vector<const Ring*> rings_of(const PolygonWithHoles& polygon);  // the outer ring, then the holes
 bool point_in_ring(const Vec2& p, const Ring& ring);  // even-odd rule, boundary undefined
 
 // True when segments [a,b] and [c,d] share any point.

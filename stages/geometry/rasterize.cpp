@@ -36,6 +36,15 @@ void fill_ring(cv::Mat& image, const Ring& ring, const GeoTransform& t, double v
 
 }  // namespace
 
+cv::Rect pixel_box(const PolygonWithHoles& polygon, const GeoTransform& transform) {
+  double x0 = 1e300, y0 = 1e300, x1 = -1e300, y1 = -1e300;
+  for (const Vec2& v : polygon.outer) {
+    const Vec2 q = transform.to_pixel(v);
+    x0 = std::min(x0, q.x()); y0 = std::min(y0, q.y()); x1 = std::max(x1, q.x()); y1 = std::max(y1, q.y());
+  }
+  return cv::Rect(cv::Point(int(std::floor(x0)), int(std::floor(y0))), cv::Point(int(std::floor(x1)) + 1, int(std::floor(y1)) + 1));
+}
+
 void rasterize(cv::Mat& image, const PolygonWithHoles& p, const GeoTransform& t, double outer_value, double hole_value) {
   fill_ring(image, p.outer, t, outer_value);
   for (const Ring& h : p.holes) fill_ring(image, h, t, hole_value);

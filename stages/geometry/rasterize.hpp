@@ -7,6 +7,9 @@
 
 namespace lodforge {
 
+// The pixels (columns, rows) of the grid that the box of the polygon's outer ring touches, not clipped.
+cv::Rect pixel_box(const PolygonWithHoles& polygon, const GeoTransform& transform);
+
 // Sets the pixels of image (any type) whose centres lie inside the outer ring to outer_value,
 // then those inside a hole to hole_value.
 void rasterize(cv::Mat& image, const PolygonWithHoles& polygon, const GeoTransform& transform, double outer_value = 1,

@@ -60,9 +60,7 @@ Heights measure_heights(const PolygonWithHoles& footprint, const HeightRaster& d
   const double pixel = dsm.transform.pixel_size();
   const cv::Rect box = heights_box(footprint, dsm.transform, dsm.values.size(), o);
   if (box.empty()) { h.reason = "the footprint lies outside the DSM"; return h; }
-  GeoTransform local = dsm.transform;
-  local.c[0] = dsm.transform.c[0] + box.x * dsm.transform.c[1] + box.y * dsm.transform.c[2];
-  local.c[3] = dsm.transform.c[3] + box.x * dsm.transform.c[4] + box.y * dsm.transform.c[5];
+  const GeoTransform local = dsm.transform.window(box.x, box.y);
   cv::Mat inside = cv::Mat::zeros(box.size(), CV_8U);
   rasterize(inside, footprint, local);
 

@@ -162,13 +162,13 @@ Partition partition_outlines(const std::vector<PolygonWithHoles>& outlines,
     CSet cell = bands[i];
     cell.difference(cells);
     cells.join(cell);
-    cell.join(own[i]);
     if (options.lod0 == "cadastre") {
       auto [parts, invalid] = polygons_of(own[i]);
       if (!parts.empty()) share.polygon = parts.front();
       if (parts.size() > 1) share.note = std::to_string(parts.size() - 1) + " smaller part(s) of the footprint left out";
       continue;
     }
+    cell.join(own[i]);
     cell.intersection(outline);
     auto [parts, invalid] = polygons_of(cell);
     if (!parts.empty()) {
@@ -184,7 +184,6 @@ Partition partition_outlines(const std::vector<PolygonWithHoles>& outlines,
       // The outline misses the footprint's cell (or leaves only a pinched part): the cadastre's polygon.
       auto [own_parts, own_invalid] = polygons_of(own[i]);
       if (!own_parts.empty()) share.polygon = own_parts.front();
-      share.footprint_taken = true;
       share.note = "the regularized outline leaves nothing valid in the footprint's cell; the cadastre's polygon is its LOD0";
     }
   }

@@ -31,7 +31,6 @@ struct PartitionOptions {
 struct FootprintShare {
   PolygonWithHoles polygon;  // empty outer ring: none (see note)
   std::string note;          // why the share is not the outline's part (cadastre polygon taken, parts dropped), else empty
-  bool footprint_taken = false;  // the outline leaves nothing valid in the cell: polygon is the footprint's own
 };
 
 struct Partition {

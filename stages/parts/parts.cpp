@@ -22,20 +22,12 @@ int find(std::vector<int>& parent, int a) {
 }  // namespace
 
 std::vector<PolygonWithHoles> split_by_roof_steps(const PolygonWithHoles& footprint, const HeightRaster& window, double pixel_size,
-                                                  const CoreOptions& core, const PartOptions& options) {
+                                                  const std::string& regularizer, const CoreOptions& core, const PartOptions& options) {
   if (!options.enabled || window.values.empty()) return {};
   // The cells of the footprint's box only (the window holds a ground ring around it too).
-  double x0 = 1e300, y0 = 1e300, x1 = -1e300, y1 = -1e300;
-  for (const Vec2& v : footprint.outer) {
-    const Vec2 q = window.transform.to_pixel(v);
-    x0 = std::min(x0, q.x()); y0 = std::min(y0, q.y()); x1 = std::max(x1, q.x()); y1 = std::max(y1, q.y());
-  }
-  const cv::Rect box = cv::Rect(cv::Point(int(std::floor(x0)) - 1, int(std::floor(y0)) - 1), cv::Point(int(std::ceil(x1)) + 1, int(std::ceil(y1)) + 1)) &
-                       cv::Rect(0, 0, window.values.cols, window.values.rows);
+  const cv::Rect box = (pixel_box(footprint, window.transform) + cv::Size(2, 2) - cv::Point(1, 1)) & cv::Rect(0, 0, window.values.cols, window.values.rows);
   if (box.empty()) return {};
-  HeightRaster dsm{window.values(box), window.valid(box), window.transform};
-  dsm.transform.c[0] = window.transform.to_map(box.x, box.y).x();
-  dsm.transform.c[3] = window.transform.to_map(box.x, box.y).y();
+  const HeightRaster dsm{window.values(box), window.valid(box), window.transform.window(box.x, box.y)};
   const int rows = dsm.values.rows, cols = dsm.values.cols;
   cv::Mat inside = cv::Mat::zeros(rows, cols, CV_8U);
   rasterize(inside, footprint, dsm.transform);
@@ -90,7 +82,7 @@ std::vector<PolygonWithHoles> split_by_roof_steps(const PolygonWithHoles& footpr
     target.insert(target.end(), cells.begin(), cells.end());
   }
   if (regions.size() < 2) return {};
-  // Each region's outline through the chain, largest first.
+  // Each region's outline, regularized as the building's was, largest first.
   std::vector<std::pair<std::size_t, int>> order;
   for (const auto& [root, cells] : regions) order.push_back({cells.size(), root});
   std::sort(order.begin(), order.end(), [](const auto& a, const auto& b) { return a.first != b.first ? a.first > b.first : a.second < b.second; });
@@ -106,7 +98,7 @@ std::vector<PolygonWithHoles> split_by_roof_steps(const PolygonWithHoles& footpr
     if (traced.buildings.empty()) return {};
     const auto largest = std::max_element(traced.buildings.begin(), traced.buildings.end(),
                                           [](const BuildingContour& a, const BuildingContour& b) { return a.pixel_count < b.pixel_count; });
-    outlines.push_back({regularize_building(largest->rings, pixel_size, core).footprint});
+    outlines.push_back({regularize_with(regularizer, largest->rings, pixel_size, core).footprint});
   }
   // Fitted to the footprint: its share of each part's cell, the rest to the part it borders longest.
   PartitionOptions fit;

@@ -3,6 +3,7 @@
 // LoD1.3. The parts tile the building's LOD0 footprint exactly (shared walls identical).
 // Pure computation.
 #pragma once
+#include <string>
 #include <vector>
 
 #include "common/option.hpp"
@@ -30,8 +31,9 @@ struct PartOptions {
 
 // The building's parts where its roof steps, largest first, covering footprint exactly; empty when
 // it has one part (or the split fails). dsm: a window holding the footprint. Each part's outline
-// is the chain's regularization of its cells (core), then the parts are fitted to the footprint.
+// is its cells' regularization by `regularizer` (the building's: regularize_with), then the parts
+// are fitted to the footprint.
 std::vector<PolygonWithHoles> split_by_roof_steps(const PolygonWithHoles& footprint, const HeightRaster& dsm, double pixel_size,
-                                                  const CoreOptions& core, const PartOptions& options);
+                                                  const std::string& regularizer, const CoreOptions& core, const PartOptions& options);
 
 }  // namespace lodforge
