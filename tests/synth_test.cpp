@@ -1,9 +1,11 @@
 #include <gtest/gtest.h>
 
+#include <filesystem>
 #include <opencv2/core.hpp>
 #include <set>
 
 #include "geometry/polygon.hpp"
+#include "support/process.hpp"
 #include "synth/city.hpp"
 
 namespace lodforge {
@@ -18,6 +20,21 @@ TEST(Synth, SameSeedSameCity) {
   EXPECT_EQ(cv::norm(a.dsm, b.dsm, cv::NORM_L1), 0.0);
   o.seed = 2;
   EXPECT_GT(cv::norm(a.building_mask, generate_city(o).building_mask, cv::NORM_L1), 0.0);
+}
+
+// The files too: lodforge synth and regularize write the same bytes twice (their GeoPackages'
+// last change is the run's, not the clock's).
+TEST(Synth, TheCommandsWriteTheSameBytesTwice) {
+  const std::filesystem::path dir = test::fresh_test_directory("synth_bytes");
+  for (const char* name : {"a", "b"}) {
+    const test::CommandOutput synth = test::lodforge("synth --out " + (dir / name).string() + " --size-m 100 --seed 4");
+    ASSERT_EQ(synth.code, 0) << synth.output;
+    const test::CommandOutput lod0 = test::lodforge("regularize --mask " + (dir / name / "seg_class.tif").string() + " --building-value 6 --out " +
+                                                    (dir / name / "lod0.gpkg").string() + " -j 1");
+    ASSERT_EQ(lod0.code, 0) << lod0.output;
+  }
+  for (const char* file : {"footprints.gpkg", "seg_class.tif", "dsm.tif", "lod0.gpkg"})
+    EXPECT_EQ(test::slurp(dir / "a" / file), test::slurp(dir / "b" / file)) << file;
 }
 
 // The degradation in metres is the same physical noise at every pixel size: the area between the

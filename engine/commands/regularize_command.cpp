@@ -78,6 +78,7 @@ int run_regularize(int argc, char** argv) {
       .value("set", "KEY=VALUE", "set any stage option as in a job, e.g. stages.labeling.kappa2=5 (see lodforge options)", true);
   args.parse(argc, argv, 2);
   if (args.has("help")) { std::cout << args.help(); return 0; }
+  set_gpkg_timestamp();  // (the same mask and options, the same bytes)
   const std::string mask_path = args.require("mask");
   const std::string out_path = args.require("out");
   StageOptions options;

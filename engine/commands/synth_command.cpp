@@ -34,6 +34,7 @@ int run_synth(int argc, char** argv) {
       .flag("help", "show this help");
   args.parse(argc, argv, 2);
   if (args.has("help")) { std::cout << args.help(); return 0; }
+  set_gpkg_timestamp();  // (the same city, the same bytes)
   const fs::path out = args.require("out");
   std::vector<std::string> errors;
   std::map<std::string, std::string> values = split_assignments(args.all("set"), "--set", errors);
