@@ -156,6 +156,18 @@ TEST(CadastreRun, DelftWithTheBgtFootprintsGivesOneBuildingPerHouseWithItsIdAndH
     EXPECT_EQ(other.at(id).wkt, w.wkt) << id;
     EXPECT_EQ(other.at(id).roof, w.roof) << id;
   }
+  // And in three shards of the small tiles (one process each, as on a cluster): the same again.
+  write_job(dir, "shards", 64);
+  for (const char* shard : {"0/3", "1/3", "2/3"}) {
+    const test::CommandOutput part = test::lodforge("run " + (dir / "shards.yaml").string() + " --progress none --shard " + shard);
+    ASSERT_EQ(part.code, 0) << part.output;
+  }
+  const std::map<std::string, Written> sharded = read_run(dir / "shards");  // (an ID in two shards fails)
+  ASSERT_EQ(sharded.size(), buildings.size());
+  for (const auto& [id, w] : buildings) {
+    ASSERT_EQ(sharded.count(id), 1u) << id;
+    EXPECT_EQ(sharded.at(id).wkt, w.wkt) << id;
+  }
 
   // The 3D formats name each building by its ID and validate.
   const std::string gml = test::slurp(dir / "one_tile" / "tiles" / "r0000_c0000.gml");
