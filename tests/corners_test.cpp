@@ -49,6 +49,31 @@ TEST(Corners, RectangleGivesItsFourCorners) {
   EXPECT_NEAR(signed_area(out), 60.0, 1e-9);
 }
 
+// A thin building whose short ends got no direction of their own: its two long walls, each
+// labeled over half of each end, still make a polygon, its ends square steps where the labels
+// change; two runs that are neither parallel nor curved do not.
+TEST(Corners, TwoParallelRunsCloseWithSquareEnds) {
+  CornerOptions straight;
+  straight.curve_px = 0;  // (a run over a wall and an end would bow like a curve ...
+  straight.split_px = 0;  // ... or split into steps)
+  Ring ring;
+  std::vector<int> labels;
+  rectangle_contour(40, 6, ring, labels);
+  for (int& l : labels) l = l == 0 || l == 1 ? 0 : 2;  // the bottom wall and the right end: label 0
+  std::string problem;
+  const Ring out = extract_corners(ring, labels, axis_normals, 1.0, straight, &problem);
+  ASSERT_EQ(out.size(), 4u) << problem;
+  EXPECT_NEAR(std::abs(signed_area(out)), 6.0 * 40.0, 6.0 * 1.5);  // the ends at the label changes
+  for (std::size_t i = 0; i < out.size(); ++i) {
+    const Vec2 e = edge_vector(out, i);
+    EXPECT_LT(std::min(std::abs(e.x()), std::abs(e.y())), 1e-9) << i;  // square to the axes
+  }
+  for (int& l : labels) l = l == 0 ? 0 : 1;  // labels square to each other
+  problem.clear();
+  EXPECT_TRUE(extract_corners(ring, labels, axis_normals, 1.0, straight, &problem).empty());
+  EXPECT_NE(problem.find("only 2 straight runs"), std::string::npos) << problem;
+}
+
 TEST(Corners, ShortRunsAreAbsorbed) {
   Ring ring;
   std::vector<int> labels;

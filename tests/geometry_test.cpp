@@ -1,5 +1,7 @@
 #include <gtest/gtest.h>
 
+#include <algorithm>
+
 #include "geometry/polygon.hpp"
 
 namespace lodforge {
@@ -34,6 +36,30 @@ TEST(Geometry, PolygonProblemChecksHoles) {
   EXPECT_EQ(polygon_problem(outside), "hole 0 lies outside the outer ring");
   PolygonWithHoles crossing{square(10), {{{8, 2}, {8, 4}, {12, 4}, {12, 2}}}};
   EXPECT_NE(polygon_problem(crossing), "");
+}
+
+// Two corner lines that overshoot past each other make a thin inverted loop: it is cut off at the
+// crossing, and the ring keeps its corner. A loop wider than allowed, or a figure eight, is left.
+TEST(Geometry, UntangleCutsOffAThinLoopOnly) {
+  const Ring overshoot = {{0, 0}, {10, 0}, {10, 10.5}, {10.5, 10}, {0, 10}};  // loop (10,10)-(10,10.5)-(10.5,10)
+  ASSERT_NE(ring_problem(overshoot), "");
+  Ring ring = overshoot;
+  EXPECT_FALSE(untangle(ring, 0.1));  // the loop's mean width: 2 x 0.125 m^2 / 1.71 m = 0.15 m
+  EXPECT_EQ(ring, overshoot);
+  ASSERT_TRUE(untangle(ring, 0.2));
+  EXPECT_EQ(ring_problem(ring), "");
+  EXPECT_NEAR(signed_area(ring), 100.0, 1e-9);
+  ASSERT_EQ(ring.size(), 4u);
+  EXPECT_EQ(std::count_if(ring.begin(), ring.end(), [](const Vec2& p) { return (p - Vec2(10, 10)).norm() < 1e-9; }), 1);
+  // Clockwise (a hole's way), the same.
+  Ring hole(overshoot.rbegin(), overshoot.rend());
+  ASSERT_TRUE(untangle(hole, 0.2));
+  EXPECT_NEAR(signed_area(hole), -100.0, 1e-9);
+  // A bow tie: two triangles of 16 m^2, neither thin.
+  const Ring bowtie = {{0, 0}, {8, 0}, {0, 8}, {8, 8}};
+  ring = bowtie;
+  EXPECT_FALSE(untangle(ring, 1.0));
+  EXPECT_EQ(ring, bowtie);
 }
 
 TEST(Geometry, RemoveDegenerateVertices) {

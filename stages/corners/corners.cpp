@@ -36,6 +36,25 @@ Line fit_line(const Ring& ring, int first, int count, const Vec2& normal) {
   return {normal, total > 0 ? weighted / total : normal.dot(ring[first])};
 }
 
+// The line fitted again to the run's edges that lie within `band` of it: a long wall's line
+// without the short end walls its run took in.
+Line trimmed_fit(const Ring& ring, int first, int count, Line line, double band) {
+  for (int iteration = 0; iteration < 2; ++iteration) {
+    double weighted = 0, total = 0;
+    for (int k = 0; k < count; ++k) {
+      const std::size_t i = (first + k) % ring.size();
+      const Vec2 e = edge_vector(ring, i);
+      const double offset = line.normal.dot(ring[i] + 0.5 * e);
+      if (std::abs(offset - line.offset) > band) continue;
+      weighted += e.norm() * offset;
+      total += e.norm();
+    }
+    if (total <= 0) break;
+    line.offset = weighted / total;
+  }
+  return line;
+}
+
 // True when a parabola across the run's middle (its ends, a window each, left out) explains at
 // least min_explained of the contour's spread about a straight line: an arc bends one way over
 // its whole length, a wobble of several half-waves along a long wall does not.
@@ -141,49 +160,78 @@ bool is_curved(const Ring& ring, int first, int count, const Line& line, const C
 }
 
 // Appends run [first, first + count) to out, split where its contour steps between parallel
-// offsets (a row of houses stepping back and forth under one label). The run is cut greedily,
-// each cut where it removes most of the spread about the pieces' own offsets (pieces at least
-// 4 * split long, up to 8 pieces), and the fewest pieces that explain the contour are kept:
-// what is left of the spread about one line at most split_max_residual of it and at most
-// split_max_rms_px (the staircase of a slanted wall alone leaves ~0.3 px), with neighbouring
-// offsets at least `split` apart. A wobble or an arc is not explained that well by a few
-// offsets that far apart.
+// offsets (a row of houses stepping back and forth under one label). The pieces are parallel to
+// each other but not necessarily to the label's direction, which a stepped wall tilts when it is
+// fitted: each piece has its own offset, all share one slope about that direction. The run is cut
+// greedily, each cut where it removes most of the spread about the pieces' lines (pieces at
+// least 4 * split long, up to 8 pieces), and the fewest pieces that explain the contour are
+// kept: what is left of the spread about the run's own line at most split_max_residual of it, or
+// no more than the noise leaves (split_max_rms_noise), and at most split_max_rms_px, with
+// neighbouring pieces at least `split` apart. A wobble or an arc is not explained that well by a
+// few offsets that far apart.
 void split_parallel(const Ring& ring, int first, int count, const Vec2& normal, const CornerOptions& o,
                     double pixel_size, double noise, std::vector<std::pair<int, int>>& out) {
   constexpr int max_pieces = 8;
   const double split = std::max({o.split_px * pixel_size, o.split_m, o.split_noise * noise});
   if (o.split_px <= 0 || count < 4) { out.push_back({first, count}); return; }
-  std::vector<double> w(count + 1, 0.0), s(count + 1, 0.0), q(count + 1, 0.0);  // prefix sums
+  // Length-weighted prefix sums of each edge's position t along the run and offset y across it
+  // (both from the run's first edge, for range).
+  struct Sums {
+    double w = 0, t = 0, y = 0, tt = 0, ty = 0, yy = 0;
+    Sums operator-(const Sums& o) const { return {w - o.w, t - o.t, y - o.y, tt - o.tt, ty - o.ty, yy - o.yy}; }
+    Sums operator+(const Sums& o) const { return {w + o.w, t + o.t, y + o.y, tt + o.tt, ty + o.ty, yy + o.yy}; }
+    // The centred second moments: spread of t, covariance, spread of y.
+    double stt() const { return w > 0 ? tt - t * t / w : 0.0; }
+    double sty() const { return w > 0 ? ty - t * y / w : 0.0; }
+    double syy() const { return w > 0 ? yy - y * y / w : 0.0; }
+  };
+  const Vec2 along(-normal.y(), normal.x());
+  const Vec2 origin = ring[first % ring.size()];
+  std::vector<Sums> sums(count + 1);
   for (int k = 0; k < count; ++k) {
     const std::size_t i = (first + k) % ring.size();
     const Vec2 e = edge_vector(ring, i);
-    const double len = e.norm(), offset = normal.dot(ring[i] + 0.5 * e);
-    w[k + 1] = w[k] + len; s[k + 1] = s[k] + len * offset; q[k + 1] = q[k] + len * offset * offset;
+    const Vec2 mid = ring[i] + 0.5 * e - origin;
+    const double len = e.norm(), t = along.dot(mid), y = normal.dot(mid);
+    sums[k + 1] = sums[k] + Sums{len, len * t, len * y, len * t * t, len * t * y, len * y * y};
   }
-  auto sse = [&](int a, int b) {  // spread of edges [a, b) about their own offset
-    const double W = w[b] - w[a], S = s[b] - s[a];
-    return W > 0 ? q[b] - q[a] - S * S / W : 0.0;
-  };
-  auto offset = [&](int a, int b) { return (s[b] - s[a]) / (w[b] - w[a]); };
-  const double whole = sse(0, count), max_rms = o.split_max_rms_px * pixel_size;
+  auto piece = [&](int a, int b) { return sums[b] - sums[a]; };
+  // The spread left about lines of one shared slope, one offset per piece, from the pieces'
+  // centred moments added up.
+  auto spread = [](double stt, double sty, double syy) { return stt > 1e-12 ? syy - sty * sty / stt : syy; };
   std::vector<int> cuts = {0, count};  // piece p is [cuts[p], cuts[p + 1])
-  double total = whole;
+  const Sums all = piece(0, count);
+  double stt = all.stt(), sty = all.sty(), syy = all.syy();
+  const double whole = spread(stt, sty, syy), w_total = all.w;
+  const double noise_rms = o.split_max_rms_noise * noise, max_rms = std::max(o.split_max_rms_px * pixel_size, noise_rms);
   while (int(cuts.size()) - 1 < max_pieces) {
     int best_cut = -1;
-    double best_gain = 0;
+    double best_total = spread(stt, sty, syy);
     for (std::size_t p = 0; p + 1 < cuts.size(); ++p) {
       const int a = cuts[p], b = cuts[p + 1];
-      const double own = sse(a, b);
+      const Sums own = piece(a, b);
       for (int k = a + 1; k < b; ++k) {
-        if (w[k] - w[a] < 4 * split || w[b] - w[k] < 4 * split) continue;
-        const double gain = own - sse(a, k) - sse(k, b);
-        if (gain > best_gain) { best_gain = gain; best_cut = k; }
+        if (sums[k].w - sums[a].w < 4 * split || sums[b].w - sums[k].w < 4 * split) continue;
+        const Sums left = piece(a, k), right = piece(k, b);
+        const double total = spread(stt - own.stt() + left.stt() + right.stt(), sty - own.sty() + left.sty() + right.sty(),
+                                    syy - own.syy() + left.syy() + right.syy());
+        if (total < best_total) { best_total = total; best_cut = k; }
       }
     }
     if (best_cut < 0) break;
-    cuts.insert(std::upper_bound(cuts.begin(), cuts.end(), best_cut), best_cut);
-    total -= best_gain;
-    if (total > o.split_max_residual * whole || total > max_rms * max_rms * w[count]) continue;
+    const auto at = std::upper_bound(cuts.begin(), cuts.end(), best_cut);
+    const Sums own = piece(*(at - 1), *at), left = piece(*(at - 1), best_cut), right = piece(best_cut, *at);
+    stt += left.stt() + right.stt() - own.stt();
+    sty += left.sty() + right.sty() - own.sty();
+    syy += left.syy() + right.syy() - own.syy();
+    cuts.insert(at, best_cut);
+    // The parts explain the run: they leave little of its spread, or no more than the noise does.
+    const double total = spread(stt, sty, syy);
+    const bool explained = total <= o.split_max_residual * whole || total <= noise_rms * noise_rms * w_total;
+    if (!explained || total > max_rms * max_rms * w_total) continue;
+    // Neighbouring pieces' lines (the shared slope, each its own offset) at least `split` apart.
+    const double slope = stt > 1e-12 ? sty / stt : 0.0;
+    auto offset = [&](int a, int b) { const Sums q = piece(a, b); return (q.y - slope * q.t) / q.w; };
     bool apart = true;
     for (std::size_t p = 1; p + 1 < cuts.size(); ++p)
       apart &= std::abs(offset(cuts[p - 1], cuts[p]) - offset(cuts[p], cuts[p + 1])) >= split;
@@ -386,11 +434,18 @@ Ring extract_corners(const Ring& ring, const std::vector<int>& labels, const std
   std::vector<bool> curved(n);
   bool any_curved = false;
   for (int r = 0; r < n; ++r) any_curved |= curved[r] = is_curved(ring, runs[r].first, runs[r].second, lines[r], o, pixel_size, noise);
-  if (n < 3 && !(n == 2 && any_curved)) {  // two runs make a polygon only when one is a curve
+  const double parallel_sin = std::sin(o.parallel_angle_deg * M_PI / 180.0);
+  // Two runs make a polygon when one is a curve, or when they are a thin building's two long
+  // walls, whose ends (each run's end, on a short wall no direction was found for) become steps
+  // square to them.
+  const bool two_walls = n == 2 && !any_curved && std::abs(cross(lines[0].normal, lines[1].normal)) < parallel_sin;
+  if (n < 3 && !(n == 2 && any_curved) && !two_walls) {
     *problem = "only " + std::to_string(runs.size()) + " straight runs, a polygon needs 3";
     return {};
   }
-  const double parallel_sin = std::sin(o.parallel_angle_deg * M_PI / 180.0);
+  if (two_walls)
+    for (int r = 0; r < 2; ++r)
+      lines[r] = trimmed_fit(ring, runs[r].first, runs[r].second, lines[r], std::max(2 * pixel_size, 3 * noise));
   const double square_sin = std::cos(o.parallel_angle_deg * M_PI / 180.0);  // within that of 90 degrees
   const double curve_tolerance = std::max(pixel_size, o.curve_tolerance_noise * noise);
   const double curve_window = std::max(o.curve_window_px * pixel_size, o.curve_window_m);

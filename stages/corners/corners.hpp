@@ -20,6 +20,7 @@ struct CornerOptions {
                                      // replaced by a step between the two lines
   double square_corner_shift_m = 3.0;  // ... or this, when the lines are within parallel_angle_deg of square
   int repair_attempts = 4;           // an invalid polygon is retried with min_run doubled this often
+  double untangle_noise = 2.0;       // a loop where a ring crosses itself is cut off when its mean width is under this many boundary noises (at least a pixel)
   double curve_px = 2.5;             // a run whose contour bows this far from its line is a curved wall (0 = off)
   double curve_noise_factor = 2.5;   // ... and this many times the building's boundary noise
   double curve_window_px = 16.0;     // ... measured as the mean offset over windows of this length
@@ -42,6 +43,7 @@ struct CornerOptions {
   double split_noise = 5.0;          // ... and at least this many times the boundary noise
   double split_max_residual = 0.15;  // ... when the parts leave at most this share of the spread about one line
   double split_max_rms_px = 0.5;     // ... and at most this RMS distance to their own lines
+  double split_max_rms_noise = 1.5;  // ... or this many times the boundary noise
 
   template <class V>
   void visit(V& v) {
@@ -51,6 +53,7 @@ struct CornerOptions {
     v("parallel_angle_deg", parallel_angle_deg, "consecutive lines closer than this in angle are joined by a perpendicular step (degrees)", Check::between(0, 89));
     v("max_corner_shift_m", max_corner_shift_m, "an intersection farther than this from where the runs meet is replaced by a step (m)", Check::above(0));
     v("square_corner_shift_m", square_corner_shift_m, "the same for two lines within parallel_angle_deg of perpendicular, whose intersection is well posed (a rounded corner puts it farther from the runs' junction) (m)", Check::above(0));
+    v("untangle_noise", untangle_noise, "where a ring crosses itself, the loop is cut off when its mean width (area over half its perimeter) is under this many times the boundary noise, and at least a pixel (0 = off: the polygon is retried as below)", Check::at_least(0));
     v("repair_attempts", repair_attempts, "retries of an invalid polygon with min_run_px doubled each time (when all fail, they are made again with runs unsplit)", Check::between(0, 20));
     v("curve_px", curve_px, "a run whose contour departs from its fitted line by more than this on average over a window (pixels) is kept as a curve: its contour, simplified, replaces the line (0 = off)", Check::at_least(0));
     v("curve_noise_factor", curve_noise_factor, "... and by more than this many times the building's boundary noise (a wobble's window means stay below, an arc's do not)", Check::at_least(0));
@@ -74,6 +77,7 @@ struct CornerOptions {
     v("split_noise", split_noise, "... and at least this many times the building's boundary noise (a step smaller than that is the noise's)", Check::at_least(0));
     v("split_max_residual", split_max_residual, "parts split a run only when they leave at most this share of its contour's spread about one line", Check::between(0, 1));
     v("split_max_rms_px", split_max_rms_px, "... and at most this RMS distance of the contour to the parts' lines (pixels)", Check::above(0));
+    v("split_max_rms_noise", split_max_rms_noise, "... or at most this many times the building's boundary noise, which also stands for split_max_residual (a wobbling wall lies about its line by the noise)", Check::at_least(0));
   }
 };
 

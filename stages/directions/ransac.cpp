@@ -1,5 +1,6 @@
 #include "directions/ransac.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <numeric>
 #include <random>
@@ -77,12 +78,36 @@ std::vector<DominantDirection> detect_directions(const std::vector<Vec2>& normal
       const double p_missing = std::pow(1.0 - best.support / remaining_weight, drawn);
       if (p_missing < o.missing_probability) break;
     }
-    const Vec2 d = refine(best.direction, normals, weights, remaining, cos_threshold);
+    Vec2 d = refine(best.direction, normals, weights, remaining, cos_threshold);
     // The paper stops below |n|/16; a short wall square to a found direction (the ends of a
     // long thin building) is kept with less, noise rarely lines up like that.
-    const bool enough = best.support >= o.min_support_fraction * total ||
-                        (o.lattice_angle_deg > 0 && best.support >= o.lattice_min_support_m &&
-                         on_lattice(d, directions, o.lattice_angle_deg));
+    bool enough = best.support >= o.min_support_fraction * total ||
+                  (o.lattice_angle_deg > 0 && best.support >= o.lattice_min_support_m &&
+                   on_lattice(d, directions, o.lattice_angle_deg));
+    if (!enough && o.lattice_angle_deg > 0) {
+      // The best candidate is noise, but a short wall square to the walls found (the ends of a
+      // long thin building) may still be there, less supported than the noise: look for it at
+      // each quarter turn of a found direction that none of them is near yet.
+      const double near_cos = std::cos(o.lattice_angle_deg * M_PI / 180.0);
+      Candidate square;
+      for (const DominantDirection& f : directions)
+        for (const Vec2 q : {Vec2(-f.normal.y(), f.normal.x()), Vec2(-f.normal), Vec2(f.normal.y(), -f.normal.x())}) {
+          const bool taken = std::any_of(directions.begin(), directions.end(),
+                                         [&](const DominantDirection& g) { return g.normal.dot(q) >= near_cos; });
+          if (taken) continue;
+          const Candidate c = evaluate(q, normals, weights, remaining, cos_threshold);
+          if (c.support > square.support) square = c;
+        }
+      if (square.support >= o.lattice_min_support_m) {
+        const Vec2 refined = refine(square.direction, normals, weights, remaining, cos_threshold);
+        // A wall's normals gather about its direction; an arc's spread evenly over the cone.
+        const double narrow = std::cos(o.inlier_angle_deg * M_PI / 180.0 / 4.0);
+        const double gathered = evaluate(refined, normals, weights, remaining, narrow).support;
+        const double support = evaluate(refined, normals, weights, remaining, cos_threshold).support;
+        enough = on_lattice(refined, directions, o.lattice_angle_deg) && gathered >= o.square_min_gathered * support;
+        if (enough) d = refined;
+      }
+    }
     if (!enough) break;
     double support = 0;
     for (std::size_t k = 0; k < normals.size(); ++k) {

@@ -15,6 +15,7 @@ struct RansacOptions {
   double min_support_fraction = 1.0 / 16.0;  // stop when the best set is below |n|/16
   double lattice_angle_deg = 10.0;   // a direction this close to a quarter turn of a found one ...
   double lattice_min_support_m = 1.0;  // ... needs only this much support (short walls of thin buildings)
+  double square_min_gathered = 0.35;   // ... and, found only by looking square to the others, this share of it within a quarter of the inlier angle
   int max_candidates = 500;        // per direction, bounds the work
   int max_directions = 16;
   std::uint64_t seed = 42;
@@ -26,6 +27,7 @@ struct RansacOptions {
     v("min_support_fraction", min_support_fraction, "stop when a direction's support is below this share of the edges", Check::between(0, 1));
     v("lattice_angle_deg", lattice_angle_deg, "a direction within this of a quarter turn of a found one is accepted with less support (degrees, 0 = off)", Check::between(0, 45));
     v("lattice_min_support_m", lattice_min_support_m, "the support such a direction needs (m of contour)", Check::at_least(0));
+    v("square_min_gathered", square_min_gathered, "when the best candidate is noise, a quarter turn of a found direction is still taken (a long building's short ends) with lattice_min_support_m and this share of its support within a quarter of inlier_angle_deg: a wall's normals gather, an arc's spread evenly (1 = never)", Check::between(0, 1));
     v("max_candidates", max_candidates, "candidate directions drawn per dominant direction at most", Check::at_least(1));
     v("max_directions", max_directions, "dominant directions per building at most", Check::at_least(1));
     v("seed", seed, "random seed (results are deterministic for a seed)", Check::at_least(0));

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <optional>
 #include <vector>
 
 namespace lodforge {
@@ -78,8 +79,15 @@ bool adjacent_in_ring(const Segment& s, const Segment& t, const std::vector<std:
   return (s.index + 1) % n == t.index || (t.index + 1) % n == s.index;
 }
 
-// Sweep over x: reports the first pair of non-adjacent segments that touch, O(n log n + k).
-std::string first_crossing(const std::vector<Ring>& rings) {
+// The first pair of non-adjacent segments that touch, or adjacent ones that fold back on each
+// other (`fold`). Sweep over x, O(n log n + k).
+struct Crossing {
+  int ring = -1, index = -1;              // the first segment (ring, edge from vertex index)
+  int other_ring = -1, other_index = -1;  // the second
+  bool fold = false;
+};
+
+std::optional<Crossing> find_crossing(const std::vector<Ring>& rings) {
   std::vector<Segment> segments;
   std::vector<std::size_t> sizes;
   for (std::size_t r = 0; r < rings.size(); ++r) {
@@ -101,21 +109,25 @@ std::string first_crossing(const std::vector<Ring>& rings) {
         const Segment& first = s_first ? s : t;
         const Segment& second = s_first ? t : s;
         if (sizes[s.ring] > 2 && orientation(first.a, first.b, second.b) == 0 &&
-            (first.b - first.a).dot(second.b - second.a) < 0) {
-          return "ring " + std::to_string(s.ring) + " folds back at vertex " +
-                 std::to_string(second.index);
-        }
+            (first.b - first.a).dot(second.b - second.a) < 0)
+          return Crossing{first.ring, first.index, second.ring, second.index, true};
         continue;
       }
-      if (segments_intersect(s.a, s.b, t.a, t.b)) {
-        return s.ring == t.ring ? "ring " + std::to_string(s.ring) + " crosses itself near (" +
-                                      std::to_string(s.a.x()) + ", " + std::to_string(s.a.y()) + ")"
-                                : "rings " + std::to_string(s.ring) + " and " +
-                                      std::to_string(t.ring) + " touch or cross";
-      }
+      if (segments_intersect(s.a, s.b, t.a, t.b)) return Crossing{s.ring, s.index, t.ring, t.index, false};
     }
   }
-  return {};
+  return std::nullopt;
+}
+
+std::string first_crossing(const std::vector<Ring>& rings) {
+  const std::optional<Crossing> c = find_crossing(rings);
+  if (!c) return {};
+  if (c->fold) return "ring " + std::to_string(c->ring) + " folds back at vertex " + std::to_string(c->other_index);
+  const Vec2& a = rings[c->ring][c->index];
+  return c->ring == c->other_ring ? "ring " + std::to_string(c->ring) + " crosses itself near (" +
+                                        std::to_string(a.x()) + ", " + std::to_string(a.y()) + ")"
+                                  : "rings " + std::to_string(c->ring) + " and " + std::to_string(c->other_ring) +
+                                        " touch or cross";
 }
 
 }  // namespace
@@ -264,6 +276,44 @@ Ring douglas_peucker(const Ring& ring, double tolerance) {
     else { out.push_back(ring[far]); out.push_back(ring[best]); }
   }
   return out;
+}
+
+
+bool untangle(Ring& ring, double max_width) {
+  const double sign = signed_area(ring) >= 0 ? 1.0 : -1.0;
+  Ring out = ring;
+  for (std::size_t attempt = 0; attempt < ring.size(); ++attempt) {
+    const std::optional<Crossing> c = find_crossing({out});
+    if (!c) break;
+    const int n = static_cast<int>(out.size());
+    if (c->fold) {  // a spike: its tip goes
+      out.erase(out.begin() + c->other_index);
+      continue;
+    }
+    const int i = std::min(c->index, c->other_index), j = std::max(c->index, c->other_index);
+    // Where edge i (i to i+1) meets edge j (j to j+1); for overlapping collinear edges, a shared point.
+    const Vec2 u = out[(i + 1) % n] - out[i], v = out[(j + 1) % n] - out[j];
+    const double det = cross(u, v);
+    Vec2 x = out[(i + 1) % n];
+    if (std::abs(det) > 1e-12 * u.norm() * v.norm()) x = out[i] + u * (cross(out[j] - out[i], v) / det);
+    else if (on_segment(out[i], out[(i + 1) % n], out[j])) x = out[j];
+    Ring first{x}, second{x};  // the two loops the crossing makes
+    for (int k = i + 1; k <= j; ++k) first.push_back(out[k]);
+    for (int k = j + 1; k != i + 1 + n; ++k) second.push_back(out[k % n]);
+    first = remove_degenerate_vertices(first, 1e-9);
+    second = remove_degenerate_vertices(second, 1e-9);
+    const double a1 = first.size() >= 3 ? sign * signed_area(first) : 0.0;
+    const double a2 = second.size() >= 3 ? sign * signed_area(second) : 0.0;
+    Ring& keep = a1 >= a2 ? first : second;
+    const Ring& cut = a1 >= a2 ? second : first;
+    if (std::max(a1, a2) <= 0) return false;
+    // A loop's mean width: its area over half its perimeter.
+    if (cut.size() >= 3 && 2 * std::abs(signed_area(cut)) > max_width * perimeter(cut)) return false;
+    out = std::move(keep);
+  }
+  if (!ring_problem(out).empty()) return false;
+  ring = std::move(out);
+  return true;
 }
 
 }  // namespace lodforge

@@ -25,6 +25,12 @@ std::string ring_problem(const Ring& ring);
 // counter-clockwise, holes clockwise, inside the outer ring and pairwise disjoint.
 std::string polygon_problem(const PolygonWithHoles& polygon);
 
+// Cuts off the loops of a ring that crosses itself: at each crossing the ring splits in two and
+// the piece of larger area, turning the ring's way, is kept. Each piece cut off must be thinner
+// than max_width on average (its area over half its perimeter). True, with the ring changed, when
+// that leaves a simple ring; false, with the ring as it was, otherwise.
+bool untangle(Ring& ring, double max_width);
+
 // Removes consecutive duplicates (closer than eps) and vertices whose two edges are collinear
 // (deviation below eps from the line through their neighbours).
 Ring remove_degenerate_vertices(const Ring& ring, double eps);

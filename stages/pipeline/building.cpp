@@ -175,6 +175,9 @@ PolygonWithHoles corner_polygon(const std::vector<Ring>& rings, const EdgeLabels
     std::string problem;
     Ring ring = extract_corners(rings[r], labels[r], directions, pixel_size, options, &problem, context);
     if (ring.empty()) throw StageError("corners", (r == 0 ? "outer ring: " : "hole " + std::to_string(r - 1) + ": ") + problem);
+    // Where two corner lines overshoot past each other, the ring crosses itself in a thin loop.
+    if (options.untangle_noise > 0 && !ring_problem(ring).empty())
+      untangle(ring, options.untangle_noise * std::max(pixel_size, context.noise));
     for (Vec2& p : ring) p += origin;
     if (r == 0) footprint.outer = std::move(ring);
     else footprint.holes.push_back(std::move(ring));
