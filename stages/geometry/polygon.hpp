@@ -14,6 +14,9 @@ std::size_t vertex_count(const PolygonWithHoles& polygon);  // of its outer ring
 std::vector<const Ring*> rings_of(const PolygonWithHoles& polygon);  // the outer ring, then the holes
 bool point_in_ring(const Vec2& p, const Ring& ring);  // even-odd rule, boundary undefined
 
+// The distance from p to the segment [a, b].
+double distance_to_segment(const Vec2& p, const Vec2& a, const Vec2& b);
+
 // True when segments [a,b] and [c,d] share any point.
 bool segments_intersect(const Vec2& a, const Vec2& b, const Vec2& c, const Vec2& d);
 

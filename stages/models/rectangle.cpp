@@ -2,6 +2,8 @@
 
 #include "models/statistics.hpp"
 
+#include "geometry/polygon.hpp"
+
 #include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <cmath>
@@ -52,13 +54,6 @@ Ring rectangle_of(const Moments& m, const Vec2& normal) {
   return {c - u - v, c - u + v, c + u + v, c + u - v};  // counter-clockwise (t is n turned left)
 }
 
-double distance_to_segment(const Vec2& p, const Vec2& a, const Vec2& b) {
-  const Vec2 ab = b - a;
-  const double len2 = ab.squaredNorm();
-  const double s = len2 > 0 ? std::clamp((p - a).dot(ab) / len2, 0.0, 1.0) : 0.0;
-  return (p - a - s * ab).norm();
-}
-
 }  // namespace
 
 Ring moment_rectangle(const Ring& ring, const Vec2& normal) {
@@ -69,15 +64,30 @@ Ring moment_rectangle(const Ring& ring, const Vec2& normal) {
 // The distance of each of the ring's edge midpoints to the polygon's boundary, with the edge's
 // length: (distance, length).
 static std::vector<std::pair<double, double>> boundary_distances(const Ring& ring, const PolygonWithHoles& polygon) {
+  struct Segment {
+    Vec2 a, b, low, high;  // ends and bounding box
+  };
+  std::vector<Segment> segments;
+  for (const Ring* r : rings_of(polygon))
+    for (std::size_t k = 0; k < r->size(); ++k) {
+      const Vec2& a = (*r)[k];
+      const Vec2& b = (*r)[(k + 1) % r->size()];
+      segments.push_back({a, b, a.cwiseMin(b), a.cwiseMax(b)});
+    }
   std::vector<std::pair<double, double>> distances;
+  if (segments.empty()) return distances;
+  distances.reserve(ring.size());
+  std::size_t nearest = 0;  // the previous midpoint's nearest segment: a first bound for the next
   for (std::size_t i = 0; i < ring.size(); ++i) {
     const Vec2 e = edge_vector(ring, i), mid = ring[i] + 0.5 * e;
-    double best = std::numeric_limits<double>::infinity();
-    auto scan = [&](const Ring& r) {
-      for (std::size_t k = 0; k < r.size(); ++k) best = std::min(best, distance_to_segment(mid, r[k], r[(k + 1) % r.size()]));
-    };
-    scan(polygon.outer);
-    for (const Ring& h : polygon.holes) scan(h);
+    double best = distance_to_segment(mid, segments[nearest].a, segments[nearest].b);
+    for (std::size_t k = 0; k < segments.size(); ++k) {
+      // A segment whose box lies farther than the best so far cannot be nearer.
+      const Vec2 gap = (segments[k].low - mid).cwiseMax(mid - segments[k].high).cwiseMax(0.0);
+      if (k == nearest || gap.squaredNorm() >= best * best) continue;
+      const double d = distance_to_segment(mid, segments[k].a, segments[k].b);
+      if (d < best) best = d, nearest = k;
+    }
     distances.push_back({best, e.norm()});
   }
   return distances;
