@@ -278,7 +278,6 @@ Ring douglas_peucker(const Ring& ring, double tolerance) {
   return out;
 }
 
-
 bool untangle(Ring& ring, double max_width) {
   const double sign = signed_area(ring) >= 0 ? 1.0 : -1.0;
   Ring out = ring;
