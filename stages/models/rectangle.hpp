@@ -14,7 +14,8 @@ struct ModelOptions {
   double outline_tolerance = 0.5;    // in boundary-noise units: how much worse the regular outline may explain the contour
   double lattice_tolerance = 2.0;    // the lattice outline may explain the contour worse by this many standard errors
   double rescue_fit_noise = 1.0;     // ... and stands in for a failed chain within this many times the noise
-  double rectangle_tolerance = 1.0;  // ... and a rectangle, by the 90th percentile of the distances
+  double rectangle_tolerance = 1.0;  // ... and a rectangle, by a high percentile of the distances ...
+  double rectangle_quantile = 0.95;  // ... this one
   double min_noise_px = 0.3;         // the noise assumed at least (a staircase's quantization)
   double fallback_fit_px = 0.5;      // a rectangle replaces a failed building's fallback when it fits within this ...
   double fallback_fit_ratio = 2.0;   // ... or this many times as far as the fallback (mean distances)
@@ -24,7 +25,8 @@ struct ModelOptions {
     v("outline_tolerance", outline_tolerance, "the regular outline (walls held to the lattice, steps and curves judged against the noise) is kept when it explains the contour (mean distance of the contour to it) no worse than the plain one (pixel thresholds) plus this many times the boundary noise", Check::at_least(0));
     v("lattice_tolerance", lattice_tolerance, "a building on a lattice gets the lattice outline (straight walls labeled among its main direction and quarter turns alone) when that has no more vertices than the chosen outline and explains the contour (mean distance) no worse than it plus this many standard errors of that mean: the boundary noise times sqrt(corners.snap_correlation_m / perimeter); 0 = never", Check::at_least(0));
     v("rescue_fit_noise", rescue_fit_noise, "when the chain fails, the lattice outline stands in for the fallback if the contour lies within this many times the boundary noise of it (mean distance), or as close to it as to the fallback", Check::at_least(0));
-    v("rectangle_tolerance", rectangle_tolerance, "a building becomes the oriented rectangle of its contour's moments when that explains the contour no worse than the regularized outline plus this many times the boundary noise (the 90th percentile of the distances of the contour to each: a rectangle must follow the contour everywhere, not on average; 0 = off)", Check::at_least(0));
+    v("rectangle_tolerance", rectangle_tolerance, "a building becomes the oriented rectangle of its contour's moments when that explains the contour no worse than the regularized outline plus this many times the boundary noise (a high percentile of the distances of the contour to each, rectangle_quantile: a rectangle must follow the contour everywhere, not on average; 0 = off)", Check::at_least(0));
+    v("rectangle_quantile", rectangle_quantile, "... that percentile, as a share (0.95: the rectangle may leave 5 % of the contour, by length, farther than the outline does plus the tolerance)", Check::between(0.5, 1));
     v("min_noise_px", min_noise_px, "the boundary noise is taken as at least this (pixels; a staircase's own)", Check::at_least(0));
     v("fallback_fit_px", fallback_fit_px, "when the chain fails, the rectangle replaces the Douglas-Peucker fallback if the contour lies within this (pixels, mean distance) of it ...", Check::at_least(0));
     v("fallback_fit_ratio", fallback_fit_ratio, "... or within this many times the fallback's own mean distance to the contour", Check::at_least(0));

@@ -287,7 +287,7 @@ double fit_tolerance(const std::vector<Ring>& rings, double pixel_size, const Bu
 }
 
 // Replaces the chain's outline by the building's moment rectangle when that explains the contour
-// (90th percentile of the contour's distances to each) no worse than the outline plus the allowed noise:
+// (a high percentile, models.rectangle_quantile, of the contour's distances to each) no worse than the outline plus the allowed noise:
 // the simplest outline that explains the contour within its noise.
 void choose_rectangle(const std::vector<Ring>& rings, double pixel_size, const ModelOptions& o, BuildingResult& result) {
   if (o.rectangle_tolerance <= 0 || rings.size() != 1 || result.footprint.outer.size() <= 4) return;
@@ -295,8 +295,8 @@ void choose_rectangle(const std::vector<Ring>& rings, double pixel_size, const M
   Ring rectangle = best_rectangle(rings[0], result.directions, &mean_fit);
   if (rectangle.empty()) return;
   PolygonWithHoles candidate{std::move(rectangle), {}};
-  const double outline_fit = distance_quantile_to_boundary(rings[0], result.footprint, 0.9);
-  const double rectangle_fit = distance_quantile_to_boundary(rings[0], candidate, 0.9);
+  const double outline_fit = distance_quantile_to_boundary(rings[0], result.footprint, o.rectangle_quantile);
+  const double rectangle_fit = distance_quantile_to_boundary(rings[0], candidate, o.rectangle_quantile);
   if (rectangle_fit > outline_fit + o.rectangle_tolerance * model_noise(result, pixel_size, o)) return;
   if (!polygon_problem(candidate).empty()) return;
   result.footprint = std::move(candidate);
