@@ -272,7 +272,9 @@ TEST(CadastreRun, AMultiPartFootprintIsOneBuildingWhateverTheTiling) {
 
 // Resuming after an edit of the cadastre: the tiles whose windows hold no changed footprint keep
 // their checkpoints, and the files equal a fresh run's with the edited cadastre.
-TEST(CadastreRun, AnEditedCadastreRedoesOnlyTheTilesItTouches) {
+// (The tiles' keys hold each footprint's place in the cadastre, which decides overlaps: removing
+// or inserting one before others shifts theirs, and the tiles holding them are traced again.)
+TEST(CadastreRun, RemovingTheLastFootprintRedoesOnlyTheTilesItTouches) {
   GDALAllRegister();
   const fs::path dir = test::fresh_test_directory("cadastre_edit");
   const std::string bgt = test::slurp(delft("derived/bgt_pand_buildings.geojson"));
@@ -301,10 +303,13 @@ TEST(CadastreRun, AnEditedCadastreRedoesOnlyTheTilesItTouches) {
   const int tiles = resumed.at("tiles").get<int>(), reused = resumed.at("checkpoints_reused").at("contours").get<int>();
   EXPECT_GT(reused, tiles / 2);
   EXPECT_LT(reused, tiles);
-  EXPECT_EQ(fresh.at("checkpoints_reused").at("contours"), 0);
-  for (const auto& e : fs::directory_iterator(dir / "out_fresh" / "tiles"))
-    if (e.path().extension() == ".json")
-      EXPECT_EQ(test::slurp(e.path()), test::slurp(dir / "out_resumed" / "tiles" / e.path().filename())) << e.path();
+  int compared = 0;
+  for (const auto& e : fs::directory_iterator(dir / "out_fresh" / "tiles")) {
+    if (e.path().extension() != ".json") continue;
+    EXPECT_EQ(test::slurp(e.path()), test::slurp(dir / "out_resumed" / "tiles" / e.path().filename())) << e.path();
+    ++compared;
+  }
+  EXPECT_GT(compared, 0);  // (the loop compared something)
 }
 
 }  // namespace

@@ -169,9 +169,7 @@ Overview write_overview(const std::string& job_path, const std::vector<fs::path>
     // (an outline far off the raster, which a run does not make, grows it by max_pixels at most)
     c0 = std::max(c0, -double(max_pixels)), r0 = std::max(r0, -double(max_pixels));
     c1 = std::min(c1, double(width + max_pixels)), r1 = std::min(r1, double(height + max_pixels));
-    const Vec2 origin = frame.to_map(c0, r0);
-    frame.c[0] = origin.x();
-    frame.c[3] = origin.y();
+    frame = frame.window(c0, r0);
     width = int(c1 - c0);
     height = int(r1 - r0);
   }

@@ -117,8 +117,7 @@ std::vector<BuildingOutput> split_among_footprints(const std::vector<TileGroup>&
         split = partition_outlines(outlines, confirmed, options, plan.job.stages.contour.min_area_m2);
       } catch (const std::exception& e) {  // (a failure is the block's status, never the run's end)
         split_failure = e.what();
-        split = Partition{};
-        split.shares.resize(confirmed.size());
+        split.shares.resize(confirmed.size());  // (split is as it was: empty)
       }
     }
     std::size_t next_share = 0;

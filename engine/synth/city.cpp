@@ -104,12 +104,6 @@ double terrain(const Vec2& local) {
 
 }  // namespace
 
-// The pixels around a footprint (a pixel of margin), clipped to the raster.
-static cv::Rect pixels_around(const PolygonWithHoles& footprint, const GeoTransform& t, int cols, int rows) {
-  return (pixel_box(footprint, t) + cv::Size(2, 2) - cv::Point(1, 1)) & cv::Rect(0, 0, cols, rows);
-}
-
-
 // The segmentation of a true 0/1 mask: rounded corners, a smooth boundary wobble, speckles.
 static cv::Mat segmentation_of(const cv::Mat& truth, const SynthOptions& o, Rng& rng) {
   const int rows = truth.rows, cols = truth.cols;
@@ -167,7 +161,7 @@ SynthCity generate_city(const SynthOptions& o) {
     rasterize(truth, b.footprint, city.transform);
     // The roof, in the footprint's bounding box only (a whole-raster mask per building made
     // generation quadratic in the area).
-    const cv::Rect box = pixels_around(b.footprint, city.transform, cols, rows);
+    const cv::Rect box = pixel_box(b.footprint, city.transform, 1, cv::Size(cols, rows));
     if (box.empty()) continue;
     cv::Mat roof = cv::Mat::zeros(box.size(), CV_8U);
     rasterize(roof, b.footprint, city.transform.window(box.x, box.y));
@@ -202,7 +196,7 @@ SynthCity segment_footprints(const std::vector<PolygonWithHoles>& footprints, co
   cv::Mat truth = cv::Mat::zeros(rows, cols, CV_8U);
   for (const PolygonWithHoles& f : footprints) {
     // Each footprint on its own, then OR-ed in: a hole must not erase a building standing in it.
-    const cv::Rect box = pixels_around(f, city.transform, cols, rows);
+    const cv::Rect box = pixel_box(f, city.transform, 1, cv::Size(cols, rows));
     cv::Mat own = cv::Mat::zeros(box.size(), CV_8U);
     rasterize(own, f, city.transform.window(box.x, box.y));
     truth(box) |= own;

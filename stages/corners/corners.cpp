@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 #include <Eigen/Dense>
 
@@ -24,34 +25,31 @@ struct Line {
   Vec2 project(const Vec2& p) const { return p - (normal.dot(p) - offset) * normal; }
 };
 
-Line fit_line(const Ring& ring, int first, int count, const Vec2& normal) {
+// The length-weighted mean offset along `normal` of the run's edge midpoints within `band` of
+// `around` (all of them by default); `fallback` when none is.
+double mean_offset(const Ring& ring, int first, int count, const Vec2& normal, double fallback,
+                   double around = 0, double band = std::numeric_limits<double>::infinity()) {
   double weighted = 0, total = 0;
   for (int k = 0; k < count; ++k) {
     const std::size_t i = (first + k) % ring.size();
     const Vec2 e = edge_vector(ring, i);
-    const double len = e.norm();
-    weighted += len * normal.dot(ring[i] + 0.5 * e);
-    total += len;
+    const double offset = normal.dot(ring[i] + 0.5 * e);
+    if (std::abs(offset - around) > band) continue;
+    weighted += e.norm() * offset;
+    total += e.norm();
   }
-  return {normal, total > 0 ? weighted / total : normal.dot(ring[first])};
+  return total > 0 ? weighted / total : fallback;
 }
 
-// The line fitted again to the run's edges that lie within `band` of it: a long wall's line
-// without the short end walls its run took in.
+Line fit_line(const Ring& ring, int first, int count, const Vec2& normal) {
+  return {normal, mean_offset(ring, first, count, normal, normal.dot(ring[first]))};
+}
+
+// The line fitted again (twice) to the run's edges that lie within `band` of it: a long wall's
+// line without the short end walls its run took in.
 Line trimmed_fit(const Ring& ring, int first, int count, Line line, double band) {
-  for (int iteration = 0; iteration < 2; ++iteration) {
-    double weighted = 0, total = 0;
-    for (int k = 0; k < count; ++k) {
-      const std::size_t i = (first + k) % ring.size();
-      const Vec2 e = edge_vector(ring, i);
-      const double offset = line.normal.dot(ring[i] + 0.5 * e);
-      if (std::abs(offset - line.offset) > band) continue;
-      weighted += e.norm() * offset;
-      total += e.norm();
-    }
-    if (total <= 0) break;
-    line.offset = weighted / total;
-  }
+  for (int iteration = 0; iteration < 2; ++iteration)
+    line.offset = mean_offset(ring, first, count, line.normal, line.offset, line.offset, band);
   return line;
 }
 

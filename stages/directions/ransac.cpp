@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <numeric>
+#include <optional>
 #include <random>
 
 namespace lodforge {
@@ -10,7 +11,7 @@ namespace lodforge {
 namespace {
 
 struct Candidate {
-  Vec2 direction;
+  Vec2 direction = Vec2::Zero();
   double support = 0;
 };
 
@@ -49,6 +50,33 @@ bool on_lattice(const Vec2& d, const std::vector<DominantDirection>& found, doub
   return false;
 }
 
+// When RANSAC's best candidate is noise, a short wall square to the walls found (the ends of a
+// long thin building) may still be there, less supported than the noise: the best supported
+// quarter turn of a found direction that none of them is near yet, with lattice_min_support_m,
+// refined, and with square_min_gathered of its support within a quarter of the inlier angle (a
+// wall's normals gather about its direction, an arc's spread evenly over the cone).
+std::optional<Vec2> square_wall(const std::vector<Vec2>& normals, const std::vector<double>& weights,
+                                const std::vector<char>& remaining, const std::vector<DominantDirection>& found,
+                                const RansacOptions& o) {
+  const double cos_threshold = std::cos(o.inlier_angle_deg * M_PI / 180.0);
+  const double near_cos = std::cos(o.lattice_angle_deg * M_PI / 180.0);
+  Candidate square;
+  for (const DominantDirection& f : found)
+    for (const Vec2& q : {Vec2(-f.normal.y(), f.normal.x()), Vec2(-f.normal), Vec2(f.normal.y(), -f.normal.x())}) {
+      const bool taken = std::any_of(found.begin(), found.end(), [&](const DominantDirection& g) { return g.normal.dot(q) >= near_cos; });
+      if (taken) continue;
+      const Candidate c = evaluate(q, normals, weights, remaining, cos_threshold);
+      if (c.support > square.support) square = c;
+    }
+  if (square.support < o.lattice_min_support_m) return std::nullopt;
+  const Vec2 refined = refine(square.direction, normals, weights, remaining, cos_threshold);
+  const double narrow = std::cos(o.inlier_angle_deg * M_PI / 180.0 / 4.0);
+  const double gathered = evaluate(refined, normals, weights, remaining, narrow).support;
+  const double support = evaluate(refined, normals, weights, remaining, cos_threshold).support;
+  if (!on_lattice(refined, found, o.lattice_angle_deg) || gathered < o.square_min_gathered * support) return std::nullopt;
+  return refined;
+}
+
 }  // namespace
 
 std::vector<DominantDirection> detect_directions(const std::vector<Vec2>& normals,
@@ -85,28 +113,10 @@ std::vector<DominantDirection> detect_directions(const std::vector<Vec2>& normal
                   (o.lattice_angle_deg > 0 && best.support >= o.lattice_min_support_m &&
                    on_lattice(d, directions, o.lattice_angle_deg));
     if (!enough && o.lattice_angle_deg > 0) {
-      // The best candidate is noise, but a short wall square to the walls found (the ends of a
-      // long thin building) may still be there, less supported than the noise: look for it at
-      // each quarter turn of a found direction that none of them is near yet.
-      const double near_cos = std::cos(o.lattice_angle_deg * M_PI / 180.0);
-      Candidate square;
-      for (const DominantDirection& f : directions)
-        for (const Vec2 q : {Vec2(-f.normal.y(), f.normal.x()), Vec2(-f.normal), Vec2(f.normal.y(), -f.normal.x())}) {
-          const bool taken = std::any_of(directions.begin(), directions.end(),
-                                         [&](const DominantDirection& g) { return g.normal.dot(q) >= near_cos; });
-          if (taken) continue;
-          const Candidate c = evaluate(q, normals, weights, remaining, cos_threshold);
-          if (c.support > square.support) square = c;
-        }
-      if (square.support >= o.lattice_min_support_m) {
-        const Vec2 refined = refine(square.direction, normals, weights, remaining, cos_threshold);
-        // A wall's normals gather about its direction; an arc's spread evenly over the cone.
-        const double narrow = std::cos(o.inlier_angle_deg * M_PI / 180.0 / 4.0);
-        const double gathered = evaluate(refined, normals, weights, remaining, narrow).support;
-        const double support = evaluate(refined, normals, weights, remaining, cos_threshold).support;
-        enough = on_lattice(refined, directions, o.lattice_angle_deg) && gathered >= o.square_min_gathered * support;
-        if (enough) d = refined;
-      }
+      // The best candidate is noise, but a short wall square to the walls found may still be there.
+      const std::optional<Vec2> square = square_wall(normals, weights, remaining, directions, o);
+      enough = square.has_value();
+      if (enough) d = *square;
     }
     if (!enough) break;
     double support = 0;

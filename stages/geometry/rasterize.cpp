@@ -45,6 +45,10 @@ cv::Rect pixel_box(const PolygonWithHoles& polygon, const GeoTransform& transfor
   return cv::Rect(cv::Point(int(std::floor(x0)), int(std::floor(y0))), cv::Point(int(std::floor(x1)) + 1, int(std::floor(y1)) + 1));
 }
 
+cv::Rect pixel_box(const PolygonWithHoles& polygon, const GeoTransform& transform, int margin, cv::Size raster) {
+  return (pixel_box(polygon, transform) + cv::Size(2 * margin, 2 * margin) - cv::Point(margin, margin)) & cv::Rect(cv::Point(0, 0), raster);
+}
+
 void rasterize(cv::Mat& image, const PolygonWithHoles& p, const GeoTransform& t, double outer_value, double hole_value) {
   fill_ring(image, p.outer, t, outer_value);
   for (const Ring& h : p.holes) fill_ring(image, h, t, hole_value);

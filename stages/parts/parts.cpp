@@ -25,7 +25,7 @@ std::vector<PolygonWithHoles> split_by_roof_steps(const PolygonWithHoles& footpr
                                                   const std::string& regularizer, const CoreOptions& core, const PartOptions& options) {
   if (!options.enabled || window.values.empty()) return {};
   // The cells of the footprint's box only (the window holds a ground ring around it too).
-  const cv::Rect box = (pixel_box(footprint, window.transform) + cv::Size(2, 2) - cv::Point(1, 1)) & cv::Rect(0, 0, window.values.cols, window.values.rows);
+  const cv::Rect box = pixel_box(footprint, window.transform, 1, window.values.size());
   if (box.empty()) return {};
   const HeightRaster dsm{window.values(box), window.valid(box), window.transform.window(box.x, box.y)};
   const int rows = dsm.values.rows, cols = dsm.values.cols;
