@@ -6,6 +6,7 @@
 
 #include "corners/corners.hpp"
 #include "deformation/deform.hpp"
+#include "directions/lattice.hpp"
 #include "directions/ransac.hpp"
 #include "directions/refine.hpp"
 #include "geometry/polygon.hpp"
@@ -331,10 +332,26 @@ void run_chain(const std::vector<Ring>& rings, double pixel_size, const CoreOpti
   // Label, re-estimate the directions from the labeled runs, label again with them.
   EdgeLabels labels = label_edges(input, o.labeling);
   refine_directions(rings, labels, input.directions, pixel_size, o.refinement);
-  // How noisy the contour is, about lines along the building's lattice. Directions off the lattice
-  // without a wall of their own, long against that noise, are a wobble's: label without them.
-  const Vec2 lattice = main_direction(labels, input.lengths, input.directions);
-  const double noise = lattice_noise(rings, input.normals, lattice, pixel_size, o.noise);
+  // The building's lattice: the labeled main direction, unless the contour's chords gather along
+  // a direction of their own (lattice.min_share) and few of them lie along the main one (less
+  // than lattice.main_share_ratio of the peak's share): a wobble's flank took the main direction
+  // off the walls, and the chords' direction is followed. After labeling again, the main
+  // direction stays the lattice where it is near the chords'.
+  const ChordLattice chord = chord_lattice(rings, o.lattice);
+  const Vec2 first_main = main_direction(labels, input.lengths, input.directions);
+  double noise = lattice_noise(rings, input.normals, first_main, pixel_size, o.noise);
+  bool follow_chords = false;
+  if (chord.share >= o.lattice.min_share && lattice_angle_deg(first_main, chord.direction) > o.lattice.max_gap_deg) {
+    follow_chords = chord.share_at(first_main, o.lattice.window_deg) < o.lattice.main_share_ratio * chord.share;
+    if (follow_chords) noise = lattice_noise(rings, input.normals, chord.direction, pixel_size, o.noise);
+  }
+  const auto building_lattice = [&] {
+    const Vec2 main = main_direction(labels, input.lengths, input.directions);
+    return !follow_chords || lattice_angle_deg(main, chord.direction) <= o.lattice.max_gap_deg ? main : chord.direction;
+  };
+  // How noisy the contour is, about lines along the building's lattice: above. Directions off the
+  // lattice without a wall of their own, long against that noise, are a wobble's: label without them.
+  const Vec2 lattice = follow_chords ? chord.direction : first_main;
   // A round or oblique shape (little of it along the lattice, its outline turning about once, as
   // a convex one does, not back and forth as a wobble does) has no lattice to hold its walls to.
   // (A building of a few dozen pixels shows no curvature: it is taken as on its lattice.)
@@ -344,7 +361,7 @@ void run_chain(const std::vector<Ring>& rings, double pixel_size, const CoreOpti
   result.noise_m = noise;
   // Drops the insignificant directions and labels again without them, their support unknown.
   const auto drop_and_label = [&] {
-    if (!on_lattice || !drop_insignificant_directions(rings, labels, input.directions, main_direction(labels, input.lengths, input.directions), noise, o.refinement))
+    if (!on_lattice || !drop_insignificant_directions(rings, labels, input.directions, building_lattice(), noise, o.refinement))
       return false;
     input.support.assign(input.directions.size(), 1.0);
     labels = label_edges(input, o.labeling);
@@ -381,7 +398,7 @@ void run_chain(const std::vector<Ring>& rings, double pixel_size, const CoreOpti
   // and the plain one (the paper's corners with pixel thresholds), and the regular one kept
   // unless it explains the contour worse than the plain one by more than the noise allows.
   CornerContext context;
-  if (on_lattice) context.lattice = main_direction(labels, input.lengths, input.directions);
+  if (on_lattice) context.lattice = building_lattice();
   context.noise = noise;
   const double allowed = o.models.outline_tolerance * model_noise(result, pixel_size, o.models);
   PolygonWithHoles regular, plain;
@@ -429,7 +446,12 @@ void run_chain(const std::vector<Ring>& rings, double pixel_size, const CoreOpti
     result.model = regular_wins ? "regular" : "lines";
     if (lattice_ok && vertex_count(lattice_outline) <= vertex_count(result.footprint)) {
       if (chosen_fit < 0) chosen_fit = contour_fit(rings, result.footprint);
-      if (contour_fit(rings, lattice_outline) <= chosen_fit + fit_tolerance(rings, pixel_size, result, o)) {
+      const double lattice_fit = contour_fit(rings, lattice_outline);
+      // (A building whose lattice came from its chords: its wobble, which the chosen outline may
+      // follow, is what the lattice outline leaves within the noise.)
+      const bool within_noise = follow_chords && vertex_count(lattice_outline) < vertex_count(result.footprint) &&
+                                lattice_fit <= o.models.lattice_fit_noise * model_noise(result, pixel_size, o.models);
+      if (within_noise || lattice_fit <= chosen_fit + fit_tolerance(rings, pixel_size, result, o)) {
         result.footprint = std::move(lattice_outline);
         result.model = "lattice";
       }

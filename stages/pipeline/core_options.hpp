@@ -4,6 +4,7 @@
 #include "contour/contour.hpp"
 #include "corners/corners.hpp"
 #include "deformation/deform.hpp"
+#include "directions/lattice.hpp"
 #include "directions/ransac.hpp"
 #include "directions/refine.hpp"
 #include "labeling/mrf.hpp"
@@ -50,6 +51,7 @@ struct CoreOptions {
   MrfOptions labeling;
   NoiseOptions noise;
   RefineOptions refinement;
+  LatticeOptions lattice;
   TriangulationOptions triangulation;
   DeformationOptions deformation;
   CornerOptions corners;
@@ -65,6 +67,7 @@ struct CoreOptions {
     v.section("labeling", labeling);
     v.section("noise", noise);
     v.section("refinement", refinement);
+    v.section("lattice", lattice);
     v.section("triangulation", triangulation);
     v.section("deformation", deformation);
     v.section("corners", corners);

@@ -1,0 +1,97 @@
+#include "directions/lattice.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+
+namespace lodforge {
+
+namespace {
+
+// The point at arc length s along a closed ring (positions: the arc length at each vertex, and the
+// perimeter last).
+Vec2 point_at(const Ring& ring, const std::vector<double>& positions, double s) {
+  const double total = positions.back();
+  s = std::fmod(s, total);
+  if (s < 0) s += total;
+  const std::size_t k = std::min<std::size_t>(std::upper_bound(positions.begin(), positions.end(), s) - positions.begin() - 1,
+                                              ring.size() - 1);
+  const double length = positions[k + 1] - positions[k];
+  const double t = length > 0 ? (s - positions[k]) / length : 0.0;
+  return ring[k] + t * edge_vector(ring, k);
+}
+
+// An angle in [0, 2π).
+double wrap(double a) {
+  a = std::fmod(a, 2 * M_PI);
+  return a < 0 ? a + 2 * M_PI : a;
+}
+
+}  // namespace
+
+double lattice_angle_deg(const Vec2& a, const Vec2& b) {
+  const double diff = std::atan2(cross(a, b), a.dot(b)) * 180.0 / M_PI;
+  return std::abs(diff - 90.0 * std::round(diff / 90.0));
+}
+
+double ChordLattice::share_at(const Vec2& lattice, double window_deg) const {
+  const double at = wrap(4 * std::atan2(lattice.y(), lattice.x())), window = 4 * window_deg * M_PI / 180.0;
+  double near = 0, total = 0;
+  for (const auto& [a, w] : chords) {
+    total += w;
+    if (std::abs(std::remainder(a - at, 2 * M_PI)) <= window) near += w;
+  }
+  return total > 0 ? near / total : 0.0;
+}
+
+ChordLattice chord_lattice(const std::vector<Ring>& rings, const LatticeOptions& o) {
+  if (o.chord_m <= 0) return {};
+  // Each chord's direction times four (quarter turns become whole turns), weighted by its edge.
+  std::vector<std::pair<double, double>> samples;
+  for (const Ring& ring : rings) {
+    const std::size_t n = ring.size();
+    if (n < 3) continue;
+    std::vector<double> positions(n + 1, 0.0);
+    for (std::size_t i = 0; i < n; ++i) positions[i + 1] = positions[i] + edge_vector(ring, i).norm();
+    const double span = std::min(o.chord_m, o.chord_share * positions[n]);
+    if (span <= 0) continue;
+    for (std::size_t i = 0; i < n; ++i) {
+      const double length = positions[i + 1] - positions[i];
+      const double middle = positions[i] + length / 2;
+      const Vec2 chord = point_at(ring, positions, middle + span / 2) - point_at(ring, positions, middle - span / 2);
+      if (length <= 0 || chord.squaredNorm() <= 0) continue;
+      samples.push_back({wrap(4 * std::atan2(chord.y(), chord.x())), length});
+    }
+  }
+  if (samples.empty()) return {};
+  // The histogram's peak (bins of a quarter degree of direction), smoothed by a circular Gaussian.
+  const int bins = 360;
+  const double bin = 2 * M_PI / bins;
+  std::vector<double> histogram(bins, 0.0), smoothed(bins, 0.0);
+  for (const auto& [a, w] : samples) histogram[std::min(bins - 1, int(a / bin))] += w;
+  const double sigma = 4 * o.smooth_deg * M_PI / 180.0;
+  const int reach = std::min(bins / 2, int(std::ceil(3 * sigma / bin)));
+  std::vector<double> kernel(reach + 1);
+  for (int k = 0; k <= reach; ++k) kernel[k] = std::exp(-0.5 * std::pow(k * bin / sigma, 2));
+  for (int b = 0; b < bins; ++b) {
+    if (histogram[b] == 0) continue;
+    for (int k = -reach; k <= reach; ++k) smoothed[(b + k + bins) % bins] += histogram[b] * kernel[std::abs(k)];
+  }
+  const int peak = int(std::max_element(smoothed.begin(), smoothed.end()) - smoothed.begin());
+  const double mode = (peak + 0.5) * bin;
+  // The mean of the chords near the peak.
+  Vec2 sum = Vec2::Zero();
+  double near = 0, total = 0;
+  const double window = 4 * o.window_deg * M_PI / 180.0;
+  for (const auto& [a, w] : samples) {
+    const double off = std::abs(std::remainder(a - mode, 2 * M_PI));
+    total += w;
+    if (off > window) continue;
+    sum += w * Vec2(std::cos(a), std::sin(a));
+    near += w;
+  }
+  const double angle = (sum.squaredNorm() > 0 ? std::atan2(sum.y(), sum.x()) : mode) / 4;
+  return {Vec2(std::cos(angle), std::sin(angle)), near / total, std::move(samples)};
+}
+
+}  // namespace lodforge

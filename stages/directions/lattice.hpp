@@ -1,0 +1,52 @@
+// The building's lattice (its main wall direction, up to quarter turns) from the chords of its
+// contour. An addition to the paper: under a network's wobble (a boundary that swings by a metre
+// over a few metres) the smoothed normals spread by tens of degrees and the labeled main direction
+// follows a flank; a chord spanning several metres of contour averages the wobble out.
+#pragma once
+#include <utility>
+#include <vector>
+
+#include "common/option.hpp"
+#include "geometry/types.hpp"
+
+namespace lodforge {
+
+struct LatticeOptions {
+  double chord_m = 16.0;        // chords span this much contour (m) ...
+  double chord_share = 0.125;   // ... and at most this share of the ring's perimeter
+  double smooth_deg = 6.0;      // the chords' angle histogram is smoothed by this (degrees)
+  double window_deg = 15.0;     // chords within this of its peak are averaged
+  double min_share = 0.45;      // the chords give a lattice when this share of them is near its peak ...
+  double max_gap_deg = 5.0;     // ... and the labeled main direction is kept within this of it ...
+  double main_share_ratio = 0.5;  // ... or with this ratio of the peak's share of the chords
+
+  template <class V>
+  void visit(V& v) {
+    v("chord_m", chord_m, "the building's lattice is also read off chords of the contour spanning this much of it (m), which average a wobble out (0 = off: the labeled main direction alone)", Check::at_least(0));
+    v("chord_share", chord_share, "... and at most this share of the ring's perimeter (a small building's chords stay on its walls)", Check::between(0, 0.5));
+    v("smooth_deg", smooth_deg, "... their directions, modulo quarter turns, gathered in a histogram smoothed by this (degrees) ...", Check::between(0.1, 20));
+    v("window_deg", window_deg, "... and averaged within this of its peak (degrees)", Check::between(0.1, 45));
+    v("min_share", min_share, "the chords give the building a lattice when at least this share of them (by length) lies within window_deg of its peak (chords of a round building spread evenly: 2 window_deg / 90)", Check::between(0, 1));
+    v("max_gap_deg", max_gap_deg, "the labeled main direction (the direction with the most labeled contour) stays the lattice when within this of the chords' (degrees) ...", Check::between(0, 45));
+    v("main_share_ratio", main_share_ratio, "... or when its own share of the chords (within window_deg) is at least this ratio of the chords' peak's; less, it follows a wobble's flank and the chords' direction is taken", Check::between(0, 1));
+  }
+};
+
+// The chords' lattice: the peak of the length-weighted histogram, modulo quarter turns, of the
+// directions of chords spanning min(chord_m, chord_share * perimeter) of each ring around each
+// edge, refined by their mean within window_deg: a unit vector (any of the four), zero when the
+// rings give no chord; and the share of the chords along it.
+struct ChordLattice {
+  Vec2 direction = Vec2::Zero();
+  double share = 0;  // of the chords' weight, within window_deg of it
+  std::vector<std::pair<double, double>> chords;  // each chord's direction times four (radians), weight
+
+  // The share of the chords' weight within window_deg of a lattice.
+  double share_at(const Vec2& lattice, double window_deg) const;
+};
+ChordLattice chord_lattice(const std::vector<Ring>& rings, const LatticeOptions& options);
+
+// The angle between two lattices (0 to 45 degrees).
+double lattice_angle_deg(const Vec2& a, const Vec2& b);
+
+}  // namespace lodforge
