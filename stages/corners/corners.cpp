@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <set>
+#include <tuple>
 
 #include <Eigen/Dense>
 
@@ -392,22 +394,53 @@ void drop_corner_cuts(const Ring& ring, std::vector<std::pair<int, int>>& runs, 
 }  // namespace
 
 void absorb_short_runs(const Ring& ring, std::vector<int>& labels, double min_length) {
-  for (int guard = 0; guard < int(ring.size()); ++guard) {
-    const auto runs = label_runs(labels);
-    if (runs.size() <= 4) return;  // never below a quadrilateral
-    int shortest = -1;
-    double shortest_length = min_length;
-    for (int r = 0; r < int(runs.size()); ++r) {
-      const double len = run_length(ring, runs[r].first, runs[r].second);
-      if (len < shortest_length) { shortest_length = len; shortest = r; }
+  // The runs as a cyclic list; the short ones ordered by length, then by their first edge (the
+  // order of label_runs), so that the shortest, the first of equals, goes first. A merged run's
+  // length is summed again edge by edge, as a run's is.
+  struct Run {
+    int first, count;
+    double length;
+    int prev, next;
+  };
+  std::vector<Run> runs;
+  for (const auto& [first, count] : label_runs(labels)) runs.push_back({first, count, run_length(ring, first, count), 0, 0});
+  int alive = int(runs.size());
+  if (alive <= 4) return;  // never below a quadrilateral
+  for (int r = 0; r < alive; ++r) {
+    runs[r].prev = (r + alive - 1) % alive;
+    runs[r].next = (r + 1) % alive;
+  }
+  std::set<std::tuple<double, int, int>> short_runs;  // length, first edge, run
+  const auto track = [&](int r) {
+    if (runs[r].length < min_length) short_runs.insert({runs[r].length, runs[r].first, r});
+  };
+  const auto untrack = [&](int r) { short_runs.erase({runs[r].length, runs[r].first, r}); };
+  for (int r = 0; r < alive; ++r) track(r);
+  const int n = int(labels.size());
+  while (alive > 4 && !short_runs.empty()) {
+    const int s = std::get<2>(*short_runs.begin());
+    const int p = runs[s].prev, q = runs[s].next;
+    const bool to_prev = runs[p].length >= runs[q].length;
+    const int label = labels[runs[to_prev ? p : q].first];
+    for (int k = 0; k < runs[s].count; ++k) labels[(runs[s].first + k) % n] = label;
+    // The run s joins, and the other neighbour too when it has the same label.
+    const bool with_prev = to_prev || labels[runs[p].first] == label;
+    const bool with_next = !to_prev || labels[runs[q].first] == label;
+    const int head = with_prev ? p : s, tail = with_next ? q : s;
+    for (int r : {p, s, q}) untrack(r);
+    int count = 0;
+    for (int r = head;; r = runs[r].next) {
+      count += runs[r].count;
+      if (r == tail) break;
     }
-    if (shortest < 0) return;
-    const int n = int(runs.size());
-    const auto& prev = runs[(shortest + n - 1) % n];
-    const auto& next = runs[(shortest + 1) % n];
-    const bool to_prev = run_length(ring, prev.first, prev.second) >= run_length(ring, next.first, next.second);
-    const int label = labels[to_prev ? prev.first : next.first];
-    for (int k = 0; k < runs[shortest].second; ++k) labels[(runs[shortest].first + k) % labels.size()] = label;
+    runs[head].count = count;
+    runs[head].length = run_length(ring, runs[head].first, count);
+    alive -= (head == s ? 0 : 1) + (tail == s ? 0 : 1);
+    runs[head].next = runs[tail].next;
+    runs[runs[tail].next].prev = head;
+    track(head);
+    if (!with_prev) track(p);
+    if (!with_next) track(q);
   }
 }
 
