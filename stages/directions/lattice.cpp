@@ -64,8 +64,9 @@ ChordLattice chord_lattice(const std::vector<Ring>& rings, const LatticeOptions&
     }
   }
   if (samples.empty()) return {};
-  // The histogram's peak (bins of a quarter degree of direction), smoothed by a circular Gaussian.
-  const int bins = 360;
+  // The histogram's peak (bins of a degree of direction: the mean about it refines it), smoothed
+  // by a circular Gaussian.
+  const int bins = 90;
   const double bin = 2 * M_PI / bins;
   std::vector<double> histogram(bins, 0.0), smoothed(bins, 0.0);
   for (const auto& [a, w] : samples) histogram[std::min(bins - 1, int(a / bin))] += w;
