@@ -274,42 +274,54 @@ TEST(CadastreRun, AMultiPartFootprintIsOneBuildingWhateverTheTiling) {
 // their checkpoints, and the files equal a fresh run's with the edited cadastre.
 // (The tiles' keys hold each footprint's place in the cadastre, which decides overlaps: removing
 // or inserting one before others shifts theirs, and the tiles holding them are traced again.)
-TEST(CadastreRun, RemovingTheLastFootprintRedoesOnlyTheTilesItTouches) {
+// Removing a footprint from the cadastre, the first or the last, redoes only the tiles it
+// touches: a tile's checkpoints hang on the footprints in its window (IDs, shapes and order), not
+// on their places in the whole cadastre; the resumed run's files are the fresh run's.
+TEST(CadastreRun, RemovingAFootprintRedoesOnlyTheTilesItTouches) {
   GDALAllRegister();
-  const fs::path dir = test::fresh_test_directory("cadastre_edit");
   const std::string bgt = test::slurp(delft("derived/bgt_pand_buildings.geojson"));
-  std::ofstream(dir / "before.geojson") << bgt;
-  // The edit: the last footprint goes.
-  const std::size_t last = bgt.rfind("{ \"type\": \"Feature\"");
-  ASSERT_NE(last, std::string::npos);
-  std::string edited = bgt.substr(0, last);
-  edited.erase(edited.find_last_of(','));  // (the comma before it)
-  edited += "\n]\n}\n";
-  std::ofstream(dir / "after.geojson") << edited;
-  const auto run = [&](const std::string& footprints, const std::string& work, const std::string& out) {
-    std::ofstream(dir / "job.yaml") << "inputs:\n  segmentation: {path: " << delft("derived/top_class_50cm.tif") << "}\n"
-                                    << "  footprints: {path: " << footprints << ", id_field: identificatiebagpnd}\n"
-                                    << "tiling: {tile_size_m: 32}\noutput: {dir: " << out << ", formats: [gpkg, cityjson]}\nwork_dir: " << work << "\n"
-                                    << "stages: {parts: {enabled: false}}\n";
-    const test::CommandOutput r = test::lodforge("run " + (dir / "job.yaml").string() + " --progress none");
-    EXPECT_EQ(r.code, 0) << r.output;
-    return nlohmann::json::parse(test::slurp(dir / out / "report.json"));
-  };
-  run("before.geojson", "work", "out_before");
-  const nlohmann::json resumed = run("after.geojson", "work", "out_resumed");
-  const nlohmann::json fresh = run("after.geojson", "work_fresh", "out_fresh");
-  EXPECT_EQ(resumed.at("cadastre").at("confirmed").get<int>() + resumed.at("cadastre").at("not_in_mask").get<int>(), 159);
-  // Most tiles' contours come from the checkpoints; those around the edited footprint are traced again.
-  const int tiles = resumed.at("tiles").get<int>(), reused = resumed.at("checkpoints_reused").at("contours").get<int>();
-  EXPECT_GT(reused, tiles / 2);
-  EXPECT_LT(reused, tiles);
-  int compared = 0;
-  for (const auto& e : fs::directory_iterator(dir / "out_fresh" / "tiles")) {
-    if (e.path().extension() != ".json") continue;
-    EXPECT_EQ(test::slurp(e.path()), test::slurp(dir / "out_resumed" / "tiles" / e.path().filename())) << e.path();
-    ++compared;
+  const std::string feature = "{ \"type\": \"Feature\"";
+  for (const bool first : {false, true}) {
+    const fs::path dir = test::fresh_test_directory(first ? "cadastre_edit_first" : "cadastre_edit_last");
+    std::ofstream(dir / "before.geojson") << bgt;
+    std::string edited;
+    if (first) {  // the first feature and the line break after it go
+      const std::size_t a = bgt.find(feature), b = bgt.find(feature, a + 1);
+      ASSERT_NE(b, std::string::npos);
+      edited = bgt.substr(0, a) + bgt.substr(b);
+    } else {  // the last feature and the comma before it go
+      const std::size_t last = bgt.rfind(feature);
+      ASSERT_NE(last, std::string::npos);
+      edited = bgt.substr(0, last);
+      edited.erase(edited.find_last_of(','));
+      edited += "\n]\n}\n";
+    }
+    std::ofstream(dir / "after.geojson") << edited;
+    const auto run = [&](const std::string& footprints, const std::string& work, const std::string& out) {
+      std::ofstream(dir / "job.yaml") << "inputs:\n  segmentation: {path: " << delft("derived/top_class_50cm.tif") << "}\n"
+                                      << "  footprints: {path: " << footprints << ", id_field: identificatiebagpnd}\n"
+                                      << "tiling: {tile_size_m: 32}\noutput: {dir: " << out << ", formats: [gpkg, cityjson]}\nwork_dir: " << work << "\n"
+                                      << "stages: {parts: {enabled: false}}\n";
+      const test::CommandOutput r = test::lodforge("run " + (dir / "job.yaml").string() + " --progress none");
+      EXPECT_EQ(r.code, 0) << r.output;
+      return nlohmann::json::parse(test::slurp(dir / out / "report.json"));
+    };
+    run("before.geojson", "work", "out_before");
+    const nlohmann::json resumed = run("after.geojson", "work", "out_resumed");
+    const nlohmann::json fresh = run("after.geojson", "work_fresh", "out_fresh");
+    EXPECT_EQ(resumed.at("cadastre").at("confirmed").get<int>() + resumed.at("cadastre").at("not_in_mask").get<int>(), 159) << first;
+    // Most tiles' contours come from the checkpoints; those around the removed footprint are traced again.
+    const int tiles = resumed.at("tiles").get<int>(), reused = resumed.at("checkpoints_reused").at("contours").get<int>();
+    EXPECT_GT(reused, tiles / 2) << (first ? "first" : "last") << ": " << reused << " of " << tiles;
+    EXPECT_LT(reused, tiles) << (first ? "first" : "last");
+    int compared = 0;
+    for (const auto& e : fs::directory_iterator(dir / "out_fresh" / "tiles")) {
+      if (e.path().extension() != ".json") continue;
+      EXPECT_EQ(test::slurp(e.path()), test::slurp(dir / "out_resumed" / "tiles" / e.path().filename())) << e.path();
+      ++compared;
+    }
+    EXPECT_GT(compared, 0);  // (the loop compared something)
   }
-  EXPECT_GT(compared, 0);  // (the loop compared something)
 }
 
 }  // namespace

@@ -124,7 +124,7 @@ std::vector<BuildingOutput> split_among_footprints(const std::vector<TileGroup>&
     for (std::size_t k = 0; k < t.footprints.size(); ++k) {
       const CadastralFootprint& footprint = cadastre.footprints()[std::size_t(t.footprints[k])];
       BuildingOutput o;
-      o.id = -1 - std::int64_t(t.footprints[k]);
+      o.id = -1 - std::int64_t(t.footprints[k]);  // (internal: the files name it by its cadastre ID, o.cadastre_id)
       o.first_row = block.first_row;
       o.first_col = block.first_col;
       o.cadastre_id = footprint.id;

@@ -224,10 +224,11 @@ TileWindow find_tile_window(const MaskWindowReader& reader, const TileGrid& grid
     const auto labeling = std::chrono::steady_clock::now();
     out.components = label_components(out.mask, connectivity);
     out.label_seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - labeling).count();
-    // The footprints in the window (their place in the cadastre, ID and coordinates) are what the
-    // tile's buildings depend on: a change elsewhere in the cadastre leaves this tile's checkpoints.
+    // The footprints in the window (their IDs and coordinates, in the cadastre's order, which
+    // decides who gets an overlap) are what the tile's buildings depend on, not their places in the
+    // whole cadastre: a footprint added or removed elsewhere leaves this tile's checkpoints.
     for (const auto& [f, seed] : out.footprint_seeds) {
-      const std::uint64_t s[4] = {std::uint64_t(f), std::uint64_t(seed.x), std::uint64_t(seed.y), cadastre->footprints()[std::size_t(f)].hash};
+      const std::uint64_t s[3] = {std::uint64_t(seed.x), std::uint64_t(seed.y), cadastre->footprints()[std::size_t(f)].hash};
       out.hash = fnv1a(s, sizeof s, out.hash);
     }
   }
