@@ -349,8 +349,8 @@ void run_chain(const std::vector<Ring>& rings, double pixel_size, const CoreOpti
     const Vec2 main = main_direction(labels, input.lengths, input.directions);
     return !follow_chords || lattice_angle_deg(main, chord.direction) <= o.lattice.max_gap_deg ? main : chord.direction;
   };
-  // How noisy the contour is, about lines along the building's lattice: above. Directions off the
-  // lattice without a wall of their own, long against that noise, are a wobble's: label without them.
+  // (The noise above: how noisy the contour is about lines along that lattice. Directions off the
+  // lattice without a wall of their own, long against that noise, are a wobble's: label without them.)
   const Vec2 lattice = follow_chords ? chord.direction : first_main;
   // A round or oblique shape (little of it along the lattice, its outline turning about once, as
   // a convex one does, not back and forth as a wobble does) has no lattice to hold its walls to.
