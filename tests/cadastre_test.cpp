@@ -272,8 +272,6 @@ TEST(CadastreRun, AMultiPartFootprintIsOneBuildingWhateverTheTiling) {
 
 // Resuming after an edit of the cadastre: the tiles whose windows hold no changed footprint keep
 // their checkpoints, and the files equal a fresh run's with the edited cadastre.
-// (The tiles' keys hold each footprint's place in the cadastre, which decides overlaps: removing
-// or inserting one before others shifts theirs, and the tiles holding them are traced again.)
 // Removing a footprint from the cadastre, the first or the last, redoes only the tiles it
 // touches: a tile's checkpoints hang on the footprints in its window (IDs, shapes and order), not
 // on their places in the whole cadastre; the resumed run's files are the fresh run's.

@@ -35,10 +35,10 @@ struct LatticeOptions {
 // The chords' lattice: the peak of the length-weighted histogram, modulo quarter turns, of the
 // directions of chords spanning min(chord_m, chord_share * perimeter) of each ring around each
 // edge, refined by their mean within window_deg: a unit vector (any of the four), zero when the
-// rings give no chord; and the share of the chords along it.
+// rings give no chord; and the share of the chords near the peak.
 struct ChordLattice {
   Vec2 direction = Vec2::Zero();
-  double share = 0;  // of the chords' weight, within window_deg of it
+  double share = 0;  // of the chords' weight, within window_deg of the histogram's peak
   std::vector<std::pair<double, double>> chords;  // each chord's direction times four (radians), weight
 
   // The share of the chords' weight within window_deg of a lattice.
