@@ -448,9 +448,11 @@ void run_chain(const std::vector<Ring>& rings, double pixel_size, const CoreOpti
       if (chosen_fit < 0) chosen_fit = contour_fit(rings, result.footprint);
       const double lattice_fit = contour_fit(rings, lattice_outline);
       // (A building whose lattice came from its chords: its wobble, which the chosen outline may
-      // follow, is what the lattice outline leaves within the noise.)
+      // follow, is what the lattice outline leaves within the noise; a wing it leaves out would
+      // cost more than lattice_fit_gap_noise over the chosen outline.)
       const bool within_noise = follow_chords && vertex_count(lattice_outline) < vertex_count(result.footprint) &&
-                                lattice_fit <= o.models.lattice_fit_noise * model_noise(result, pixel_size, o.models);
+                                lattice_fit <= o.models.lattice_fit_noise * model_noise(result, pixel_size, o.models) &&
+                                lattice_fit <= chosen_fit + o.models.lattice_fit_gap_noise * model_noise(result, pixel_size, o.models);
       if (within_noise || lattice_fit <= chosen_fit + fit_tolerance(rings, pixel_size, result, o)) {
         result.footprint = std::move(lattice_outline);
         result.model = "lattice";
