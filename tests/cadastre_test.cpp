@@ -308,17 +308,21 @@ TEST(CadastreRun, RemovingAFootprintRedoesOnlyTheTilesItTouches) {
     const nlohmann::json resumed = run("after.geojson", "work", "out_resumed");
     const nlohmann::json fresh = run("after.geojson", "work_fresh", "out_fresh");
     EXPECT_EQ(resumed.at("cadastre").at("confirmed").get<int>() + resumed.at("cadastre").at("not_in_mask").get<int>(), 159) << first;
-    // Most tiles' contours come from the checkpoints; those around the removed footprint are traced again.
+    // Most tiles' contours come from the checkpoints; those whose windows hold the removed
+    // footprint are traced again: at 32 m tiles a window spans its neighbours', so 18-21 of the 72
+    // (68 when the key held each footprint's place in the cadastre).
     const int tiles = resumed.at("tiles").get<int>(), reused = resumed.at("checkpoints_reused").at("contours").get<int>();
-    EXPECT_GT(reused, tiles / 2) << (first ? "first" : "last") << ": " << reused << " of " << tiles;
+    EXPECT_LE(tiles - reused, tiles / 3) << (first ? "first" : "last") << ": " << reused << " of " << tiles;
     EXPECT_LT(reused, tiles) << (first ? "first" : "last");
-    int compared = 0;
+    // Every tile file (CityJSON and GeoPackage), byte for byte, and no other.
+    std::set<std::string> fresh_files, resumed_files;
     for (const auto& e : fs::directory_iterator(dir / "out_fresh" / "tiles")) {
-      if (e.path().extension() != ".json") continue;
+      fresh_files.insert(e.path().filename().string());
       EXPECT_EQ(test::slurp(e.path()), test::slurp(dir / "out_resumed" / "tiles" / e.path().filename())) << e.path();
-      ++compared;
     }
-    EXPECT_GT(compared, 0);  // (the loop compared something)
+    for (const auto& e : fs::directory_iterator(dir / "out_resumed" / "tiles")) resumed_files.insert(e.path().filename().string());
+    EXPECT_EQ(fresh_files, resumed_files);
+    EXPECT_GT(fresh_files.size(), 0u);  // (the loop compared something)
   }
 }
 
