@@ -193,12 +193,19 @@ TEST(Lattice, ChordsFollowTheWallsUnderAMetreOfWobble) {
       const Vec2 lattice = chord_lattice(shape.buildings[0].rings, LatticeOptions{}).direction;
       ASSERT_GT(lattice.norm(), 0.5);
       const double deg = M_PI / 180.0;
-      EXPECT_LT(lattice_angle_deg(lattice, Vec2(std::cos(33 * deg), std::sin(33 * deg))), 3.0) << pixel << " seed " << seed;
+      EXPECT_LT(angle_between_lattices_deg(lattice, Vec2(std::cos(33 * deg), std::sin(33 * deg))), 3.0) << pixel << " seed " << seed;
     }
   }
   // A clean rectangle's chords give its walls' direction exactly, whichever way it turns.
   const PolygonWithHoles house = test::rotated(kHouse, 71.0);
-  EXPECT_LT(lattice_angle_deg(chord_lattice({house.outer}, LatticeOptions{}).direction, Vec2(std::cos(71 * M_PI / 180), std::sin(71 * M_PI / 180))), 1e-6);
+  EXPECT_LT(angle_between_lattices_deg(chord_lattice({house.outer}, LatticeOptions{}).direction, Vec2(std::cos(71 * M_PI / 180), std::sin(71 * M_PI / 180))), 1e-6);
+  // ... and so do a clean L's pixel staircase, whose chords also cut its six corners.
+  for (const double pixel : {0.1, 0.5}) {
+    const test::RasterizedShape clean = test::rasterize_shape_m(truth, pixel, 0.0, 8.0, 0.0, 1);
+    ASSERT_EQ(clean.buildings.size(), 1u);
+    const Vec2 lattice = chord_lattice(clean.buildings[0].rings, LatticeOptions{}).direction;
+    EXPECT_LT(angle_between_lattices_deg(lattice, Vec2(std::cos(33 * M_PI / 180), std::sin(33 * M_PI / 180))), 0.5) << pixel;
+  }
 }
 
 // The same L under that wobble: its lattice taken from the chords, the lattice outline leaves the

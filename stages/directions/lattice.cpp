@@ -26,21 +26,20 @@ double wrap(double a) {
   return a < 0 ? a + 2 * M_PI : a;
 }
 
-}  // namespace
-
-double lattice_angle_deg(const Vec2& a, const Vec2& b) {
-  const double diff = std::atan2(cross(a, b), a.dot(b)) * 180.0 / M_PI;
-  return std::abs(diff - 90.0 * std::round(diff / 90.0));
-}
-
-double ChordLattice::share_at(const Vec2& lattice, double window_deg) const {
-  const double at = wrap(4 * std::atan2(lattice.y(), lattice.x())), window = 4 * window_deg * M_PI / 180.0;
+// The share of the samples' weight (directions times four, weights) within window of at.
+double share_near(const std::vector<std::pair<double, double>>& samples, double at, double window) {
   double near = 0, total = 0;
-  for (const auto& [a, w] : chords) {
+  for (const auto& [a, w] : samples) {
     total += w;
     if (std::abs(std::remainder(a - at, 2 * M_PI)) <= window) near += w;
   }
   return total > 0 ? near / total : 0.0;
+}
+
+}  // namespace
+
+double ChordLattice::share_at(const Vec2& lattice, double window_deg) const {
+  return share_near(chords, wrap(4 * std::atan2(lattice.y(), lattice.x())), 4 * window_deg * M_PI / 180.0);
 }
 
 ChordLattice chord_lattice(const std::vector<Ring>& rings, const LatticeOptions& o) {
@@ -81,17 +80,12 @@ ChordLattice chord_lattice(const std::vector<Ring>& rings, const LatticeOptions&
   const double mode = (peak + 0.5) * bin;
   // The mean of the chords near the peak.
   Vec2 sum = Vec2::Zero();
-  double near = 0, total = 0;
   const double window = 4 * o.window_deg * M_PI / 180.0;
-  for (const auto& [a, w] : samples) {
-    const double off = std::abs(std::remainder(a - mode, 2 * M_PI));
-    total += w;
-    if (off > window) continue;
-    sum += w * Vec2(std::cos(a), std::sin(a));
-    near += w;
-  }
+  for (const auto& [a, w] : samples)
+    if (std::abs(std::remainder(a - mode, 2 * M_PI)) <= window) sum += w * Vec2(std::cos(a), std::sin(a));
   const double angle = (sum.squaredNorm() > 0 ? std::atan2(sum.y(), sum.x()) : mode) / 4;
-  return {Vec2(std::cos(angle), std::sin(angle)), near / total, std::move(samples)};
+  const double share = share_near(samples, mode, window);
+  return {Vec2(std::cos(angle), std::sin(angle)), share, std::move(samples)};
 }
 
 }  // namespace lodforge

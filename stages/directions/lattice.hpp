@@ -46,7 +46,4 @@ struct ChordLattice {
 };
 ChordLattice chord_lattice(const std::vector<Ring>& rings, const LatticeOptions& options);
 
-// The angle between two lattices (0 to 45 degrees).
-double lattice_angle_deg(const Vec2& a, const Vec2& b);
-
 }  // namespace lodforge

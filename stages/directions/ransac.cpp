@@ -44,8 +44,7 @@ Vec2 refine(Vec2 d, const std::vector<Vec2>& normals, const std::vector<double>&
 bool on_lattice(const Vec2& d, const std::vector<DominantDirection>& found, double tolerance_deg) {
   for (const DominantDirection& f : found) {
     const double diff = std::atan2(cross(f.normal, d), f.normal.dot(d)) * 180.0 / M_PI;
-    const double off = std::abs(diff - 90.0 * std::round(diff / 90.0));
-    if (std::abs(diff) > 45.0 && off <= tolerance_deg) return true;
+    if (std::abs(diff) > 45.0 && angle_between_lattices_deg(f.normal, d) <= tolerance_deg) return true;
   }
   return false;
 }

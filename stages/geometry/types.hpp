@@ -40,4 +40,11 @@ inline Vec2 nearest_lattice_axis(const Vec2& n, const Vec2& lattice) {
   return b >= 0 ? quarter : Vec2(-quarter);
 }
 
+// The angle between two lattices (unit normals, each standing for itself and its quarter turns):
+// 0 to 45 degrees.
+inline double angle_between_lattices_deg(const Vec2& a, const Vec2& b) {
+  const double diff = std::atan2(cross(a, b), a.dot(b)) * 180.0 / M_PI;
+  return std::abs(diff - 90.0 * std::round(diff / 90.0));
+}
+
 }  // namespace lodforge

@@ -341,13 +341,13 @@ void run_chain(const std::vector<Ring>& rings, double pixel_size, const CoreOpti
   const Vec2 first_main = main_direction(labels, input.lengths, input.directions);
   double noise = lattice_noise(rings, input.normals, first_main, pixel_size, o.noise);
   bool follow_chords = false;
-  if (chord.share >= o.lattice.min_share && lattice_angle_deg(first_main, chord.direction) > o.lattice.max_gap_deg) {
+  if (chord.share >= o.lattice.min_share && angle_between_lattices_deg(first_main, chord.direction) > o.lattice.max_gap_deg) {
     follow_chords = chord.share_at(first_main, o.lattice.window_deg) < o.lattice.main_share_ratio * chord.share;
     if (follow_chords) noise = lattice_noise(rings, input.normals, chord.direction, pixel_size, o.noise);
   }
   const auto building_lattice = [&] {
     const Vec2 main = main_direction(labels, input.lengths, input.directions);
-    return !follow_chords || lattice_angle_deg(main, chord.direction) <= o.lattice.max_gap_deg ? main : chord.direction;
+    return !follow_chords || angle_between_lattices_deg(main, chord.direction) <= o.lattice.max_gap_deg ? main : chord.direction;
   };
   // (The noise above: how noisy the contour is about lines along that lattice. Directions off the
   // lattice without a wall of their own, long against that noise, are a wobble's: label without them.)
@@ -450,9 +450,10 @@ void run_chain(const std::vector<Ring>& rings, double pixel_size, const CoreOpti
       // (A building whose lattice came from its chords: its wobble, which the chosen outline may
       // follow, is what the lattice outline leaves within the noise; a wing it leaves out would
       // cost more than lattice_fit_gap_noise over the chosen outline.)
+      const double model_noise_m = model_noise(result, pixel_size, o.models);
       const bool within_noise = follow_chords && vertex_count(lattice_outline) < vertex_count(result.footprint) &&
-                                lattice_fit <= o.models.lattice_fit_noise * model_noise(result, pixel_size, o.models) &&
-                                lattice_fit <= chosen_fit + o.models.lattice_fit_gap_noise * model_noise(result, pixel_size, o.models);
+                                lattice_fit <= o.models.lattice_fit_noise * model_noise_m &&
+                                lattice_fit <= chosen_fit + o.models.lattice_fit_gap_noise * model_noise_m;
       if (within_noise || lattice_fit <= chosen_fit + fit_tolerance(rings, pixel_size, result, o)) {
         result.footprint = std::move(lattice_outline);
         result.model = "lattice";
