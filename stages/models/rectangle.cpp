@@ -61,9 +61,8 @@ Ring moment_rectangle(const Ring& ring, const Vec2& normal) {
   return rectangle_of(moments_of(ring), normal);
 }
 
-// The distance of each of the ring's edge midpoints to the polygon's boundary, with the edge's
-// length: (distance, length).
-static std::vector<std::pair<double, double>> boundary_distances(const Ring& ring, const PolygonWithHoles& polygon) {
+std::vector<std::pair<double, double>> boundary_distances(const Ring& ring, const PolygonWithHoles& polygon,
+                                                          std::vector<std::size_t>* nearest_segments) {
   struct Segment {
     Vec2 a, b, low, high;  // ends and bounding box
   };
@@ -89,6 +88,7 @@ static std::vector<std::pair<double, double>> boundary_distances(const Ring& rin
       if (d < best) best = d, nearest = k;
     }
     distances.push_back({best, e.norm()});
+    if (nearest_segments) nearest_segments->push_back(nearest);
   }
   return distances;
 }

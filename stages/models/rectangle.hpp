@@ -16,6 +16,7 @@ struct ModelOptions {
   double rescue_fit_noise = 1.0;     // ... and stands in for a failed chain within this many times the noise
   double lattice_fit_noise = 1.1;    // ... and, its lattice from the chords, is taken when it explains the contour within this many times the noise
   double lattice_fit_gap_noise = 1.0;  // ... and no worse than the chosen outline plus this many times the noise
+  double stretch_fit_noise = 1.0;  // a wall off the lattice takes the lattice outline's walls where they explain its contour within this many noises of the regular outline
   double rectangle_tolerance = 1.0;  // ... and a rectangle, by a high percentile of the distances ...
   double rectangle_quantile = 0.95;  // ... this one
   double min_noise_px = 0.3;         // the noise assumed at least (a staircase's quantization)
@@ -28,6 +29,7 @@ struct ModelOptions {
     v("lattice_tolerance", lattice_tolerance, "a building on a lattice gets the lattice outline (straight walls labeled among its main direction and quarter turns alone) when that has no more vertices than the chosen outline and explains the contour (mean distance) no worse than it plus this many standard errors of that mean: the boundary noise times sqrt(corners.snap_correlation_m / perimeter); 0 = never", Check::at_least(0));
     v("lattice_fit_noise", lattice_fit_noise, "a building whose lattice was taken from its contour's chords (its main direction followed a wobble's flank, see lattice.main_share_ratio) gets the lattice outline, when that has fewer vertices, if the contour lies within this many times the boundary noise of it (mean distance) however closer a more intricate outline follows it: under a wobble of many pixels, the plain outline follows the wobble (0 = off)", Check::at_least(0));
     v("lattice_fit_gap_noise", lattice_fit_gap_noise, "... and no worse than the chosen outline plus this many times the boundary noise (mean distances): a real wing the lattice outline leaves out costs more than a wobble", Check::at_least(0));
+    v("stretch_fit_noise", stretch_fit_noise, "a wall of the regular outline more than corners.snap_max_deg off the building's lattice is redrawn with the lattice outline's walls (the contour edges nearest to it labeled as the lattice labeling has them) when the lattice outline explains that stretch of contour no worse than the regular outline plus this many times the boundary noise (mean distances; the noise taken as the regular outline's own mean distance where that is less), and draws at most two walls along it (more only where it explains the stretch better): an oblique cut across a wobble or a notch becomes square walls, a real oblique wall or an arc, which a staircase would follow, stays (0 = off)", Check::at_least(0));
     v("rescue_fit_noise", rescue_fit_noise, "when the chain fails, the lattice outline stands in for the fallback if the contour lies within this many times the boundary noise of it (mean distance), or as close to it as to the fallback", Check::at_least(0));
     v("rectangle_tolerance", rectangle_tolerance, "a building becomes the oriented rectangle of its contour's moments when that explains the contour no worse than the regularized outline plus this many times the boundary noise (a high percentile of the distances of the contour to each, rectangle_quantile: a rectangle must follow the contour everywhere, not on average; 0 = off)", Check::at_least(0));
     v("rectangle_quantile", rectangle_quantile, "... that percentile, as a share (0.95: the rectangle may leave 5 % of the contour, by length, farther than the outline does plus the tolerance)", Check::between(0.5, 1));
@@ -40,6 +42,12 @@ struct ModelOptions {
 // The rectangle with edges along `normal` and its quarter turn whose area, centroid and second
 // moments about its axes are those of the ring (counter-clockwise). Empty for a degenerate ring.
 Ring moment_rectangle(const Ring& ring, const Vec2& normal);
+
+// The distance of each of the ring's edge midpoints to the polygon's boundary, with the edge's
+// length: (distance, length), per edge; and, when asked, the nearest of the polygon's edges to
+// each (numbered along its outer ring, then along each hole).
+std::vector<std::pair<double, double>> boundary_distances(const Ring& ring, const PolygonWithHoles& polygon,
+                                                          std::vector<std::size_t>* nearest_segments = nullptr);
 
 // The length-weighted mean distance from the ring's edge midpoints to the polygon's boundary.
 double mean_distance_to_boundary(const Ring& ring, const PolygonWithHoles& polygon);

@@ -1,5 +1,6 @@
 #include "pipeline/building.hpp"
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <stdexcept>
@@ -304,6 +305,84 @@ void choose_rectangle(const std::vector<Ring>& rings, double pixel_size, const M
   result.model = "rectangle";
 }
 
+// A stretch of contour: edges [first, first + count) of a ring, cyclically.
+struct Stretch {
+  std::size_t ring;
+  int first, count;
+};
+
+// The regular outline's walls off the lattice that the lattice outline explains as well: the
+// stretches of contour (maximal runs of edges) whose nearest wall of the regular outline lies more
+// than near_deg off the lattice, where the lattice outline explains the stretch no worse than the
+// regular outline plus `tolerance` (mean distances of its edges) and draws at most two walls
+// along it (runs of one axis at least min_run long), or more only where it explains the stretch
+// better.
+std::vector<Stretch> lattice_stretches(const std::vector<Ring>& rings, const EdgeLabels& axis_labels, const Vec2& lattice,
+                                       const PolygonWithHoles& regular, const PolygonWithHoles& lattice_outline,
+                                       double min_run, double near_deg, double tolerance) {
+  const double near_cos = std::cos(near_deg * M_PI / 180.0);
+  std::vector<char> oblique_wall;  // per edge of the regular outline
+  for (const Ring* ring : rings_of(regular))
+    for (std::size_t k = 0; k < ring->size(); ++k) {
+      const Vec2 e = edge_vector(*ring, k);
+      const Vec2 n = e.norm() > 0 ? outward_normal(e) : lattice;
+      oblique_wall.push_back(nearest_lattice_axis(n, lattice).dot(n) < near_cos);
+    }
+  std::vector<Stretch> stretches;
+  for (std::size_t r = 0; r < rings.size(); ++r) {
+    const Ring& ring = rings[r];
+    const int n = int(ring.size());
+    std::vector<std::size_t> nearest;
+    const auto off_regular = boundary_distances(ring, regular, &nearest);
+    std::vector<char> oblique(n);
+    for (int i = 0; i < n; ++i) oblique[i] = oblique_wall[nearest[i]];
+    const int start = int(std::find(oblique.begin(), oblique.end(), 0) - oblique.begin());
+    if (start == n) continue;  // no wall of this ring on the lattice: nothing to hold a stretch
+    std::vector<std::pair<double, double>> off_lattice;  // computed when a stretch needs them
+    for (int k = 0; k < n;) {
+      const int first = (start + k) % n;
+      if (!oblique[first]) { ++k; continue; }
+      int count = 0;
+      while (k + count < n && oblique[(first + count) % n]) ++count;
+      k += count;
+      if (off_lattice.empty()) off_lattice = boundary_distances(ring, lattice_outline);
+      double sum_regular = 0, sum_lattice = 0, length = 0, wall = 0;
+      int walls = 0;
+      for (int j = 0; j < count; ++j) {
+        const int i = (first + j) % n;
+        sum_regular += off_regular[i].second * off_regular[i].first;
+        sum_lattice += off_lattice[i].second * off_lattice[i].first;
+        length += off_regular[i].second;
+        wall += off_regular[i].second;
+        if (j + 1 == count || axis_labels[r][(i + 1) % n] != axis_labels[r][i]) {
+          walls += wall >= min_run;
+          wall = 0;
+        }
+      }
+      if (length > 0 && sum_lattice <= sum_regular + (walls <= 2 ? tolerance : 0.0) * length)
+        stretches.push_back({r, first, count});
+    }
+  }
+  return stretches;
+}
+
+// How far the polygon's boundary reaches from the contour: the largest distance to the contour's
+// rings of its vertices and of the points a quarter along each edge (the midpoints of its edges
+// halved).
+double outline_reach(const PolygonWithHoles& polygon, const std::vector<Ring>& rings) {
+  PolygonWithHoles contour{rings[0], {rings.begin() + 1, rings.end()}};
+  double reach = 0;
+  for (const Ring* ring : rings_of(polygon)) {
+    Ring halved;
+    for (std::size_t i = 0; i < ring->size(); ++i) {
+      halved.push_back((*ring)[i]);
+      halved.push_back((*ring)[i] + 0.5 * edge_vector(*ring, i));
+    }
+    for (const auto& [d, length] : boundary_distances(halved, contour)) reach = std::max(reach, d);
+  }
+  return reach;
+}
+
 void run_chain(const std::vector<Ring>& rings, double pixel_size, const CoreOptions& o, BuildingResult& result,
                const std::function<bool()>& over_budget) {
   std::size_t edges = 0;
@@ -355,7 +434,7 @@ void run_chain(const std::vector<Ring>& rings, double pixel_size, const CoreOpti
   // A round or oblique shape (little of it along the lattice, its outline turning about once, as
   // a convex one does, not back and forth as a wobble does) has no lattice to hold its walls to.
   // (A building of a few dozen pixels shows no curvature: it is taken as on its lattice.)
-  const bool on_lattice = perimeter(rings[0]) < o.refinement.min_round_px * pixel_size ||
+  const bool on_lattice = perimeter(rings[0]) < std::max(o.refinement.min_round_px * pixel_size, o.refinement.min_round_m) ||
                           lattice_share(input.normals, input.lengths, lattice, o.refinement.lattice_deg) >= o.refinement.min_lattice_share ||
                           total_turning(rings[0], input.normals[0], std::max(1.0, 2 * pixel_size)) >= o.refinement.min_turning;
   result.noise_m = noise;
@@ -413,12 +492,13 @@ void run_chain(const std::vector<Ring>& rings, double pixel_size, const CoreOpti
   // the contour about as well (fit_tolerance), and stands in for a chain that failed.
   PolygonWithHoles lattice_outline;
   bool lattice_ok = false;
+  EdgeLabels axis_labels;
   if (on_lattice && o.models.lattice_tolerance > 0) {
     // (The labeling input's last use: its directions become the lattice's, its normals stay.)
     const Vec2 l = context.lattice;
     input.directions = {l, Vec2(-l.y(), l.x()), -l, Vec2(l.y(), -l.x())};
     input.support.assign(4, 1.0);
-    const EdgeLabels axis_labels = label_edges(input, o.labeling);
+    axis_labels = label_edges(input, o.labeling);
     CornerOptions straight = o.corners;  // its walls are straight: no curve
     straight.curve_px = 0;
     lattice_ok = outline(fit_rings, axis_labels, input.directions, straight, origin, pixel_size, context, regular_min_run_px,
@@ -461,6 +541,40 @@ void run_chain(const std::vector<Ring>& rings, double pixel_size, const CoreOpti
     }
   }
   if (on_lattice) choose_rectangle(rings, pixel_size, o.models, result);  // a round shape is no rectangle
+  // Per stretch of contour, the simpler model where it explains the stretch as well: the regular
+  // outline's walls off the lattice redrawn with the lattice outline's walls where those explain
+  // their contour within stretch_fit_noise noises (an oblique cut across a wobble or a notch).
+  if (result.model == "regular" && lattice_ok && o.models.stretch_fit_noise > 0) {
+    const PolygonWithHoles& regular = result.footprint;
+    // The noise, as the regular outline leaves it where that is less: a shape off any lattice
+    // (a hexagon, a disc) measures a large noise about lattice lines.
+    const double regular_fit = contour_fit(rings, regular);
+    const double noise_m = std::max(o.models.min_noise_px * pixel_size, std::min(model_noise(result, pixel_size, o.models), regular_fit));
+    const double tolerance = o.models.stretch_fit_noise * noise_m;
+    const std::vector<Stretch> stretches = lattice_stretches(rings, axis_labels, context.lattice, regular, lattice_outline,
+                                                             regular_min_run_px * pixel_size, o.corners.snap_max_deg, tolerance);
+    if (!stretches.empty()) {
+      // The chain's labels with the stretches' edges labeled as the lattice labeling has them
+      // (the chain's directions, then the lattice's four).
+      EdgeLabels mixed = labels;
+      for (const Stretch& s : stretches)
+        for (int j = 0; j < s.count; ++j) {
+          const std::size_t i = (s.first + j) % rings[s.ring].size();
+          mixed[s.ring][i] = int(result.directions.size()) + axis_labels[s.ring][i];
+        }
+      std::vector<Vec2> mixed_directions = result.directions;
+      mixed_directions.insert(mixed_directions.end(), input.directions.begin(), input.directions.end());
+      // Taken when it is a valid polygon that explains the contour within the tolerance of the
+      // regular outline and reaches no farther from it than that plus the noise (lines of the
+      // lattice meeting beyond the contour).
+      PolygonWithHoles candidate;
+      if (outline(fit_rings, mixed, mixed_directions, o.corners, origin, pixel_size, context, regular_min_run_px, candidate)
+              .second.empty() &&
+          contour_fit(rings, candidate) <= regular_fit + tolerance &&
+          outline_reach(candidate, rings) <= outline_reach(regular, rings) + noise_m)
+        result.footprint = std::move(candidate);
+    }
+  }
 }
 
 }  // namespace
