@@ -284,22 +284,24 @@ TEST(DeformedRoute, OverItsWorkBudgetTheBuildingTakesTheOriginalRoute) {
 }
 
 // A 3 x 5 m shed under half a metre of wobble, its corners rounded by a metre, is a blob that
-// turns about once: a round shape by its normals. At 16 m of outline a mask cannot show round
-// against that rounding (refinement.min_round_m, 20 m): the shed is taken as on a lattice, and
-// its outline is four square corners in ten cases of twelve at 25 and 40 cm pixels (six without
-// the rule, all at 40 cm lost: 40 pixels of outline was the only bound).
+// turns about once: a round shape by its normals. With under 20 m of outline a mask cannot show
+// round against that rounding (refinement.min_round_m): the shed is taken as on a lattice, and
+// its outline is four square corners in most cases at 25 and 40 cm pixels (9 of 12; 6 with
+// min_round_m = 0, where 40 pixels of outline were the only bound). Mean IoU 0.69.
 TEST(NoisyMasks, AWobblingShedIsARectangle) {
   const PolygonWithHoles truth = test::rotated({{{0, 0}, {5, 0}, {5, 3}, {0, 3}}, {}}, 27.0);
   int squared = 0;
+  double iou_sum = 0;
   for (const double pixel : {0.25, 0.4}) {
     for (std::uint64_t seed = 1; seed <= 6; ++seed) {
       const BuildingResult r = regularize(test::rasterize_shape_m(truth, pixel, 0.5, 8.0, 1.0, seed), pixel);
       ASSERT_TRUE(r.ok) << pixel << " seed " << seed << ": " << r.reason;
-      EXPECT_GE(test::iou(r.footprint, truth), 0.5) << pixel << " seed " << seed;  // (the mask itself is that far off)
       squared += r.footprint.outer.size() == 4 && right_angle_corners(r.footprint).first == 4;
+      iou_sum += test::iou(r.footprint, truth);
     }
   }
   EXPECT_GE(squared, 9);
+  EXPECT_GE(iou_sum / 12, 0.65);  // (the mask itself lies that far off the shed)
 }
 
 }  // namespace

@@ -74,6 +74,7 @@ std::vector<std::pair<double, double>> boundary_distances(const Ring& ring, cons
       segments.push_back({a, b, a.cwiseMin(b), a.cwiseMax(b)});
     }
   std::vector<std::pair<double, double>> distances;
+  if (nearest_segments) nearest_segments->clear();
   if (segments.empty()) return distances;
   distances.reserve(ring.size());
   std::size_t nearest = 0;  // the previous midpoint's nearest segment: a first bound for the next

@@ -314,14 +314,14 @@ struct Stretch {
 // The regular outline's walls off the lattice that the lattice outline explains as well: the
 // stretches of contour (maximal runs of edges) whose nearest wall of the regular outline lies more
 // than near_deg off the lattice, where the lattice outline explains the stretch no worse than the
-// regular outline plus `tolerance` (mean distances of its edges) and draws at most two walls
-// along it (runs of one axis at least min_run long), or more only where it explains the stretch
-// better.
+// regular outline plus `tolerance` (mean distances of its edges) and the lattice labeling draws
+// at most two walls along it (its runs within the stretch at least min_run long: an estimate of
+// the walls the lattice outline draws there), or, drawing more, no worse than the regular outline.
 std::vector<Stretch> lattice_stretches(const std::vector<Ring>& rings, const EdgeLabels& axis_labels, const Vec2& lattice,
                                        const PolygonWithHoles& regular, const PolygonWithHoles& lattice_outline,
                                        double min_run, double near_deg, double tolerance) {
   const double near_cos = std::cos(near_deg * M_PI / 180.0);
-  std::vector<char> oblique_wall;  // per edge of the regular outline
+  std::vector<int> oblique_wall;  // per edge of the regular outline, numbered as boundary_distances does
   for (const Ring* ring : rings_of(regular))
     for (std::size_t k = 0; k < ring->size(); ++k) {
       const Vec2 e = edge_vector(*ring, k);
@@ -334,17 +334,14 @@ std::vector<Stretch> lattice_stretches(const std::vector<Ring>& rings, const Edg
     const int n = int(ring.size());
     std::vector<std::size_t> nearest;
     const auto off_regular = boundary_distances(ring, regular, &nearest);
-    std::vector<char> oblique(n);
+    if (int(nearest.size()) != n) continue;
+    std::vector<int> oblique(n);
     for (int i = 0; i < n; ++i) oblique[i] = oblique_wall[nearest[i]];
-    const int start = int(std::find(oblique.begin(), oblique.end(), 0) - oblique.begin());
-    if (start == n) continue;  // no wall of this ring on the lattice: nothing to hold a stretch
+    const auto runs = label_runs(oblique);
+    if (runs.size() < 2) continue;  // the ring all on the lattice, or all off it: nothing to hold a stretch
     std::vector<std::pair<double, double>> off_lattice;  // computed when a stretch needs them
-    for (int k = 0; k < n;) {
-      const int first = (start + k) % n;
-      if (!oblique[first]) { ++k; continue; }
-      int count = 0;
-      while (k + count < n && oblique[(first + count) % n]) ++count;
-      k += count;
+    for (const auto& [first, count] : runs) {
+      if (!oblique[first]) continue;
       if (off_lattice.empty()) off_lattice = boundary_distances(ring, lattice_outline);
       double sum_regular = 0, sum_lattice = 0, length = 0, wall = 0;
       int walls = 0;
@@ -367,8 +364,9 @@ std::vector<Stretch> lattice_stretches(const std::vector<Ring>& rings, const Edg
 }
 
 // How far the polygon's boundary reaches from the contour: the largest distance to the contour's
-// rings of its vertices and of the points a quarter along each edge (the midpoints of its edges
-// halved).
+// rings of the points a quarter and three quarters along each of its edges (the midpoints of the
+// edges halved). Not of its vertices: a square corner lies beyond a contour the segmentation
+// rounded, and should.
 double outline_reach(const PolygonWithHoles& polygon, const std::vector<Ring>& rings) {
   PolygonWithHoles contour{rings[0], {rings.begin() + 1, rings.end()}};
   double reach = 0;
@@ -505,6 +503,7 @@ void run_chain(const std::vector<Ring>& rings, double pixel_size, const CoreOpti
                          lattice_outline).second.empty();
   }
   // (Each contour fit computed once, when it is needed: they are a good part of the time.)
+  double chosen_fit = -1;  // the chosen outline's, unknown yet
   if (!regular_problem.second.empty() && !plain_problem.second.empty()) {
     // As a stand-in for a failed chain, the lattice outline must explain the contour within the
     // noise, or as well as the fallback does.
@@ -515,7 +514,6 @@ void run_chain(const std::vector<Ring>& rings, double pixel_size, const CoreOpti
     result.footprint = std::move(lattice_outline);
     result.model = "lattice";
   } else {
-    double chosen_fit = -1;  // unknown yet
     bool regular_wins = !plain_problem.second.empty();
     if (!regular_wins && regular_problem.second.empty()) {
       const double regular_fit = contour_fit(rings, regular), plain_fit = contour_fit(rings, plain);
@@ -544,14 +542,15 @@ void run_chain(const std::vector<Ring>& rings, double pixel_size, const CoreOpti
   // Per stretch of contour, the simpler model where it explains the stretch as well: the regular
   // outline's walls off the lattice redrawn with the lattice outline's walls where those explain
   // their contour within stretch_fit_noise noises (an oblique cut across a wobble or a notch).
-  if (result.model == "regular" && lattice_ok && o.models.stretch_fit_noise > 0) {
-    const PolygonWithHoles& regular = result.footprint;
+  // (Skipped past the time budget: the regular outline stands.)
+  if (result.model == "regular" && lattice_ok && o.models.stretch_fit_noise > 0 && !over_budget()) {
+    const PolygonWithHoles& chosen = result.footprint;
+    if (chosen_fit < 0) chosen_fit = contour_fit(rings, chosen);
     // The noise, as the regular outline leaves it where that is less: a shape off any lattice
     // (a hexagon, a disc) measures a large noise about lattice lines.
-    const double regular_fit = contour_fit(rings, regular);
-    const double noise_m = std::max(o.models.min_noise_px * pixel_size, std::min(model_noise(result, pixel_size, o.models), regular_fit));
+    const double noise_m = std::max(o.models.min_noise_px * pixel_size, std::min(model_noise(result, pixel_size, o.models), chosen_fit));
     const double tolerance = o.models.stretch_fit_noise * noise_m;
-    const std::vector<Stretch> stretches = lattice_stretches(rings, axis_labels, context.lattice, regular, lattice_outline,
+    const std::vector<Stretch> stretches = lattice_stretches(rings, axis_labels, context.lattice, chosen, lattice_outline,
                                                              regular_min_run_px * pixel_size, o.corners.snap_max_deg, tolerance);
     if (!stretches.empty()) {
       // The chain's labels with the stretches' edges labeled as the lattice labeling has them
@@ -566,12 +565,12 @@ void run_chain(const std::vector<Ring>& rings, double pixel_size, const CoreOpti
       mixed_directions.insert(mixed_directions.end(), input.directions.begin(), input.directions.end());
       // Taken when it is a valid polygon that explains the contour within the tolerance of the
       // regular outline and reaches no farther from it than that plus the noise (lines of the
-      // lattice meeting beyond the contour).
+      // lattice meeting beyond the contour). It keeps the name "regular".
       PolygonWithHoles candidate;
       if (outline(fit_rings, mixed, mixed_directions, o.corners, origin, pixel_size, context, regular_min_run_px, candidate)
               .second.empty() &&
-          contour_fit(rings, candidate) <= regular_fit + tolerance &&
-          outline_reach(candidate, rings) <= outline_reach(regular, rings) + noise_m)
+          contour_fit(rings, candidate) <= chosen_fit + tolerance &&
+          outline_reach(candidate, rings) <= outline_reach(chosen, rings) + noise_m)
         result.footprint = std::move(candidate);
     }
   }
