@@ -22,7 +22,9 @@ struct BuildingResult {
   int deformation_iterations = 0;
   int mesh_vertices = 0;         // of the deformation mesh, if one was built
   double noise_m = -1;          // the boundary noise measured on the contour (m), when labeled
-  std::string model;            // "lines" (the chain's outline), "rectangle", or empty for the fallback
+  std::string model;            // the outline chosen: "regular" (walls held to the lattice; also after its oblique
+                                // walls are redrawn per stretch), "lines" (pixel thresholds), "lattice", "rectangle";
+                                // empty for the fallback
   std::string route;            // the chain's corner route taken: "original" or "deformed"; empty otherwise
   std::string note;             // when ok: why the route taken is not the one asked for (a budget), else empty
   double seconds = 0;
