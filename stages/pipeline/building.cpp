@@ -363,12 +363,11 @@ std::vector<Stretch> lattice_stretches(const std::vector<Ring>& rings, const Edg
   return stretches;
 }
 
-// How far the polygon's boundary reaches from the contour: the largest distance to the contour's
-// rings of the points a quarter and three quarters along each of its edges (the midpoints of the
-// edges halved). Not of its vertices: a square corner lies beyond a contour the segmentation
-// rounded, and should.
-double outline_reach(const PolygonWithHoles& polygon, const std::vector<Ring>& rings) {
-  PolygonWithHoles contour{rings[0], {rings.begin() + 1, rings.end()}};
+// How far the polygon's boundary reaches from the contour (its rings as one polygon): the largest
+// distance to it of the points a quarter and three quarters along each of the polygon's edges
+// (the midpoints of the edges halved). Not of its vertices: a square corner lies beyond a contour
+// the segmentation rounded, and should.
+double outline_reach(const PolygonWithHoles& polygon, const PolygonWithHoles& contour) {
   double reach = 0;
   for (const Ring* ring : rings_of(polygon)) {
     Ring halved;
@@ -569,9 +568,10 @@ void run_chain(const std::vector<Ring>& rings, double pixel_size, const CoreOpti
       PolygonWithHoles candidate;
       if (outline(fit_rings, mixed, mixed_directions, o.corners, origin, pixel_size, context, regular_min_run_px, candidate)
               .second.empty() &&
-          contour_fit(rings, candidate) <= chosen_fit + tolerance &&
-          outline_reach(candidate, rings) <= outline_reach(chosen, rings) + noise_m)
-        result.footprint = std::move(candidate);
+          contour_fit(rings, candidate) <= chosen_fit + tolerance) {
+        const PolygonWithHoles contour{rings[0], {rings.begin() + 1, rings.end()}};
+        if (outline_reach(candidate, contour) <= outline_reach(chosen, contour) + noise_m) result.footprint = std::move(candidate);
+      }
     }
   }
 }
