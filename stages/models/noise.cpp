@@ -25,9 +25,9 @@ double inverse_erf(double y) {
 }  // namespace
 
 double lattice_noise(const std::vector<Ring>& rings, const std::vector<std::vector<Vec2>>& normals, const Vec2& lattice,
-                     double pixel_size, const NoiseOptions& o) {
+                     double pixel_size, const NoiseOptions& o, double* arc_noise) {
   const Vec2 axes[4] = {lattice, Vec2(-lattice.y(), lattice.x()), -lattice, Vec2(lattice.y(), -lattice.x())};
-  std::vector<std::pair<double, double>> residuals;  // |distance|, weight
+  std::vector<std::pair<double, double>> residuals, arc_residuals;  // |distance|, weight
   for (std::size_t r = 0; r < rings.size(); ++r) {
     const Ring& ring = rings[r];
     const std::size_t n = ring.size();
@@ -71,10 +71,33 @@ double lattice_noise(const std::vector<Ring>& rings, const std::vector<std::vect
         normal = Vec2(std::cos(t) * axis.x() - std::sin(t) * axis.y(), std::sin(t) * axis.x() + std::cos(t) * axis.y());
       }
       for (const auto& [p, w] : middle) residuals.push_back({std::abs(normal.dot(p - mean)), w});
+      if (arc_noise) {
+        // The same middle fitted by a parabola across its line (in the run's length as unit, for
+        // the range): an arc's spread about the line goes, a wobble's of several half-waves stays.
+        const Vec2 tangent(-normal.y(), normal.x());
+        const double unit = std::max(length, 1e-9);
+        Eigen::Matrix3d ata = Eigen::Matrix3d::Zero();
+        Eigen::Vector3d atb = Eigen::Vector3d::Zero();
+        for (const auto& [p, w] : middle) {
+          const double t = tangent.dot(p - mean) / unit;
+          const Eigen::Vector3d row(1.0, t, t * t);
+          ata += w * row * row.transpose();
+          atb += w * normal.dot(p - mean) * row;
+        }
+        Eigen::Vector3d c = Eigen::Vector3d::Zero();  // too few points for a parabola: the line's
+        if (middle.size() >= 3) c = ata.ldlt().solve(atb);
+        if (!c.allFinite()) c.setZero();
+        for (const auto& [p, w] : middle) {
+          const double t = tangent.dot(p - mean) / unit;
+          arc_residuals.push_back({std::abs(normal.dot(p - mean) - c[0] - c[1] * t - c[2] * t * t), w});
+        }
+      }
     }
   }
   // A Gaussian's |x| has its quantile q at z((1 + q) / 2) standard deviations.
-  return weighted_quantile(std::move(residuals), o.quantile) / (std::sqrt(2.0) * inverse_erf(o.quantile));
+  const double z = std::sqrt(2.0) * inverse_erf(o.quantile);
+  if (arc_noise) *arc_noise = weighted_quantile(std::move(arc_residuals), o.quantile) / z;
+  return weighted_quantile(std::move(residuals), o.quantile) / z;
 }
 
 }  // namespace lodforge

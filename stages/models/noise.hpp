@@ -31,8 +31,10 @@ struct NoiseOptions {
 // The boundary noise of a building (map units): the standard deviation of the Gaussian noise
 // whose |x| has, at `quantile`, the length-weighted quantile of the distances of the contour's
 // edge midpoints to their lattice run's line. normals: per ring, per edge, the smoothed outward normals;
-// lattice: the building's main wall direction (unit normal).
+// lattice: the building's main wall direction (unit normal). *arc_noise, when asked: the same
+// measure about a parabola fitted across each run's line, which an arc's spread does not inflate
+// (a round building's contour, far from lattice lines, measures a "noise" of metres about them).
 double lattice_noise(const std::vector<Ring>& rings, const std::vector<std::vector<Vec2>>& normals, const Vec2& lattice,
-                     double pixel_size, const NoiseOptions& options);
+                     double pixel_size, const NoiseOptions& options, double* arc_noise = nullptr);
 
 }  // namespace lodforge

@@ -12,6 +12,8 @@ namespace lodforge {
 
 struct ModelOptions {
   double outline_tolerance = 0.5;    // in boundary-noise units: how much worse the regular outline may explain the contour
+  double regular_fit_noise = 1.0;    // ... or when it explains the contour within this many times the noise
+  double arc_noise_ratio = 3.0;      // the noise for the model choice: at most this many times the spread about parabolas along the runs
   double lattice_tolerance = 2.0;    // the lattice outline may explain the contour worse by this many standard errors
   double rescue_fit_noise = 1.0;     // ... and stands in for a failed chain within this many times the noise
   double lattice_fit_noise = 1.1;    // ... and, its lattice from the chords, is taken when it explains the contour within this many times the noise
@@ -26,6 +28,7 @@ struct ModelOptions {
   template <class V>
   void visit(V& v) {
     v("outline_tolerance", outline_tolerance, "the regular outline (walls held to the lattice, steps and curves judged against the noise) is kept when it explains the contour (mean distance of the contour to it) no worse than the plain one (pixel thresholds) plus this many times the boundary noise", Check::at_least(0));
+    v("regular_fit_noise", regular_fit_noise, "... or when it explains the contour within this many times the boundary noise (mean distance), however closer the plain one follows it: at a few centimetres a pixel, the plain outline's thresholds of a few pixels follow a wobble of a metre, vertex by vertex (0 = off)", Check::at_least(0));
     v("lattice_tolerance", lattice_tolerance, "a building on a lattice gets the lattice outline (straight walls labeled among its main direction and quarter turns alone) when that has no more vertices than the chosen outline and explains the contour (mean distance) no worse than it plus this many standard errors of that mean: the boundary noise times sqrt(corners.snap_correlation_m / perimeter); 0 = never", Check::at_least(0));
     v("lattice_fit_noise", lattice_fit_noise, "a building whose lattice was taken from its contour's chords (its main direction followed a wobble's flank, see lattice.main_share_ratio) gets the lattice outline, when that has fewer vertices, if the contour lies within this many times the boundary noise of it (mean distance) however closer a more intricate outline follows it: under a wobble of many pixels, the plain outline follows the wobble (0 = off)", Check::at_least(0));
     v("lattice_fit_gap_noise", lattice_fit_gap_noise, "... and no worse than the chosen outline plus this many times the boundary noise (mean distances): a real wing the lattice outline leaves out costs more than a wobble", Check::at_least(0));
@@ -33,6 +36,7 @@ struct ModelOptions {
     v("rescue_fit_noise", rescue_fit_noise, "when the chain fails, the lattice outline stands in for the fallback if the contour lies within this many times the boundary noise of it (mean distance), or as close to it as to the fallback", Check::at_least(0));
     v("rectangle_tolerance", rectangle_tolerance, "a building becomes the oriented rectangle of its contour's moments when that explains the contour no worse than the regularized outline plus this many times the boundary noise (a high percentile of the distances of the contour to each, rectangle_quantile: a rectangle must follow the contour everywhere, not on average; 0 = off)", Check::at_least(0));
     v("rectangle_quantile", rectangle_quantile, "... that percentile, as a share (0.95: the rectangle may leave 5 % of the contour, by length, farther than the outline does plus the tolerance)", Check::between(0.5, 1));
+    v("arc_noise_ratio", arc_noise_ratio, "the boundary noise the model choice allows for (every tolerance in noises above) is at most this many times the contour's spread about parabolas fitted along the same runs of the lattice: a round building's contour lies metres off lattice lines, which is no noise, and a rectangle or a pentagon would explain it 'within the noise' (0 = no bound)", Check::at_least(0));
     v("min_noise_px", min_noise_px, "the boundary noise is taken as at least this (pixels; a staircase's own)", Check::at_least(0));
     v("fallback_fit_px", fallback_fit_px, "when the chain fails, the rectangle replaces the Douglas-Peucker fallback if the contour lies within this (pixels, mean distance) of it ...", Check::at_least(0));
     v("fallback_fit_ratio", fallback_fit_ratio, "... or within this many times the fallback's own mean distance to the contour", Check::at_least(0));

@@ -273,9 +273,13 @@ Vec2 main_direction(const EdgeLabels& labels, const std::vector<std::vector<doub
   return directions[std::max_element(support.begin(), support.end()) - support.begin()];
 }
 
-// The boundary noise the model choice allows for (m): as measured, and at least a staircase's.
+// The boundary noise the model choice allows for (m): as measured, and at least a staircase's;
+// at most models.arc_noise_ratio times the noise about parabolas along the same runs (a round
+// building's contour lies metres off lattice lines, and that is no noise).
 double model_noise(const BuildingResult& result, double pixel_size, const ModelOptions& o) {
-  return std::max(result.noise_m, o.min_noise_px * pixel_size);
+  double noise = result.noise_m;
+  if (o.arc_noise_ratio > 0 && result.arc_noise_m >= 0) noise = std::min(noise, o.arc_noise_ratio * result.arc_noise_m);
+  return std::max(noise, o.min_noise_px * pixel_size);
 }
 
 // How much worse a simpler outline may explain the contour (mean distance) and still be taken:
@@ -415,11 +419,12 @@ void run_chain(const std::vector<Ring>& rings, double pixel_size, const CoreOpti
   // direction stays the lattice where it is near the chords'.
   const ChordLattice chord = chord_lattice(rings, o.lattice);
   const Vec2 first_main = main_direction(labels, input.lengths, input.directions);
-  double noise = lattice_noise(rings, input.normals, first_main, pixel_size, o.noise);
+  double arc_noise = 0;
+  double noise = lattice_noise(rings, input.normals, first_main, pixel_size, o.noise, &arc_noise);
   bool follow_chords = false;
   if (chord.share >= o.lattice.min_share && angle_between_lattices_deg(first_main, chord.direction) > o.lattice.max_gap_deg) {
     follow_chords = chord.share_at(first_main, o.lattice.window_deg) < o.lattice.main_share_ratio * chord.share;
-    if (follow_chords) noise = lattice_noise(rings, input.normals, chord.direction, pixel_size, o.noise);
+    if (follow_chords) noise = lattice_noise(rings, input.normals, chord.direction, pixel_size, o.noise, &arc_noise);
   }
   const auto building_lattice = [&] {
     const Vec2 main = main_direction(labels, input.lengths, input.directions);
@@ -435,6 +440,7 @@ void run_chain(const std::vector<Ring>& rings, double pixel_size, const CoreOpti
                           lattice_share(input.normals, input.lengths, lattice, o.refinement.lattice_deg) >= o.refinement.min_lattice_share ||
                           total_turning(rings[0], input.normals[0], std::max(1.0, 2 * pixel_size)) >= o.refinement.min_turning;
   result.noise_m = noise;
+  result.arc_noise_m = arc_noise;
   // Drops the insignificant directions and labels again without them, their support unknown.
   const auto drop_and_label = [&] {
     if (!on_lattice || !drop_insignificant_directions(rings, labels, input.directions, building_lattice(), noise, o.refinement))
@@ -472,7 +478,9 @@ void run_chain(const std::vector<Ring>& rings, double pixel_size, const CoreOpti
   // Two outlines from the same labels: the regular one (runs shorter than min_run_noise times
   // the noise absorbed, walls held to the lattice, steps, curves and cuts judged against the noise)
   // and the plain one (the paper's corners with pixel thresholds), and the regular one kept
-  // unless it explains the contour worse than the plain one by more than the noise allows.
+  // unless it explains the contour worse than the plain one by more than the noise allows. (It is
+  // also kept when it explains the contour within the noise itself: at a few centimetres a pixel,
+  // the plain outline's thresholds of a few pixels let it follow a wobble of a metre.)
   CornerContext context;
   if (on_lattice) context.lattice = building_lattice();
   context.noise = noise;
@@ -516,7 +524,7 @@ void run_chain(const std::vector<Ring>& rings, double pixel_size, const CoreOpti
     bool regular_wins = !plain_problem.second.empty();
     if (!regular_wins && regular_problem.second.empty()) {
       const double regular_fit = contour_fit(rings, regular), plain_fit = contour_fit(rings, plain);
-      regular_wins = regular_fit <= plain_fit + allowed;
+      regular_wins = regular_fit <= plain_fit + allowed || regular_fit <= o.models.regular_fit_noise * model_noise(result, pixel_size, o.models);
       chosen_fit = regular_wins ? regular_fit : plain_fit;
     }
     result.footprint = std::move(regular_wins ? regular : plain);

@@ -22,6 +22,7 @@ struct BuildingResult {
   int deformation_iterations = 0;
   int mesh_vertices = 0;         // of the deformation mesh, if one was built
   double noise_m = -1;          // the boundary noise measured on the contour (m), when labeled
+  double arc_noise_m = -1;      // ... and measured about parabolas along the same runs, which an arc does not inflate (m)
   std::string model;            // the outline chosen: "regular" (walls held to the lattice; also after its oblique
                                 // walls are redrawn per stretch), "lines" (pixel thresholds), "lattice", "rectangle";
                                 // empty for the fallback
