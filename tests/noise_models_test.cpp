@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <limits>
 
 #include "directions/lattice.hpp"
 #include "eval/metrics.hpp"
@@ -228,6 +229,39 @@ TEST(NoisyMasks, AnLUnderAMetreOfWobbleKeepsItsCornersSquare) {
   }
   EXPECT_LE(vertices, 3u * 6u * 6u);
   EXPECT_GE(double(square), 0.75 * double(corners)) << square << " of " << corners;
+}
+
+// The distances of a contour's edge midpoints to a polygon's boundary, whether the polygon has a
+// few edges (each looked at) or hundreds (bucketed in a grid, as a traced contour is): each is
+// the least distance to any of its edges, bit for bit, and the nearest edge reported is one at
+// that distance. Points inside and outside, and beyond the polygon's box.
+TEST(Models, BoundaryDistancesAreTheNearestEdgesAtAnySize) {
+  for (const int sides : {5, 40, 300}) {
+    Ring polygon;  // a wavy star, of `sides` edges
+    for (int k = 0; k < sides; ++k) {
+      const double t = 2 * M_PI * k / sides, radius = 20 + 3 * std::sin(7 * t) + ((k * 37) % 11) * 0.1;
+      polygon.push_back(Vec2(radius * std::cos(t), radius * std::sin(t)));
+    }
+    const PolygonWithHoles shape{polygon, {}};
+    Ring contour;  // a wobbling ring around it, crossing its boundary, and a far point
+    for (int k = 0; k < 500; ++k) {
+      const double t = 2 * M_PI * k / 500, radius = 21 + 6 * std::sin(3 * t + 0.4);
+      contour.push_back(Vec2(radius * std::cos(t) + 0.7, radius * std::sin(t) - 0.3));
+    }
+    contour[250] = Vec2(400, -150);
+    std::vector<std::size_t> nearest;
+    const auto distances = boundary_distances(contour, shape, &nearest);
+    ASSERT_EQ(distances.size(), contour.size());
+    ASSERT_EQ(nearest.size(), contour.size());
+    for (std::size_t i = 0; i < contour.size(); ++i) {
+      const Vec2 mid = contour[i] + 0.5 * (contour[(i + 1) % contour.size()] - contour[i]);
+      double least = std::numeric_limits<double>::infinity();
+      for (std::size_t k = 0; k < polygon.size(); ++k)
+        least = std::min(least, distance_to_segment(mid, polygon[k], polygon[(k + 1) % polygon.size()]));
+      EXPECT_EQ(distances[i].first, least) << sides << " sides, edge " << i;
+      EXPECT_EQ(distance_to_segment(mid, polygon[nearest[i]], polygon[(nearest[i] + 1) % polygon.size()]), least) << sides << " sides, edge " << i;
+    }
+  }
 }
 
 // The moment rectangle of a rectangle is that rectangle.
