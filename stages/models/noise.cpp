@@ -73,7 +73,9 @@ double lattice_noise(const std::vector<Ring>& rings, const std::vector<std::vect
       for (const auto& [p, w] : middle) residuals.push_back({std::abs(normal.dot(p - mean)), w});
       if (arc_noise) {
         // The same middle fitted by a parabola across its line (in the run's length as unit, for
-        // the range): an arc's spread about the line goes, a wobble's of several half-waves stays.
+        // the range): an arc's spread about the line goes; a wobble's stays where the run spans
+        // several of its half-waves (on a run shorter than a wavelength, part of it goes too).
+        // Fewer than 8 points: the line's residuals (a parabola through 3 points leaves none).
         const Vec2 tangent(-normal.y(), normal.x());
         const double unit = std::max(length, 1e-9);
         Eigen::Matrix3d ata = Eigen::Matrix3d::Zero();
@@ -84,8 +86,8 @@ double lattice_noise(const std::vector<Ring>& rings, const std::vector<std::vect
           ata += w * row * row.transpose();
           atb += w * normal.dot(p - mean) * row;
         }
-        Eigen::Vector3d c = Eigen::Vector3d::Zero();  // too few points for a parabola: the line's
-        if (middle.size() >= 3) c = ata.ldlt().solve(atb);
+        Eigen::Vector3d c = Eigen::Vector3d::Zero();
+        if (middle.size() >= 8) c = ata.ldlt().solve(atb);
         if (!c.allFinite()) c.setZero();
         for (const auto& [p, w] : middle) {
           const double t = tangent.dot(p - mean) / unit;

@@ -81,9 +81,9 @@ std::vector<std::pair<double, double>> boundary_distances(const Ring& ring, cons
   // in a uniform grid over their bounding box (about four cells a segment, at most 512 a side):
   // each midpoint looks at the cells around its own, ring by ring, until a ring lies farther than
   // the nearest segment found. A few (an outline's) are all looked at, their boxes first.
-  const bool grid = segments.size() > 64;
   Vec2 low = segments[0].low, high = segments[0].high;
   for (const Segment& s : segments) low = low.cwiseMin(s.low), high = high.cwiseMax(s.high);
+  const bool grid = segments.size() > 64 && low.allFinite() && high.allFinite();
   const Vec2 extent = (high - low).cwiseMax(1e-9);
   const double cell = std::max({std::sqrt(extent.x() * extent.y() / (4.0 * double(segments.size()))), extent.x() / 512, extent.y() / 512});
   const long nx = std::max(1L, long(std::ceil(extent.x() / cell))), ny = std::max(1L, long(std::ceil(extent.y() / cell)));
@@ -113,13 +113,15 @@ std::vector<std::pair<double, double>> boundary_distances(const Ring& ring, cons
     const auto consider = [&](std::size_t k) {
       if (seen[k] == i) return;
       seen[k] = i;
-      // A segment whose box lies farther than the best so far cannot be nearer.
+      // A segment whose box lies farther than the best so far cannot be nearer. (The slack keeps
+      // every segment at the best distance: the square of a rounded distance may fall just short
+      // of the squared gap to a vertex it ties at, and the tie rule must see them all.)
       const Vec2 gap = (segments[k].low - mid).cwiseMax(mid - segments[k].high).cwiseMax(0.0);
-      if (gap.squaredNorm() > best * best) return;
+      if (gap.squaredNorm() > best * best * (1 + 1e-9)) return;
       const double d = distance_to_segment(mid, segments[k].a, segments[k].b);
       if (d < best || (d == best && nearest != previous && k < nearest)) best = d, nearest = k;
     };
-    if (!grid) {
+    if (!grid || !mid.allFinite()) {
       for (std::size_t k = 0; k < segments.size(); ++k) consider(k);
       distances.push_back({best, e.norm()});
       if (nearest_segments) nearest_segments->push_back(nearest);
@@ -127,8 +129,10 @@ std::vector<std::pair<double, double>> boundary_distances(const Ring& ring, cons
     }
     const long cx = long(std::floor((mid.x() - low.x()) / cell)), cy = long(std::floor((mid.y() - low.y()) / cell));
     const long last_ring = std::max({std::abs(cx), std::abs(cx - (nx - 1)), std::abs(cy), std::abs(cy - (ny - 1))});
-    // Ring r's cells lie at least (r - 1) cells from the midpoint's.
-    for (long r = 0; r <= last_ring && double(r - 1) * cell <= best; ++r)
+    // Ring r's cells lie at least (r - 1) cells from the midpoint's; rings short of the grid
+    // (a midpoint outside it) hold no cell.
+    const long first_ring = std::max({0L, -cx, cx - (nx - 1), -cy, cy - (ny - 1)});
+    for (long r = first_ring; r <= last_ring && double(r - 1) * cell <= best; ++r)
       for (long y = std::max(cy - r, 0L); y <= std::min(cy + r, ny - 1); ++y) {
         const auto visit = [&](long x) {
           for (std::size_t c = start[std::size_t(y * nx + x)]; c < start[std::size_t(y * nx + x) + 1]; ++c) consider(items[c]);
