@@ -77,21 +77,27 @@ double lattice_noise(const std::vector<Ring>& rings, const std::vector<std::vect
         // several of its half-waves (on a run shorter than a wavelength, part of it goes too).
         // Fewer than 8 points: the line's residuals (a parabola through 3 points leaves none).
         const Vec2 tangent(-normal.y(), normal.x());
-        const double unit = std::max(length, 1e-9);
-        Eigen::Matrix3d ata = Eigen::Matrix3d::Zero();
-        Eigen::Vector3d atb = Eigen::Vector3d::Zero();
+        std::vector<Eigen::Vector3d> rows;  // 1, t, t^2
+        std::vector<double> offsets;        // across the line
         for (const auto& [p, w] : middle) {
-          const double t = tangent.dot(p - mean) / unit;
-          const Eigen::Vector3d row(1.0, t, t * t);
-          ata += w * row * row.transpose();
-          atb += w * normal.dot(p - mean) * row;
+          const double t = tangent.dot(p - mean) / std::max(length, 1e-9);
+          rows.emplace_back(1.0, t, t * t);
+          offsets.push_back(normal.dot(p - mean));
         }
         Eigen::Vector3d c = Eigen::Vector3d::Zero();
-        if (middle.size() >= 8) c = ata.ldlt().solve(atb);
-        if (!c.allFinite()) c.setZero();
-        for (const auto& [p, w] : middle) {
-          const double t = tangent.dot(p - mean) / unit;
-          arc_residuals.push_back({std::abs(normal.dot(p - mean) - c[0] - c[1] * t - c[2] * t * t), w});
+        if (middle.size() >= 8) {
+          Eigen::Matrix3d ata = Eigen::Matrix3d::Zero();
+          Eigen::Vector3d atb = Eigen::Vector3d::Zero();
+          for (std::size_t k = 0; k < middle.size(); ++k) {
+            ata += middle[k].second * rows[k] * rows[k].transpose();
+            atb += middle[k].second * offsets[k] * rows[k];
+          }
+          c = ata.ldlt().solve(atb);
+          if (!c.allFinite()) c.setZero();
+        }
+        for (std::size_t k = 0; k < middle.size(); ++k) {
+          const double t = rows[k][1];
+          arc_residuals.push_back({std::abs(offsets[k] - c[0] - c[1] * t - c[2] * t * t), middle[k].second});
         }
       }
     }

@@ -49,7 +49,8 @@ Ring moment_rectangle(const Ring& ring, const Vec2& normal);
 
 // The distance of each of the ring's edge midpoints to the polygon's boundary, with the edge's
 // length: (distance, length), per edge; and, when asked, the nearest of the polygon's edges to
-// each (numbered along its outer ring, then along each hole; none for a polygon without edges).
+// each (numbered along its outer ring, then along each hole; none for a polygon without edges; of
+// edges at the same distance, the previous midpoint's nearest, else the first).
 std::vector<std::pair<double, double>> boundary_distances(const Ring& ring, const PolygonWithHoles& polygon,
                                                           std::vector<std::size_t>* nearest_segments = nullptr);
 
