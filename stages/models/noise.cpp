@@ -22,6 +22,35 @@ double inverse_erf(double y) {
   return 0.5 * (lo + hi);
 }
 
+// Each edge's axis among the four: the nearest to its smoothed normal; with a hysteresis, a run
+// keeps its axis until a normal turns more than 45 + hysteresis_deg degrees from it (walked from
+// the edge nearest to an axis).
+std::vector<int> axis_labels(const std::vector<Vec2>& normals, const Vec2 (&axes)[4], double hysteresis_deg) {
+  const std::size_t n = normals.size();
+  const auto nearest = [&](std::size_t i) {
+    int best = 0;
+    for (int a = 1; a < 4; ++a) if (normals[i].dot(axes[a]) > normals[i].dot(axes[best])) best = a;
+    return best;
+  };
+  std::vector<int> labels(n);
+  for (std::size_t i = 0; i < n; ++i) labels[i] = nearest(i);
+  if (hysteresis_deg <= 0 || n == 0) return labels;
+  const double keep = std::cos((45.0 + hysteresis_deg) * M_PI / 180.0);
+  std::size_t start = 0;
+  for (std::size_t i = 1; i < n; ++i)
+    if (normals[i].dot(axes[labels[i]]) > normals[start].dot(axes[labels[start]])) start = i;
+  int current = labels[start];
+  for (std::size_t k = 0; k < n; ++k) {
+    const std::size_t i = (start + k) % n;
+    if (normals[i].dot(axes[current]) < keep) current = nearest(i);
+    labels[i] = current;
+  }
+  return labels;
+}
+
+// A Gaussian's |x| has its quantile q at z((1 + q) / 2) standard deviations.
+double gaussian_abs_quantile(double q) { return std::sqrt(2.0) * inverse_erf(q); }
+
 }  // namespace
 
 double lattice_noise(const std::vector<Ring>& rings, const std::vector<std::vector<Vec2>>& normals, const Vec2& lattice,
@@ -32,12 +61,7 @@ double lattice_noise(const std::vector<Ring>& rings, const std::vector<std::vect
     const Ring& ring = rings[r];
     const std::size_t n = ring.size();
     if (n < 4) continue;
-    std::vector<int> labels(n);
-    for (std::size_t i = 0; i < n; ++i) {
-      int best = 0;
-      for (int a = 1; a < 4; ++a) if (normals[r][i].dot(axes[a]) > normals[r][i].dot(axes[best])) best = a;
-      labels[i] = best;
-    }
+    std::vector<int> labels = axis_labels(normals[r], axes, 0.0);
     absorb_short_runs(ring, labels, std::max(o.min_run_m, 2 * pixel_size));
     for (auto [first, count] : label_runs(labels)) {
       // The run's middle (ends trimmed, where corners are rounded), fitted by a line of its own
@@ -102,10 +126,112 @@ double lattice_noise(const std::vector<Ring>& rings, const std::vector<std::vect
       }
     }
   }
-  // A Gaussian's |x| has its quantile q at z((1 + q) / 2) standard deviations.
-  const double z = std::sqrt(2.0) * inverse_erf(o.quantile);
+  const double z = gaussian_abs_quantile(o.quantile);
   if (arc_noise) *arc_noise = weighted_quantile(std::move(arc_residuals), o.quantile) / z;
   return weighted_quantile(std::move(residuals), o.quantile) / z;
+}
+
+Vec2 fit_lattice(const std::vector<Ring>& rings, const std::vector<std::vector<Vec2>>& normals, const Vec2& start,
+                 double pixel_size, const LatticeOptions& lo, const NoiseOptions& no, double correlation_m,
+                 double* uncertainty, double* spread_out) {
+  if (uncertainty) *uncertainty = 0;
+  if (spread_out) *spread_out = 0;
+  const Vec2 axes[4] = {start, Vec2(-start.y(), start.x()), -start, Vec2(start.y(), -start.x())};
+  // Every run's middle (ends trimmed, where corners are rounded), turned by its axis's quarter
+  // turns onto the first axis: the edges' midpoints, weighted by their lengths, run by run.
+  struct Sample {
+    Vec2 q;
+    double w;
+    int run;
+  };
+  std::vector<Sample> samples;
+  int runs = 0;
+  for (std::size_t r = 0; r < rings.size(); ++r) {
+    const Ring& ring = rings[r];
+    const std::size_t n = ring.size();
+    if (n < 4) continue;
+    const std::vector<int> labels = axis_labels(normals[r], axes, lo.fit_hysteresis_deg);
+    for (auto [first, count] : label_runs(labels)) {
+      std::vector<double> position(count + 1, 0.0);
+      for (int k = 0; k < count; ++k) position[k + 1] = position[k] + edge_vector(ring, (first + k) % n).norm();
+      const double length = position[count], trim = std::min(no.trim_m, length / 4);
+      bool any = false;
+      for (int k = 0; k < count; ++k) {
+        if (position[k] < trim || position[k + 1] > length - trim) continue;
+        const std::size_t i = (first + k) % n;
+        const Vec2 e = edge_vector(ring, i);
+        Vec2 q = ring[i] + 0.5 * e - rings[0][0];
+        for (int t = 0; t < labels[first]; ++t) q = Vec2(q.y(), -q.x());  // a quarter turn back per axis
+        samples.push_back({q, e.norm(), runs});
+        any = true;
+      }
+      if (any) ++runs;
+    }
+  }
+  if (runs < 2) return start;
+  // One direction for every run, each run its own offset: the scatter about the runs' means.
+  // Samples farther from their run's line than fit_outlier_noise times the spread (an oblique
+  // wall absorbed into a run, a corner) leave the fit, which is made again.
+  std::vector<double> keep(samples.size(), 1.0);
+  std::vector<Vec2> mean;
+  const auto run_means = [&] {
+    mean.assign(runs, Vec2::Zero());
+    std::vector<double> total(runs, 0.0);
+    for (std::size_t k = 0; k < samples.size(); ++k) {
+      mean[samples[k].run] += keep[k] * samples[k].w * samples[k].q;
+      total[samples[k].run] += keep[k] * samples[k].w;
+    }
+    for (int j = 0; j < runs; ++j) if (total[j] > 0) mean[j] /= total[j];
+  };
+  Vec2 normal = start;
+  double spread = 0;
+  for (int pass = 0; pass < 3; ++pass) {
+    run_means();
+    Eigen::Matrix2d scatter = Eigen::Matrix2d::Zero();
+    for (std::size_t k = 0; k < samples.size(); ++k) {
+      const Vec2 d = samples[k].q - mean[samples[k].run];
+      scatter += keep[k] * samples[k].w * d * d.transpose();
+    }
+    Vec2 fitted = Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d>(scatter).eigenvectors().col(0);
+    if (!fitted.allFinite()) return start;
+    normal = fitted.dot(start) < 0 ? Vec2(-fitted) : fitted;
+    std::vector<std::pair<double, double>> residuals, kept;  // of every sample, of those in the fit
+    residuals.reserve(samples.size());
+    for (std::size_t k = 0; k < samples.size(); ++k) {
+      residuals.push_back({std::abs(normal.dot(samples[k].q - mean[samples[k].run])), samples[k].w});
+      if (keep[k] > 0) kept.push_back(residuals.back());
+    }
+    if (kept.empty()) return start;
+    spread = weighted_quantile(kept, no.quantile) / gaussian_abs_quantile(no.quantile);
+    const double bound = lo.fit_outlier_noise * std::max(spread, 0.5 * pixel_size);
+    // A run whose own RMS about its line exceeds the bound steps along its wall (row houses, a
+    // step of a few pixels the smoothed normals did not turn at): it leaves the fit whole.
+    std::vector<double> square(runs, 0.0), total(runs, 0.0);
+    for (std::size_t k = 0; k < samples.size(); ++k) {
+      square[samples[k].run] += samples[k].w * residuals[k].first * residuals[k].first;
+      total[samples[k].run] += samples[k].w;
+    }
+    std::vector<std::pair<double, double>> run_rms;  // RMS, length
+    for (int j = 0; j < runs; ++j) if (total[j] > 0) run_rms.push_back({std::sqrt(square[j] / total[j]), total[j]});
+    const double run_bound = lo.fit_outlier_noise * std::max(weighted_quantile(run_rms, 0.5), 0.3 * pixel_size);
+    for (std::size_t k = 0; k < samples.size(); ++k) {
+      const int j = samples[k].run;
+      keep[k] = residuals[k].first <= bound && square[j] <= run_bound * run_bound * total[j] ? 1.0 : 0.0;
+    }
+  }
+  if (std::acos(std::clamp(normal.dot(start), -1.0, 1.0)) * 180.0 / M_PI > lo.fit_max_turn_deg) return start;
+  if (spread_out) *spread_out = spread;
+  if (uncertainty) {
+    // A line's direction fitted over a length L of noise sigma correlated over c: its standard
+    // error is sigma sqrt(12 c / L^3) = sigma sqrt(c / sum of t^2), summed over every run.
+    run_means();
+    const Vec2 tangent(-normal.y(), normal.x());
+    double moment = 0;
+    for (std::size_t k = 0; k < samples.size(); ++k)
+      moment += keep[k] * samples[k].w * std::pow(tangent.dot(samples[k].q - mean[samples[k].run]), 2);
+    if (moment > 0) *uncertainty = spread * std::sqrt(std::max(correlation_m, pixel_size) / moment);
+  }
+  return normal;
 }
 
 }  // namespace lodforge

@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "common/option.hpp"
+#include "directions/lattice.hpp"
 #include "geometry/types.hpp"
 
 namespace lodforge {
@@ -36,5 +37,20 @@ struct NoiseOptions {
 // (a round building's contour, far from lattice lines, measures a "noise" of metres about them).
 double lattice_noise(const std::vector<Ring>& rings, const std::vector<std::vector<Vec2>>& normals, const Vec2& lattice,
                      double pixel_size, const NoiseOptions& options, double* arc_noise = nullptr);
+
+// The building's lattice fitted to its contour: the contour cut into runs along the axes of
+// `start` (a run keeps its axis until a smoothed normal turns lattice.fit_hysteresis_deg past 45
+// degrees from it: a wobble's flank does not cut a wall, a corner does), their middles (ends
+// trimmed by noise.trim_m) turned onto one axis, and one direction fitted to all of them, each
+// run with its own offset, by total least squares; samples farther than lattice.fit_outlier_noise
+// spreads from their run's line leave it. A wall's direction averages its wobble out over its
+// whole length, where a labeled direction follows a flank. Returns `start` when fewer than two runs
+// have a middle or the fit turns more than lattice.fit_max_turn_deg from it. *uncertainty, when
+// asked and fitted: the standard error of the fitted direction (radians), the spread taken as
+// correlated over correlation_m; *spread: the runs' spread about their lines (map units, read as
+// lattice_noise reads its distances, at noise.quantile), 0 when not fitted.
+Vec2 fit_lattice(const std::vector<Ring>& rings, const std::vector<std::vector<Vec2>>& normals, const Vec2& start,
+                 double pixel_size, const LatticeOptions& lattice, const NoiseOptions& noise, double correlation_m,
+                 double* uncertainty = nullptr, double* spread = nullptr);
 
 }  // namespace lodforge

@@ -426,6 +426,15 @@ void run_chain(const std::vector<Ring>& rings, double pixel_size, const CoreOpti
     follow_chords = chord.share_at(first_main, o.lattice.window_deg) < o.lattice.main_share_ratio * chord.share;
     if (follow_chords) noise = lattice_noise(rings, input.normals, chord.direction, pixel_size, o.noise, &arc_noise);
   }
+  // The lattice fitted to the contour's runs along it, from the chords' direction where they give
+  // one (under a wobble the labeled main direction follows a flank, degrees off the walls); and
+  // the spread of those runs about it, which a wobble's flanks do not cut short (below).
+  double fit_uncertainty = 0, fit_spread = 0;
+  const bool fit = o.lattice.fit_max_turn_deg > 0;
+  const Vec2 fitted_lattice =
+      fit ? fit_lattice(rings, input.normals, chord.share >= o.lattice.min_share ? chord.direction : first_main, pixel_size,
+                        o.lattice, o.noise, o.corners.snap_correlation_m, &fit_uncertainty, &fit_spread)
+          : first_main;
   const auto building_lattice = [&] {
     const Vec2 main = main_direction(labels, input.lengths, input.directions);
     return !follow_chords || angle_between_lattices_deg(main, chord.direction) <= o.lattice.max_gap_deg ? main : chord.direction;
@@ -483,6 +492,11 @@ void run_chain(const std::vector<Ring>& rings, double pixel_size, const CoreOpti
   // the plain outline's thresholds of a few pixels let it follow a wobble of a metre.)
   CornerContext context;
   if (on_lattice) context.lattice = building_lattice();
+  // The fitted lattice, unless the labeled one lies within its uncertainty (on a clean wall the
+  // labeled direction is exact).
+  if (on_lattice && fit &&
+      angle_between_lattices_deg(fitted_lattice, context.lattice) * M_PI / 180.0 > o.lattice.fit_keep_uncertainty * fit_uncertainty)
+    context.lattice = fitted_lattice;
   context.noise = noise;
   const double allowed = o.models.outline_tolerance * model_noise(result, pixel_size, o.models);
   PolygonWithHoles regular, plain;
@@ -524,7 +538,13 @@ void run_chain(const std::vector<Ring>& rings, double pixel_size, const CoreOpti
     bool regular_wins = !plain_problem.second.empty();
     if (!regular_wins && regular_problem.second.empty()) {
       const double regular_fit = contour_fit(rings, regular), plain_fit = contour_fit(rings, plain);
-      regular_wins = regular_fit <= plain_fit + allowed || regular_fit <= o.models.regular_fit_noise * model_noise(result, pixel_size, o.models);
+      // "Within the noise": the noise, or the spread of the runs along the fitted lattice where
+      // more (the noise's runs, cut where a wobble's flank turns past 45 degrees, are shorter than
+      // the walls at fine pixels, and their lines follow part of the wobble), bounded as the noise
+      // is by the spread about parabolas (an arc's spread is no noise).
+      const double within_noise = std::max(model_noise(result, pixel_size, o.models),
+                                           std::min(fit_spread, o.models.arc_noise_ratio * arc_noise));
+      regular_wins = regular_fit <= plain_fit + allowed || regular_fit <= o.models.regular_fit_noise * within_noise;
       chosen_fit = regular_wins ? regular_fit : plain_fit;
     }
     result.footprint = std::move(regular_wins ? regular : plain);
