@@ -5,6 +5,7 @@
 
 #include <cmath>
 #include <limits>
+#include <optional>
 
 #include "directions/lattice.hpp"
 #include "eval/metrics.hpp"
@@ -225,7 +226,7 @@ TEST(Lattice, FittedToTheWallsOfTheContour) {
     return normals;
   };
   const PolygonWithHoles truth = test::rotated(kL, 33.0);
-  double worst = 0, uncertainty_noisy = 0;
+  double worst = 0;
   for (const double pixel : {0.1, 0.25, 0.5}) {
     for (std::uint64_t seed = 1; seed <= 3; ++seed) {
       const test::RasterizedShape shape = test::rasterize_shape_m(truth, pixel, 1.0, 8.0, 2.0, seed);
@@ -233,16 +234,27 @@ TEST(Lattice, FittedToTheWallsOfTheContour) {
       const auto& rings = shape.buildings[0].rings;
       for (const double off : {-6.0, 6.0}) {
         double uncertainty = 0, spread = 0;
-        const Vec2 fitted = fit_lattice(rings, normals_of(rings, pixel), direction(33 + off), pixel, LatticeOptions{},
-                                        NoiseOptions{}, 1.0, &uncertainty, &spread);
-        worst = std::max(worst, angle_between_lattices_deg(fitted, direction(33)));
-        uncertainty_noisy = std::max(uncertainty_noisy, uncertainty);
+        const std::optional<Vec2> fitted = fit_lattice(rings, normals_of(rings, pixel), direction(33 + off), pixel,
+                                                       LatticeOptions{}, NoiseOptions{}, 1.0, &uncertainty, &spread);
+        ASSERT_TRUE(fitted) << pixel << " seed " << seed;
+        worst = std::max(worst, angle_between_lattices_deg(*fitted, direction(33)));
+        EXPECT_GT(uncertainty, 0.0) << pixel << " seed " << seed;
         EXPECT_GT(spread, 0.3) << pixel << " seed " << seed;  // an RMS of 0.71 m
       }
     }
   }
   EXPECT_LT(worst, 3.0);
-  EXPECT_GT(uncertainty_noisy, 0.0);
+  // No fit where it would turn farther than fit_max_turn_deg from its start (the labeled lattice stays).
+  {
+    const test::RasterizedShape clean = test::rasterize_shape_m(truth, 0.25, 0.0, 8.0, 0.0, 1);
+    ASSERT_EQ(clean.buildings.size(), 1u);
+    const auto& rings = clean.buildings[0].rings;
+    double uncertainty = -1, spread = -1;
+    EXPECT_FALSE(fit_lattice(rings, normals_of(rings, 0.25), direction(33 + 20), 0.25, LatticeOptions{}, NoiseOptions{}, 1.0,
+                             &uncertainty, &spread));
+    EXPECT_EQ(uncertainty, 0.0);
+    EXPECT_EQ(spread, 0.0);
+  }
   const PolygonWithHoles row{{{0, 0}, {10, 0}, {10, 8}, {8, 8}, {8, 9}, {4, 9}, {4, 8.5}, {0, 8.5}}, {}};  // steps of 0.5-1 m
   for (const auto& [shape, angle] : {std::pair{truth, 33.0}, std::pair{test::rotated(row, 12.0), 12.0}}) {
     for (const double pixel : {0.1, 0.25}) {
@@ -250,9 +262,10 @@ TEST(Lattice, FittedToTheWallsOfTheContour) {
       ASSERT_EQ(clean.buildings.size(), 1u);
       const auto& rings = clean.buildings[0].rings;
       double uncertainty = 0;
-      const Vec2 fitted = fit_lattice(rings, normals_of(rings, pixel), direction(angle + 3), pixel, LatticeOptions{},
-                                      NoiseOptions{}, 1.0, &uncertainty);
-      EXPECT_LT(angle_between_lattices_deg(fitted, direction(angle)), 0.1) << pixel;
+      const std::optional<Vec2> fitted = fit_lattice(rings, normals_of(rings, pixel), direction(angle + 3), pixel,
+                                                     LatticeOptions{}, NoiseOptions{}, 1.0, &uncertainty);
+      ASSERT_TRUE(fitted) << pixel;
+      EXPECT_LT(angle_between_lattices_deg(*fitted, direction(angle)), 0.1) << pixel;
       EXPECT_GT(uncertainty, 0.0) << pixel;
       EXPECT_LT(uncertainty / deg, 0.5) << pixel;
     }

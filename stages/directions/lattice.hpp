@@ -22,7 +22,7 @@ struct LatticeOptions {
   double fit_max_turn_deg = 10;    // the lattice fitted to the contour's runs, turned at most this far
   double fit_hysteresis_deg = 15;  // ... a run keeping its axis until a normal turns this past 45 degrees
   double fit_outlier_noise = 3;    // ... samples this many spreads off their run's line left out
-  double fit_keep_uncertainty = 2; // ... and the labeled main direction kept within this many standard errors of it
+  double fit_keep_uncertainty = 2; // ... and the labeled lattice kept within this many standard errors of it
 
   template <class V>
   void visit(V& v) {
@@ -32,11 +32,11 @@ struct LatticeOptions {
     v("window_deg", window_deg, "... and averaged within this of its peak (degrees)", Check::between(0.1, 45));
     v("min_share", min_share, "the chords give the building a lattice when at least this share of them (by length) lies within window_deg of its peak (chords of a round building spread evenly: 2 window_deg / 90)", Check::between(0, 1));
     v("max_gap_deg", max_gap_deg, "the labeled main direction (the direction with the most labeled contour) stays the lattice when within this of the chords' (degrees) ...", Check::between(0, 45));
-    v("fit_max_turn_deg", fit_max_turn_deg, "the lattice the outline's walls are held to is fitted to the contour: one direction for every run along its axes (from the chords' direction when they give one, else the labeled main direction), each run with its own offset, which averages a wobble out over whole walls; the fit is taken when it turns at most this far from where it started (degrees, 0 = off: the labeled or chords' direction)", Check::between(0, 45));
-    v("fit_hysteresis_deg", fit_hysteresis_deg, "... the contour cut into those runs where a smoothed normal turns this far past 45 degrees from its run's axis (a wobble's flank, up to 45 + this, does not cut a wall; a corner does) (degrees)", Check::between(0, 44));
-    v("fit_outlier_noise", fit_outlier_noise, "... samples farther than this many spreads (the noise of the runs about their lines) from their run's line left out of the fit (an oblique wall, a step)", Check::above(0));
-    v("fit_keep_uncertainty", fit_keep_uncertainty, "... and the labeled main direction kept where it lies within this many standard errors of the fit (the spread correlated over corners.snap_correlation_m): a clean wall's labeled direction is exact", Check::at_least(0));
     v("main_share_ratio", main_share_ratio, "... or when its own share of the chords (within window_deg) is at least this ratio of the chords' peak's; less, it follows a wobble's flank and the chords' direction is taken", Check::between(0, 1));
+    v("fit_max_turn_deg", fit_max_turn_deg, "the lattice the outline's walls are held to is fitted to the contour: one direction for every run along its axes (from the chords' direction when they give one, else the labeled main direction), each run with its own offset, which averages a wobble out over whole walls; the fit is taken when it turns at most this far from where it started (degrees; no fit, and the labeled lattice stays, when it turns farther, when fewer than two runs have a middle, or at 0 = off)", Check::between(0, 45));
+    v("fit_hysteresis_deg", fit_hysteresis_deg, "... the contour cut into those runs where a smoothed normal turns this far past 45 degrees from its run's axis (a wobble's flank, up to 45 + this, does not cut a wall; a corner does) (degrees)", Check::between(0, 44));
+    v("fit_outlier_noise", fit_outlier_noise, "... samples farther than this many spreads (the noise of the runs about their lines) from their run's line, and runs whose own RMS about it is over this many times the runs' median (a run stepping along row houses), left out of the fit", Check::above(0));
+    v("fit_keep_uncertainty", fit_keep_uncertainty, "... and the labeled lattice (the main direction, or the chords' above) kept where it lies within this many standard errors of the fit (the spread correlated over corners.snap_correlation_m): a clean wall's labeled direction is exact", Check::at_least(0));
   }
 };
 

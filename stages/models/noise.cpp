@@ -3,6 +3,7 @@
 #include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <cmath>
+#include <optional>
 
 #include "corners/corners.hpp"
 #include "labeling/mrf.hpp"
@@ -131,9 +132,9 @@ double lattice_noise(const std::vector<Ring>& rings, const std::vector<std::vect
   return weighted_quantile(std::move(residuals), o.quantile) / z;
 }
 
-Vec2 fit_lattice(const std::vector<Ring>& rings, const std::vector<std::vector<Vec2>>& normals, const Vec2& start,
-                 double pixel_size, const LatticeOptions& lo, const NoiseOptions& no, double correlation_m,
-                 double* uncertainty, double* spread_out) {
+std::optional<Vec2> fit_lattice(const std::vector<Ring>& rings, const std::vector<std::vector<Vec2>>& normals,
+                                const Vec2& start, double pixel_size, const LatticeOptions& lo, const NoiseOptions& no,
+                                double correlation_m, double* uncertainty, double* spread_out) {
   if (uncertainty) *uncertainty = 0;
   if (spread_out) *spread_out = 0;
   const Vec2 axes[4] = {start, Vec2(-start.y(), start.x()), -start, Vec2(start.y(), -start.x())};
@@ -168,20 +169,27 @@ Vec2 fit_lattice(const std::vector<Ring>& rings, const std::vector<std::vector<V
       if (any) ++runs;
     }
   }
-  if (runs < 2) return start;
+  if (runs < 2 || samples.size() < std::size_t(runs) + 3) return std::nullopt;  // a line per run needs points to spare
   // One direction for every run, each run its own offset: the scatter about the runs' means.
   // Samples farther from their run's line than fit_outlier_noise times the spread (an oblique
   // wall absorbed into a run, a corner) leave the fit, which is made again.
   std::vector<double> keep(samples.size(), 1.0);
   std::vector<Vec2> mean;
+  // (A run left out whole keeps the mean of all its samples, about which its residuals stay its own.)
   const auto run_means = [&] {
     mean.assign(runs, Vec2::Zero());
-    std::vector<double> total(runs, 0.0);
+    std::vector<Vec2> all(runs, Vec2::Zero());
+    std::vector<double> total(runs, 0.0), all_total(runs, 0.0);
     for (std::size_t k = 0; k < samples.size(); ++k) {
       mean[samples[k].run] += keep[k] * samples[k].w * samples[k].q;
       total[samples[k].run] += keep[k] * samples[k].w;
+      all[samples[k].run] += samples[k].w * samples[k].q;
+      all_total[samples[k].run] += samples[k].w;
     }
-    for (int j = 0; j < runs; ++j) if (total[j] > 0) mean[j] /= total[j];
+    for (int j = 0; j < runs; ++j) {
+      if (total[j] > 0) mean[j] /= total[j];
+      else if (all_total[j] > 0) mean[j] = all[j] / all_total[j];
+    }
   };
   Vec2 normal = start;
   double spread = 0;
@@ -193,7 +201,7 @@ Vec2 fit_lattice(const std::vector<Ring>& rings, const std::vector<std::vector<V
       scatter += keep[k] * samples[k].w * d * d.transpose();
     }
     Vec2 fitted = Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d>(scatter).eigenvectors().col(0);
-    if (!fitted.allFinite()) return start;
+    if (!fitted.allFinite()) return std::nullopt;
     normal = fitted.dot(start) < 0 ? Vec2(-fitted) : fitted;
     std::vector<std::pair<double, double>> residuals, kept;  // of every sample, of those in the fit
     residuals.reserve(samples.size());
@@ -201,7 +209,7 @@ Vec2 fit_lattice(const std::vector<Ring>& rings, const std::vector<std::vector<V
       residuals.push_back({std::abs(normal.dot(samples[k].q - mean[samples[k].run])), samples[k].w});
       if (keep[k] > 0) kept.push_back(residuals.back());
     }
-    if (kept.empty()) return start;
+    if (kept.empty()) return std::nullopt;
     spread = weighted_quantile(kept, no.quantile) / gaussian_abs_quantile(no.quantile);
     const double bound = lo.fit_outlier_noise * std::max(spread, 0.5 * pixel_size);
     // A run whose own RMS about its line exceeds the bound steps along its wall (row houses, a
@@ -214,12 +222,13 @@ Vec2 fit_lattice(const std::vector<Ring>& rings, const std::vector<std::vector<V
     std::vector<std::pair<double, double>> run_rms;  // RMS, length
     for (int j = 0; j < runs; ++j) if (total[j] > 0) run_rms.push_back({std::sqrt(square[j] / total[j]), total[j]});
     const double run_bound = lo.fit_outlier_noise * std::max(weighted_quantile(run_rms, 0.5), 0.3 * pixel_size);
+    if (pass == 2) break;  // the last fit's samples are those its spread and uncertainty describe
     for (std::size_t k = 0; k < samples.size(); ++k) {
       const int j = samples[k].run;
       keep[k] = residuals[k].first <= bound && square[j] <= run_bound * run_bound * total[j] ? 1.0 : 0.0;
     }
   }
-  if (std::acos(std::clamp(normal.dot(start), -1.0, 1.0)) * 180.0 / M_PI > lo.fit_max_turn_deg) return start;
+  if (std::acos(std::clamp(normal.dot(start), -1.0, 1.0)) * 180.0 / M_PI > lo.fit_max_turn_deg) return std::nullopt;
   if (spread_out) *spread_out = spread;
   if (uncertainty) {
     // A line's direction fitted over a length L of noise sigma correlated over c: its standard

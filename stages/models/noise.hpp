@@ -6,6 +6,7 @@
 // held near the lattice cannot tilt to follow it; oblique walls, arcs and corners, which a lattice
 // line does not fit, are left out by taking a low quantile of the distances.
 #pragma once
+#include <optional>
 #include <vector>
 
 #include "common/option.hpp"
@@ -42,15 +43,18 @@ double lattice_noise(const std::vector<Ring>& rings, const std::vector<std::vect
 // `start` (a run keeps its axis until a smoothed normal turns lattice.fit_hysteresis_deg past 45
 // degrees from it: a wobble's flank does not cut a wall, a corner does), their middles (ends
 // trimmed by noise.trim_m) turned onto one axis, and one direction fitted to all of them, each
-// run with its own offset, by total least squares; samples farther than lattice.fit_outlier_noise
-// spreads from their run's line leave it. A wall's direction averages its wobble out over its
-// whole length, where a labeled direction follows a flank. Returns `start` when fewer than two runs
-// have a middle or the fit turns more than lattice.fit_max_turn_deg from it. *uncertainty, when
-// asked and fitted: the standard error of the fitted direction (radians), the spread taken as
-// correlated over correlation_m; *spread: the runs' spread about their lines (map units, read as
-// lattice_noise reads its distances, at noise.quantile), 0 when not fitted.
-Vec2 fit_lattice(const std::vector<Ring>& rings, const std::vector<std::vector<Vec2>>& normals, const Vec2& start,
-                 double pixel_size, const LatticeOptions& lattice, const NoiseOptions& noise, double correlation_m,
-                 double* uncertainty = nullptr, double* spread = nullptr);
+// run with its own offset, by total least squares, three times: samples farther than
+// lattice.fit_outlier_noise spreads from their run's line, and runs whose own RMS about it is
+// over lattice.fit_outlier_noise times the runs' median (a run stepping along row houses), leave
+// the fit. A wall's direction averages its wobble out over its whole length, where a labeled
+// direction follows a flank. No fit (nullopt) when fewer than two runs have a middle, the runs
+// leave fewer than 3 points to spare, or the fit turns more than lattice.fit_max_turn_deg from
+// `start`. When fitted: *uncertainty, the standard error of its direction (radians), the spread
+// taken as correlated over correlation_m; *spread, the runs' spread about their lines (map
+// units, read as lattice_noise reads its distances, at noise.quantile); both 0 otherwise.
+std::optional<Vec2> fit_lattice(const std::vector<Ring>& rings, const std::vector<std::vector<Vec2>>& normals,
+                                const Vec2& start, double pixel_size, const LatticeOptions& lattice,
+                                const NoiseOptions& noise, double correlation_m, double* uncertainty = nullptr,
+                                double* spread = nullptr);
 
 }  // namespace lodforge

@@ -1,6 +1,7 @@
 #include "pipeline/building.hpp"
 
 #include <algorithm>
+#include <optional>
 #include <chrono>
 #include <cmath>
 #include <stdexcept>
@@ -430,11 +431,11 @@ void run_chain(const std::vector<Ring>& rings, double pixel_size, const CoreOpti
   // one (under a wobble the labeled main direction follows a flank, degrees off the walls); and
   // the spread of those runs about it, which a wobble's flanks do not cut short (below).
   double fit_uncertainty = 0, fit_spread = 0;
-  const bool fit = o.lattice.fit_max_turn_deg > 0;
-  const Vec2 fitted_lattice =
-      fit ? fit_lattice(rings, input.normals, chord.share >= o.lattice.min_share ? chord.direction : first_main, pixel_size,
+  const std::optional<Vec2> fitted_lattice =
+      o.lattice.fit_max_turn_deg > 0
+          ? fit_lattice(rings, input.normals, chord.share >= o.lattice.min_share ? chord.direction : first_main, pixel_size,
                         o.lattice, o.noise, o.corners.snap_correlation_m, &fit_uncertainty, &fit_spread)
-          : first_main;
+          : std::nullopt;
   const auto building_lattice = [&] {
     const Vec2 main = main_direction(labels, input.lengths, input.directions);
     return !follow_chords || angle_between_lattices_deg(main, chord.direction) <= o.lattice.max_gap_deg ? main : chord.direction;
@@ -492,11 +493,11 @@ void run_chain(const std::vector<Ring>& rings, double pixel_size, const CoreOpti
   // the plain outline's thresholds of a few pixels let it follow a wobble of a metre.)
   CornerContext context;
   if (on_lattice) context.lattice = building_lattice();
-  // The fitted lattice, unless the labeled one lies within its uncertainty (on a clean wall the
-  // labeled direction is exact).
-  if (on_lattice && fit &&
-      angle_between_lattices_deg(fitted_lattice, context.lattice) * M_PI / 180.0 > o.lattice.fit_keep_uncertainty * fit_uncertainty)
-    context.lattice = fitted_lattice;
+  // The fitted lattice, unless the labeled one (main direction or chords') lies within its
+  // uncertainty: on a clean wall the labeled direction is exact.
+  if (on_lattice && fitted_lattice &&
+      angle_between_lattices_deg(*fitted_lattice, context.lattice) * M_PI / 180.0 > o.lattice.fit_keep_uncertainty * fit_uncertainty)
+    context.lattice = *fitted_lattice;
   context.noise = noise;
   const double allowed = o.models.outline_tolerance * model_noise(result, pixel_size, o.models);
   PolygonWithHoles regular, plain;
@@ -542,8 +543,9 @@ void run_chain(const std::vector<Ring>& rings, double pixel_size, const CoreOpti
       // more (the noise's runs, cut where a wobble's flank turns past 45 degrees, are shorter than
       // the walls at fine pixels, and their lines follow part of the wobble), bounded as the noise
       // is by the spread about parabolas (an arc's spread is no noise).
-      const double within_noise = std::max(model_noise(result, pixel_size, o.models),
-                                           std::min(fit_spread, o.models.arc_noise_ratio * arc_noise));
+      const double within_noise =
+          std::max(model_noise(result, pixel_size, o.models),
+                   o.models.arc_noise_ratio > 0 ? std::min(fit_spread, o.models.arc_noise_ratio * arc_noise) : fit_spread);
       regular_wins = regular_fit <= plain_fit + allowed || regular_fit <= o.models.regular_fit_noise * within_noise;
       chosen_fit = regular_wins ? regular_fit : plain_fit;
     }
