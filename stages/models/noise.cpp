@@ -4,6 +4,8 @@
 #include <algorithm>
 #include <cmath>
 #include <optional>
+#include <tuple>
+#include <utility>
 
 #include "corners/corners.hpp"
 #include "labeling/mrf.hpp"
@@ -52,6 +54,26 @@ std::vector<int> axis_labels(const std::vector<Vec2>& normals, const Vec2 (&axes
 // A Gaussian's |x| has its quantile q at z((1 + q) / 2) standard deviations.
 double gaussian_abs_quantile(double q) { return std::sqrt(2.0) * inverse_erf(q); }
 
+// A run's middle: the midpoints (minus origin) and lengths of its edges farther than
+// min(trim_m, a quarter of its length) along it from either end, where corners are rounded.
+// *run_length, when asked: the whole run's length.
+std::vector<std::pair<Vec2, double>> run_middle(const Ring& ring, int first, int count, double trim_m, const Vec2& origin,
+                                                double* run_length = nullptr) {
+  const std::size_t n = ring.size();
+  std::vector<double> position(count + 1, 0.0);
+  for (int k = 0; k < count; ++k) position[k + 1] = position[k] + edge_vector(ring, (first + k) % n).norm();
+  const double length = position[count], trim = std::min(trim_m, length / 4);
+  if (run_length) *run_length = length;
+  std::vector<std::pair<Vec2, double>> middle;
+  for (int k = 0; k < count; ++k) {
+    if (position[k] < trim || position[k + 1] > length - trim) continue;
+    const std::size_t i = (first + k) % n;
+    const Vec2 e = edge_vector(ring, i);
+    middle.push_back({ring[i] + 0.5 * e - origin, e.norm()});
+  }
+  return middle;
+}
+
 }  // namespace
 
 double lattice_noise(const std::vector<Ring>& rings, const std::vector<std::vector<Vec2>>& normals, const Vec2& lattice,
@@ -68,19 +90,13 @@ double lattice_noise(const std::vector<Ring>& rings, const std::vector<std::vect
       // The run's middle (ends trimmed, where corners are rounded), fitted by a line of its own
       // direction held within max_tilt_deg of the lattice: a wall a little off the lattice is
       // still fitted, a wobble's flanks are not.
-      std::vector<double> position(count + 1, 0.0);
-      for (int k = 0; k < count; ++k) position[k + 1] = position[k] + edge_vector(ring, (first + k) % n).norm();
-      const double length = position[count], trim = std::min(o.trim_m, length / 4);
-      std::vector<std::pair<Vec2, double>> middle;  // midpoint, weight
+      double length = 0;
+      const std::vector<std::pair<Vec2, double>> middle = run_middle(ring, first, count, o.trim_m, ring[first], &length);  // midpoint, weight
       Vec2 mean = Vec2::Zero();
       double total = 0;
-      for (int k = 0; k < count; ++k) {
-        if (position[k] < trim || position[k + 1] > length - trim) continue;
-        const std::size_t i = (first + k) % n;
-        const Vec2 e = edge_vector(ring, i);
-        middle.push_back({ring[i] + 0.5 * e - ring[first], e.norm()});
-        mean += e.norm() * middle.back().first;
-        total += e.norm();
+      for (const auto& [p, w] : middle) {
+        mean += w * p;
+        total += w;
       }
       if (middle.size() < 2 || total <= 0) continue;
       mean /= total;
@@ -153,20 +169,12 @@ std::optional<Vec2> fit_lattice(const std::vector<Ring>& rings, const std::vecto
     if (n < 4) continue;
     const std::vector<int> labels = axis_labels(normals[r], axes, lo.fit_hysteresis_deg);
     for (auto [first, count] : label_runs(labels)) {
-      std::vector<double> position(count + 1, 0.0);
-      for (int k = 0; k < count; ++k) position[k + 1] = position[k] + edge_vector(ring, (first + k) % n).norm();
-      const double length = position[count], trim = std::min(no.trim_m, length / 4);
-      bool any = false;
-      for (int k = 0; k < count; ++k) {
-        if (position[k] < trim || position[k + 1] > length - trim) continue;
-        const std::size_t i = (first + k) % n;
-        const Vec2 e = edge_vector(ring, i);
-        Vec2 q = ring[i] + 0.5 * e - rings[0][0];
+      const std::vector<std::pair<Vec2, double>> middle = run_middle(ring, first, count, no.trim_m, rings[0][0]);
+      for (auto [q, w] : middle) {
         for (int t = 0; t < labels[first]; ++t) q = Vec2(q.y(), -q.x());  // a quarter turn back per axis
-        samples.push_back({q, e.norm(), runs});
-        any = true;
+        samples.push_back({q, w, runs});
       }
-      if (any) ++runs;
+      if (!middle.empty()) ++runs;
     }
   }
   if (runs < 2 || samples.size() < std::size_t(runs) + 3) return std::nullopt;  // a line per run needs points to spare
@@ -174,27 +182,29 @@ std::optional<Vec2> fit_lattice(const std::vector<Ring>& rings, const std::vecto
   // Samples farther from their run's line than fit_outlier_noise times the spread (an oblique
   // wall absorbed into a run, a corner) leave the fit, which is made again.
   std::vector<double> keep(samples.size(), 1.0);
-  std::vector<Vec2> mean;
-  // (A run left out whole keeps the mean of all its samples, about which its residuals stay its own.)
+  // Each run's mean over its samples in the fit; a run left out whole keeps the mean of all its
+  // samples, about which its residuals stay its own.
   const auto run_means = [&] {
-    mean.assign(runs, Vec2::Zero());
-    std::vector<Vec2> all(runs, Vec2::Zero());
-    std::vector<double> total(runs, 0.0), all_total(runs, 0.0);
+    std::vector<Vec2> mean(runs, Vec2::Zero());
+    std::vector<double> total(runs, 0.0);
     for (std::size_t k = 0; k < samples.size(); ++k) {
       mean[samples[k].run] += keep[k] * samples[k].w * samples[k].q;
       total[samples[k].run] += keep[k] * samples[k].w;
-      all[samples[k].run] += samples[k].w * samples[k].q;
-      all_total[samples[k].run] += samples[k].w;
     }
-    for (int j = 0; j < runs; ++j) {
-      if (total[j] > 0) mean[j] /= total[j];
-      else if (all_total[j] > 0) mean[j] = all[j] / all_total[j];
-    }
+    for (int j = 0; j < runs; ++j) if (total[j] > 0) mean[j] /= total[j];
+    return std::make_pair(mean, total);
+  };
+  const std::vector<Vec2> all_means = run_means().first;  // every sample in
+  std::vector<Vec2> mean;
+  const auto update_means = [&] {
+    std::vector<double> total;
+    std::tie(mean, total) = run_means();
+    for (int j = 0; j < runs; ++j) if (total[j] <= 0) mean[j] = all_means[j];
   };
   Vec2 normal = start;
   double spread = 0;
   for (int pass = 0; pass < 3; ++pass) {
-    run_means();
+    update_means();
     Eigen::Matrix2d scatter = Eigen::Matrix2d::Zero();
     for (std::size_t k = 0; k < samples.size(); ++k) {
       const Vec2 d = samples[k].q - mean[samples[k].run];
@@ -210,7 +220,8 @@ std::optional<Vec2> fit_lattice(const std::vector<Ring>& rings, const std::vecto
       if (keep[k] > 0) kept.push_back(residuals.back());
     }
     if (kept.empty()) return std::nullopt;
-    spread = weighted_quantile(kept, no.quantile) / gaussian_abs_quantile(no.quantile);
+    spread = weighted_quantile(std::move(kept), no.quantile) / gaussian_abs_quantile(no.quantile);
+    if (pass == 2) break;  // the last fit's samples are those its spread and uncertainty describe
     const double bound = lo.fit_outlier_noise * std::max(spread, 0.5 * pixel_size);
     // A run whose own RMS about its line exceeds the bound steps along its wall (row houses, a
     // step of a few pixels the smoothed normals did not turn at): it leaves the fit whole.
@@ -221,8 +232,7 @@ std::optional<Vec2> fit_lattice(const std::vector<Ring>& rings, const std::vecto
     }
     std::vector<std::pair<double, double>> run_rms;  // RMS, length
     for (int j = 0; j < runs; ++j) if (total[j] > 0) run_rms.push_back({std::sqrt(square[j] / total[j]), total[j]});
-    const double run_bound = lo.fit_outlier_noise * std::max(weighted_quantile(run_rms, 0.5), 0.3 * pixel_size);
-    if (pass == 2) break;  // the last fit's samples are those its spread and uncertainty describe
+    const double run_bound = lo.fit_outlier_noise * std::max(weighted_quantile(std::move(run_rms), 0.5), 0.3 * pixel_size);
     for (std::size_t k = 0; k < samples.size(); ++k) {
       const int j = samples[k].run;
       keep[k] = residuals[k].first <= bound && square[j] <= run_bound * run_bound * total[j] ? 1.0 : 0.0;
@@ -233,11 +243,12 @@ std::optional<Vec2> fit_lattice(const std::vector<Ring>& rings, const std::vecto
   if (uncertainty) {
     // A line's direction fitted over a length L of noise sigma correlated over c: its standard
     // error is sigma sqrt(12 c / L^3) = sigma sqrt(c / sum of t^2), summed over every run.
-    run_means();
     const Vec2 tangent(-normal.y(), normal.x());
     double moment = 0;
-    for (std::size_t k = 0; k < samples.size(); ++k)
-      moment += keep[k] * samples[k].w * std::pow(tangent.dot(samples[k].q - mean[samples[k].run]), 2);
+    for (std::size_t k = 0; k < samples.size(); ++k) {
+      const double t = tangent.dot(samples[k].q - mean[samples[k].run]);
+      moment += keep[k] * samples[k].w * t * t;
+    }
     if (moment > 0) *uncertainty = spread * std::sqrt(std::max(correlation_m, pixel_size) / moment);
   }
   return normal;

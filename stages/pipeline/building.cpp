@@ -1,9 +1,9 @@
 #include "pipeline/building.hpp"
 
 #include <algorithm>
-#include <optional>
 #include <chrono>
 #include <cmath>
+#include <optional>
 #include <stdexcept>
 
 #include "corners/corners.hpp"
