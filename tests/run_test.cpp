@@ -273,6 +273,27 @@ TEST_F(SynthRun, RerunResumesAndAStageOptionRecomputesOnlyWhatDependsOnIt) {
   EXPECT_EQ(report.at("checkpoints_reused"), nlohmann::json({{"contours", 16}, {"buildings", 0}})) << report;
 }
 
+// The boundary noise every building allows for is pooled over a survey of the raster, not over
+// its tile: the same for every tiling. Surveyed in one window, the whole raster, it is the noise
+// `regularize` pools over the same buildings.
+TEST_F(SynthRun, TheNoiseFloorIsTheRastersWhateverTheTiling) {
+  ASSERT_EQ(lodforge("run " + job("t60", seg, 60).string()).code, 0);
+  ASSERT_EQ(lodforge("run " + job("t100", seg, 100).string()).code, 0);
+  const double floor60 = report_of(dir / "t60_out" / "report.json").at("noise_floor_m").get<double>();
+  EXPECT_GT(floor60, 0.0);
+  EXPECT_LT(floor60, 1.0);
+  EXPECT_EQ(floor60, report_of(dir / "t100_out" / "report.json").at("noise_floor_m").get<double>());
+  ASSERT_EQ(lodforge("run " + job("whole", seg, 100, "").string() + " --set tiling.noise_survey_window_m=400").code, 0);
+  const Result r = lodforge("regularize --mask " + seg + " --out " + (dir / "r.gpkg").string() + " --stats " + (dir / "r.json").string());
+  ASSERT_EQ(r.code, 0) << r.output;
+  const nlohmann::json stats = report_of(dir / "r.json");
+  EXPECT_GT(stats.at("noise_samples").get<int>(), 20) << stats;
+  EXPECT_DOUBLE_EQ(report_of(dir / "whole_out" / "report.json").at("noise_floor_m").get<double>(), stats.at("noise_floor_m").get<double>());
+  // Off: each building its own noise.
+  ASSERT_EQ(lodforge("run " + job("off", seg, 100).string() + " --set tiling.noise_survey_windows=0").code, 0);
+  EXPECT_EQ(report_of(dir / "off_out" / "report.json").at("noise_floor_m").get<double>(), 0.0);
+}
+
 TEST_F(SynthRun, ShardsTogetherGiveTheSingleRunOutputs) {
   ASSERT_EQ(lodforge("run " + job("single", seg, 60).string()).code, 0);
   const fs::path sharded = job("sharded", seg, 60);

@@ -8,7 +8,6 @@
 #include <nlohmann/json.hpp>
 #include <spdlog/spdlog.h>
 #include <tbb/global_control.h>
-#include <tbb/parallel_for.h>
 
 #include "cli/args.hpp"
 #include "commands/commands.hpp"
@@ -18,6 +17,7 @@
 #include "io/footprint_writer.hpp"
 #include "io/raster.hpp"
 #include "pipeline/building.hpp"
+#include "run/batch.hpp"
 
 namespace lodforge {
 
@@ -108,15 +108,17 @@ int run_regularize(int argc, char** argv) {
                      " m^2 (" + std::to_string(contours.dropped_small) + " smaller components dropped)");
   spdlog::info("{} buildings, {} components below {} m^2 dropped", count, contours.dropped_small, options.contour.min_area_m2);
 
-  std::vector<BuildingResult> results(count);
   std::atomic<std::size_t> done{0};
   std::unique_ptr<tbb::global_control> limit;
   if (threads > 0) limit = std::make_unique<tbb::global_control>(tbb::global_control::max_allowed_parallelism, threads);
-  tbb::parallel_for(std::size_t(0), count, [&](std::size_t i) {
-    results[i] = regularize_with(regularizer, contours.buildings[i].rings, pixel_size, options.core);
+  const RegularizedBatch batch = regularize_batch(regularizer, contours.buildings, pixel_size, options.core, std::nullopt, [&] {
     const std::size_t n = ++done;
     if (count >= 20 && n % (count / 10) == 0) spdlog::info("{}/{} buildings", n, count);
   });
+  if (batch.noise_samples > 0)
+    spdlog::info("boundary noise pooled over {} buildings: {:.3f} m (noise.pooled_floor = {})", batch.noise_samples,
+                 batch.noise_floor_m, options.core.noise.pooled_floor);
+  const std::vector<BuildingResult>& results = batch.results;
 
   std::vector<FootprintRecord> records(count);
   std::map<std::string, int> failures;
@@ -176,6 +178,8 @@ int run_regularize(int argc, char** argv) {
     out["ok"] = count - failed;
     out["fallback"] = failed;
     out["original_route"] = rerouted;
+    out["noise_floor_m"] = batch.noise_floor_m;
+    out["noise_samples"] = batch.noise_samples;
     out["seconds_total"] = total;
     times(all, out);
     for (const SizeClass& c : classes) {

@@ -13,6 +13,7 @@
 #include <set>
 #include <sstream>
 #include <sys/stat.h>
+#include <cstdio>
 #include <tbb/global_control.h>
 #include <tbb/info.h>
 #include <tbb/parallel_for.h>
@@ -36,6 +37,7 @@
 #include "job/job.hpp"
 #include "pipeline/building.hpp"
 #include "run/checkpoint.hpp"
+#include "run/batch.hpp"
 #include "run/progress.hpp"
 #include "run/run_report.hpp"
 #include "run/tile_worker.hpp"
@@ -217,6 +219,20 @@ int run_job(int argc, char** argv) {
                job.inputs.segmentation.path, seg.size.width, seg.size.height, pixel, grid.count(), job.tiling.tile_size_m,
                tiles.size(), shard.index, shard.count, job.threads ? job.threads : tbb::info::default_concurrency());
 
+  std::unique_ptr<tbb::global_control> limit;
+  if (job.threads > 0) limit = std::make_unique<tbb::global_control>(tbb::global_control::max_allowed_parallelism, job.threads);
+  // The boundary noise every building allows for, pooled over a survey of the raster (not per
+  // tile: the same for every tiling and shard).
+  NoiseSurvey survey;
+  if (job.regularizer == "deformation" && job.stages.core.noise.pooled_floor > 0 && job.tiling.noise_survey_windows > 0) {
+    const auto surveying = Clock::now();
+    survey = survey_noise(MaskWindowReader(job.inputs.segmentation.path, selector), seg.size, seg.transform, job.stages.contour,
+                          job.stages.core, std::max(1, int(std::lround(job.tiling.noise_survey_window_m / pixel))),
+                          job.tiling.noise_survey_windows);
+    spdlog::info("boundary noise pooled over {} buildings in {} window(s) of {} m: {:.3f} m ({:.1f} s)", survey.buildings, survey.windows,
+                 job.tiling.noise_survey_window_m, survey.floor_m, seconds_since(surveying));
+  }
+
   // Keys: everything an output depends on.
   Job key_job = job;
   key_job.threads = 0;
@@ -230,7 +246,9 @@ int run_job(int argc, char** argv) {
   const std::string heights_options = options_text(key_job.stages.heights) + file_identity(job.inputs.dsm.path) + file_identity(job.inputs.dtm.path) +
                                       (cadastre ? options_text(key_job.stages.footprints) : "") + options_text(key_job.stages.parts);
   // Building ids are first-pixel indices, so the footprints also depend on the raster's width.
-  const std::string core_options = job.regularizer + "\n" + options_text(key_job.stages.core) + "\nwidth " + std::to_string(seg.size.width);
+  char floor_text[40];
+  std::snprintf(floor_text, sizeof floor_text, "\nnoise floor %.17g", survey.floor_m);
+  const std::string core_options = job.regularizer + "\n" + options_text(key_job.stages.core) + "\nwidth " + std::to_string(seg.size.width) + floor_text;
   const std::uint64_t job_key = fnv1a(gpkg_time + "\n" + file_identity(job.inputs.segmentation.path) + "\n" + file_identity(job.inputs.dsm.path) + "\n" +
                                       file_identity(job.inputs.dtm.path) + "\n" + file_identity(job.inputs.orthophoto.path) + "\n" + options_text(key_job) + cadastre_text + "\n" +
                                       std::to_string(grid.tile_px) + "/" + std::to_string(halo_px) + "/" + std::to_string(max_window_px));
@@ -291,7 +309,7 @@ int run_job(int argc, char** argv) {
   });
   const RunPlan plan{job, seg.size, seg.transform, *input_crs, pixel, grid, halo_px, max_window_px, selector,
                      dsm_source, dtm_source, ortho_source, store, contour_options, core_options, heights_options,
-                     transform_text, job_key, out_dir, &readers, &indexed_outputs, cadastre.get()};
+                     transform_text, job_key, out_dir, &readers, &indexed_outputs, cadastre.get(), survey.floor_m};
 
   // At most `tokens` tiles in flight: one per thread and one more, so that a thread finds the next
   // tile while the oldest waits to be recorded in order (each in flight holds its windows: more
@@ -303,8 +321,6 @@ int run_job(int argc, char** argv) {
   for (int t : tiles) read_areas.push_back(tile_read_area(plan, t));
   readers.plan_reads(tiles, read_areas, std::size_t(band_cols) + tokens);
 
-  std::unique_ptr<tbb::global_control> limit;
-  if (job.threads > 0) limit = std::make_unique<tbb::global_control>(tbb::global_control::max_allowed_parallelism, job.threads);
   Totals totals;
   Progress progress(tiles.size(), progress_mode == "none" ? Progress::Mode::none
                                   : progress_mode == "bar" || (progress_mode == "auto" && isatty(STDERR_FILENO)) ? Progress::Mode::bar

@@ -61,12 +61,16 @@ struct TilingOptions {
   double halo_m = 20;           // read around a tile; grown until every building it owns is whole
   double max_window_m = 4000;   // a building larger than this is reported, not processed
   int gdal_cache_mb = 64;       // GDAL's raster block cache; with the tiles in flight, bounds memory
+  int noise_survey_windows = 16;       // windows read before the tiles to pool the boundary noise over
+  double noise_survey_window_m = 250;  // ... of this side
 
   template <class V>
   void visit(V& v) {
     v("tile_size_m", tile_size_m, "side of a square tile (m)", Check::above(0));
     v("halo_m", halo_m, "margin around a tile (m): its first window reaches two, and grows to a building's box plus one until every building it owns is whole", Check::at_least(0));
     v("max_window_m", max_window_m, "largest window read for one tile (m); a building that does not fit is reported as failed", Check::above(0));
+    v("noise_survey_windows", noise_survey_windows, "windows of the segmentation read before the tiles, spread evenly over it, whose whole buildings' boundary noise is pooled (stages.noise.pooled_floor) into the floor every building allows for: the same for every tiling and shard (0 = none: each building its own noise)", Check::at_least(0));
+    v("noise_survey_window_m", noise_survey_window_m, "... each a square of this side (m), a cell of a grid laid from the raster's corner", Check::above(0));
     v("gdal_cache_mb", gdal_cache_mb, "raster block cache (MB): decoded blocks shared by the threads (3/4) and GDAL's own cache (1/4); memory is this plus the windows of the tiles in flight", Check::at_least(1));
   }
 };

@@ -235,6 +235,7 @@ void write_index_and_report(const Totals& totals, const RunPlan& plan, const std
                     {"too_large", totals.too_large.size()},
                     {"cadastre", {{"confirmed", totals.confirmed}, {"not_in_footprints", totals.not_in_footprints}, {"not_in_mask", totals.not_in_mask}}},
                     {"seconds", elapsed},
+                    {"noise_floor_m", plan.noise_floor_m},
                     {"core_seconds", totals.core_seconds},
                     {"stage_seconds", {{"contours", totals.contour_seconds}, {"regularization", totals.core_seconds},
                                        {"heights", totals.heights_seconds}, {"writing", totals.write_seconds}}},
@@ -314,6 +315,8 @@ void merge_run_reports(const std::vector<fs::path>& parts, const fs::path& targe
         if (!report.at(list).is_array()) throw std::runtime_error(std::string("'") + list + "' is not a list");
       if (merged.is_null()) merged = report;
       else add_numbers(merged, report);
+      // (Every shard's: the survey of the whole raster, not a count.)
+      if (report.contains("noise_floor_m")) merged["noise_floor_m"] = report.at("noise_floor_m");
       for (const Json& f : report.at("failed_buildings")) failed.emplace_back(f.at("tile").get<std::string>(), f);
       for (const Json& t : report.at("per_tile")) per_tile.emplace_back(t.at("tile").get<std::string>(), t);
       for (const Json& b : report.value("slowest_buildings", Json::array()))

@@ -28,6 +28,7 @@
 #include "partition/partition.hpp"
 #include "parts/parts.hpp"
 #include "pipeline/building.hpp"
+#include "run/batch.hpp"
 
 namespace lodforge {
 
@@ -53,21 +54,24 @@ void within_tile(F&& f) {
 }
 
 
-std::vector<BuildingOutput> regularize_tile(const TileBuildings& tile, const Job& job, long raster_width, double pixel_size) {
+std::vector<BuildingOutput> regularize_tile(const TileBuildings& tile, const Job& job, long raster_width, double pixel_size,
+                                            double noise_floor_m) {
   std::vector<BuildingOutput> out(tile.buildings.size());
-  within_tile([&] { tbb::parallel_for(std::size_t(0), tile.buildings.size(), [&](std::size_t i) {
+  RegularizedBatch batch;
+  within_tile([&] { batch = regularize_batch(job.regularizer, tile.buildings, pixel_size, job.stages.core, noise_floor_m); });
+  for (std::size_t i = 0; i < tile.buildings.size(); ++i) {
     const BuildingContour& b = tile.buildings[i];
+    BuildingResult& r = batch.results[i];
     BuildingOutput& o = out[i];
     o.id = std::int64_t(b.first_row) * raster_width + b.first_col;
     o.first_row = b.first_row;
     o.first_col = b.first_col;
-    BuildingResult r = regularize_with(job.regularizer, b.rings, pixel_size, job.stages.core);
     o.footprint = std::move(r.footprint);
     o.ok = r.ok;
     o.stage = r.failed_stage;
     o.reason = r.ok ? r.note : r.reason;
     o.seconds = r.seconds;
-  }); });
+  }
   return out;
 }
 
@@ -470,7 +474,7 @@ std::shared_ptr<TileResult> process_tile(const RunPlan& plan, int tile) {
   std::optional<std::vector<BuildingOutput>> buildings = store.load_buildings(r->name, buildings_key);
   r->buildings_reused = buildings.has_value();
   if (!buildings) {
-    buildings = regularize_tile(*contours, job, width, pixel);
+    buildings = regularize_tile(*contours, job, width, pixel, plan.noise_floor_m);
     store.save_buildings(r->name, buildings_key, *buildings);
   }
   r->buildings = std::move(*buildings);

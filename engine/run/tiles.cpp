@@ -105,16 +105,11 @@ std::uint64_t fnv1a(const void* data, std::size_t size, std::uint64_t h) {
 
 std::uint64_t fnv1a(const std::string& text, std::uint64_t seed) { return fnv1a(text.data(), text.size(), seed); }
 
-namespace {
-
-// Does bbox (window coordinates) touch a side of the window that is not the raster's edge?
 bool touches_inner_border(const cv::Rect& bbox, const cv::Rect& window, cv::Size raster) {
   return (bbox.x == 0 && window.x > 0) || (bbox.y == 0 && window.y > 0) ||
          (bbox.x + bbox.width == window.width && window.x + window.width < raster.width) ||
          (bbox.y + bbox.height == window.height && window.y + window.height < raster.height);
 }
-
-}  // namespace
 
 int first_window_margin(int halo_px, int tile_px, int max_window_px) {
   return std::max(halo_px, std::min(2 * halo_px, (max_window_px - tile_px) / 2));

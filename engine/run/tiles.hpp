@@ -41,6 +41,10 @@ class MaskWindowReader {
   Impl* impl_;
 };
 
+// Does bbox (window coordinates) touch a side of the window that is not the raster's edge? (A
+// component that does may go on beyond the window.)
+bool touches_inner_border(const cv::Rect& bbox, const cv::Rect& window, cv::Size raster);
+
 struct TileBuildings {
   std::vector<BuildingContour> buildings;  // first_row/first_col and bbox in raster pixels
   int dropped_small = 0;

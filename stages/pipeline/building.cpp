@@ -15,6 +15,7 @@
 #include "labeling/mrf.hpp"
 #include "models/noise.hpp"
 #include "models/rectangle.hpp"
+#include "models/statistics.hpp"
 #include "normals/smoothing.hpp"
 #include "peers/cgal_contours.hpp"
 #include "triangulation/triangulate.hpp"
@@ -385,22 +386,23 @@ double outline_reach(const PolygonWithHoles& polygon, const PolygonWithHoles& co
   return reach;
 }
 
-void run_chain(const std::vector<Ring>& rings, double pixel_size, const CoreOptions& o, BuildingResult& result,
-               const std::function<bool()>& over_budget) {
+void run_chain(const std::vector<Ring>& rings, double pixel_size, const CoreOptions& o, double noise_floor_m,
+               BuildingStart start, BuildingResult& result, const std::function<bool()>& over_budget) {
   std::size_t edges = 0;
   for (const Ring& r : rings) edges += r.size();
   if (rings.empty() || rings[0].size() < 4) throw StageError("input", "contour has fewer than 4 edges");
   if (edges > std::size_t(o.budget.max_edges))
     throw StageError("input", "contour has " + std::to_string(edges) + " edges, more than budget.max_edges = " +
                                   std::to_string(o.budget.max_edges));
+  if (start.normals.size() != rings.size()) start = start_building(rings, pixel_size, o);
   LabelingInput input;
+  input.normals = std::move(start.normals);
   std::vector<Vec2> all_normals;
   std::vector<double> all_lengths;
-  for (const Ring& ring : rings) {
-    input.normals.push_back(smooth_normals(ring, pixel_size, o.smoothing));
+  for (std::size_t r = 0; r < rings.size(); ++r) {
     input.lengths.emplace_back();
-    for (std::size_t i = 0; i < ring.size(); ++i) input.lengths.back().push_back(edge_vector(ring, i).norm());
-    all_normals.insert(all_normals.end(), input.normals.back().begin(), input.normals.back().end());
+    for (std::size_t i = 0; i < rings[r].size(); ++i) input.lengths.back().push_back(edge_vector(rings[r], i).norm());
+    all_normals.insert(all_normals.end(), input.normals[r].begin(), input.normals[r].end());
     all_lengths.insert(all_lengths.end(), input.lengths.back().begin(), input.lengths.back().end());
   }
   if (over_budget()) throw BudgetExceeded("smoothing", "time budget exceeded");
@@ -418,7 +420,7 @@ void run_chain(const std::vector<Ring>& rings, double pixel_size, const CoreOpti
   // than lattice.main_share_ratio of the peak's share): a wobble's flank took the main direction
   // off the walls, and the chords' direction is followed. After labeling again, the main
   // direction stays the lattice where it is near the chords'.
-  const ChordLattice chord = chord_lattice(rings, o.lattice);
+  const ChordLattice& chord = start.chord;
   const Vec2 first_main = main_direction(labels, input.lengths, input.directions);
   double arc_noise = 0;
   double noise = lattice_noise(rings, input.normals, first_main, pixel_size, o.noise, &arc_noise);
@@ -427,6 +429,11 @@ void run_chain(const std::vector<Ring>& rings, double pixel_size, const CoreOpti
     follow_chords = chord.share_at(first_main, o.lattice.window_deg) < o.lattice.main_share_ratio * chord.share;
     if (follow_chords) noise = lattice_noise(rings, input.normals, chord.direction, pixel_size, o.noise, &arc_noise);
   }
+  // At least the noise pooled over the buildings regularized with this one (a segmentation's
+  // noise is its mask's): walls shorter than a wobble's wavelength, or runs cut short by its
+  // flanks at fine pixels, measure too little of it.
+  noise = std::max(noise, noise_floor_m);
+  arc_noise = std::max(arc_noise, noise_floor_m);
   // The lattice fitted to the contour's runs along it, from the chords' direction where they give
   // one (under a wobble the labeled main direction follows a flank, degrees off the walls); and
   // the spread of those runs about it, which a wobble's flanks do not cut short (below).
@@ -620,7 +627,30 @@ PolygonWithHoles fallback_footprint(const std::vector<Ring>& rings, double toler
   return raw;
 }
 
-BuildingResult regularize_building(const std::vector<Ring>& rings, double pixel_size, const CoreOptions& o) {
+BuildingStart start_building(const std::vector<Ring>& rings, double pixel_size, const CoreOptions& o) {
+  BuildingStart start;
+  std::size_t edges = 0;
+  for (const Ring& r : rings) edges += r.size();
+  if (rings.empty() || rings[0].size() < 4 || edges > std::size_t(o.budget.max_edges)) return start;  // (the chain says why)
+  for (const Ring& ring : rings) start.normals.push_back(smooth_normals(ring, pixel_size, o.smoothing));
+  start.chord = chord_lattice(rings, o.lattice);
+  double arc_noise = 0;
+  double noise = lattice_noise(rings, start.normals, start.chord.direction, pixel_size, o.noise, &arc_noise);
+  if (o.models.arc_noise_ratio > 0) noise = std::min(noise, o.models.arc_noise_ratio * arc_noise);
+  start.sample = {noise, perimeter(rings[0])};
+  return start;
+}
+
+double pooled_noise_floor(const std::vector<NoiseSample>& samples, const CoreOptions& o) {
+  if (o.noise.pooled_floor <= 0) return 0.0;
+  std::vector<std::pair<double, double>> weighted;
+  for (const NoiseSample& s : samples)
+    if (s.weight_m > 0) weighted.emplace_back(s.noise_m, s.weight_m);
+  return o.noise.pooled_floor * weighted_quantile(std::move(weighted), 0.5);
+}
+
+BuildingResult regularize_building(const std::vector<Ring>& rings, double pixel_size, const CoreOptions& o, double noise_floor_m,
+                                   BuildingStart started) {
   BuildingResult result;
   const auto start = Clock::now();
   const auto over_budget = [&] {
@@ -628,7 +658,7 @@ BuildingResult regularize_building(const std::vector<Ring>& rings, double pixel_
   };
   bool rescue = true;  // a failed chain may still be a rectangle, unless it ran out of time
   try {
-    run_chain(rings, pixel_size, o, result, over_budget);
+    run_chain(rings, pixel_size, o, noise_floor_m, std::move(started), result, over_budget);
   } catch (const BudgetExceeded& e) {
     result.ok = rescue = false;
     result.failed_stage = e.stage;
@@ -669,8 +699,8 @@ const std::vector<std::string>& regularizer_names() {
 }
 
 BuildingResult regularize_with(const std::string& regularizer, const std::vector<Ring>& rings, double pixel_size,
-                               const CoreOptions& options) {
-  if (regularizer == "deformation") return regularize_building(rings, pixel_size, options);
+                               const CoreOptions& options, double noise_floor_m, BuildingStart started) {
+  if (regularizer == "deformation") return regularize_building(rings, pixel_size, options, noise_floor_m, std::move(started));
   const auto start = Clock::now();
   BuildingResult result;
   if (rings.empty()) {

@@ -5,6 +5,7 @@
 #include <vector>
 
 #include "geometry/types.hpp"
+#include "directions/lattice.hpp"
 #include "labeling/mrf.hpp"
 #include "pipeline/core_options.hpp"
 
@@ -33,9 +34,36 @@ struct BuildingResult {
   std::string status() const { return ok ? "ok" : "fallback"; }
 };
 
+// What one building's contour tells of the boundary noise of the mask it was traced from: its
+// noise about the lattice of its contour's chords (lattice_noise; at most models.arc_noise_ratio
+// times the spread about parabolas, as the model choice takes it), and the weight of that
+// measure, the length of its outline (m; 0 for a contour too small to measure).
+struct NoiseSample {
+  double noise_m = 0;
+  double weight_m = 0;
+};
+
+// The chain's first steps, which measure that sample on the way: the buildings regularized
+// together (a mask, a tile) are started first, their samples pooled (pooled_noise_floor), and
+// each then regularized from its start.
+struct BuildingStart {
+  std::vector<std::vector<Vec2>> normals;  // per ring, per edge: the smoothed outward normals (empty: not started)
+  ChordLattice chord;                      // the lattice of the contour's chords
+  NoiseSample sample;
+};
+BuildingStart start_building(const std::vector<Ring>& rings, double pixel_size, const CoreOptions& options);
+
 // rings: [0] outer counter-clockwise, then clockwise holes, in map metres (from
 // extract_contours). pixel_size: the raster's ground sampling distance in metres.
-BuildingResult regularize_building(const std::vector<Ring>& rings, double pixel_size, const CoreOptions& options);
+// noise_floor_m: the boundary noise the building is taken to have at least, pooled over the
+// buildings regularized with it (0: its own, as measured). start: from start_building on the same
+// rings and options, or empty (the chain starts itself); the result is the same.
+BuildingResult regularize_building(const std::vector<Ring>& rings, double pixel_size, const CoreOptions& options,
+                                   double noise_floor_m = 0, BuildingStart start = {});
+
+// The noise floor of buildings regularized together: noise.pooled_floor times the weighted
+// median of their samples (0 when there are none, or noise.pooled_floor is 0).
+double pooled_noise_floor(const std::vector<NoiseSample>& samples, const CoreOptions& options);
 
 // The regularizers the core offers, by name: "deformation" (the chain above, corner route in
 // options.corners.route), "cgal" (CGAL Shape_regularization, options.cgal; the fallback when it
@@ -45,8 +73,9 @@ const std::vector<std::string>& regularizer_names();
 
 // The same rings through a named regularizer (one of regularizer_names()). A failure inside is
 // the building's status (ok false, stage, reason, the fallback footprint), never an exception.
+// noise_floor_m, start: as for regularize_building (the chain alone uses them).
 BuildingResult regularize_with(const std::string& regularizer, const std::vector<Ring>& rings, double pixel_size,
-                               const CoreOptions& options);
+                               const CoreOptions& options, double noise_floor_m = 0, BuildingStart start = {});
 
 // The fallback footprint: Douglas–Peucker of the raw rings, or the raw rings if that is invalid.
 PolygonWithHoles fallback_footprint(const std::vector<Ring>& rings, double tolerance);

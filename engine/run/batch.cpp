@@ -1,0 +1,93 @@
+#include "run/batch.hpp"
+
+#include <algorithm>
+#include <chrono>
+
+#include <tbb/parallel_for.h>
+
+#include "run/tiles.hpp"
+
+namespace lodforge {
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+// Each building's start, in parallel; *seconds (when given): the time of each.
+std::vector<BuildingStart> start_buildings(const std::vector<BuildingContour>& buildings, double pixel_size, const CoreOptions& options,
+                                           std::vector<double>* seconds) {
+  std::vector<BuildingStart> starts(buildings.size());
+  if (seconds) seconds->assign(buildings.size(), 0.0);
+  tbb::parallel_for(std::size_t(0), buildings.size(), [&](std::size_t i) {
+    const auto started = Clock::now();
+    try {
+      starts[i] = start_building(buildings[i].rings, pixel_size, options);
+    } catch (const std::exception&) {  // (the chain starts it again, and says what failed)
+      starts[i] = {};
+    }
+    if (seconds) (*seconds)[i] = std::chrono::duration<double>(Clock::now() - started).count();
+  });
+  return starts;
+}
+
+std::vector<NoiseSample> samples_of(const std::vector<BuildingStart>& starts) {
+  std::vector<NoiseSample> samples;
+  for (const BuildingStart& s : starts) samples.push_back(s.sample);
+  return samples;
+}
+
+std::size_t measured(const std::vector<NoiseSample>& samples) {
+  return std::size_t(std::count_if(samples.begin(), samples.end(), [](const NoiseSample& s) { return s.weight_m > 0; }));
+}
+
+}  // namespace
+
+RegularizedBatch regularize_batch(const std::string& regularizer, const std::vector<BuildingContour>& buildings,
+                                  double pixel_size, const CoreOptions& options, std::optional<double> noise_floor_m,
+                                  const std::function<void()>& on_done) {
+  RegularizedBatch batch;
+  batch.results.resize(buildings.size());
+  std::vector<BuildingStart> starts;
+  std::vector<double> start_seconds;  // each building's time counts its start's
+  if (noise_floor_m) {
+    batch.noise_floor_m = *noise_floor_m;
+  } else if (regularizer == "deformation" && options.noise.pooled_floor > 0) {
+    starts = start_buildings(buildings, pixel_size, options, &start_seconds);
+    const std::vector<NoiseSample> samples = samples_of(starts);
+    batch.noise_samples = measured(samples);
+    batch.noise_floor_m = pooled_noise_floor(samples, options);
+  }
+  tbb::parallel_for(std::size_t(0), buildings.size(), [&](std::size_t i) {
+    batch.results[i] = regularize_with(regularizer, buildings[i].rings, pixel_size, options, batch.noise_floor_m,
+                                       starts.empty() ? BuildingStart{} : std::move(starts[i]));
+    if (!start_seconds.empty()) batch.results[i].seconds += start_seconds[i];
+    if (on_done) on_done();
+  });
+  return batch;
+}
+
+NoiseSurvey survey_noise(const MaskWindowReader& mask, cv::Size raster, const GeoTransform& transform, const ContourOptions& contour,
+                         const CoreOptions& options, int window_px, int windows) {
+  NoiseSurvey survey;
+  if (options.noise.pooled_floor <= 0 || windows <= 0 || raster.width <= 0 || raster.height <= 0) return survey;
+  window_px = std::max(1, window_px);
+  const int cols = (raster.width + window_px - 1) / window_px, rows = (raster.height + window_px - 1) / window_px;
+  const long cells = long(cols) * rows;
+  std::vector<long> chosen;
+  for (long k = 0; k < std::min<long>(cells, windows); ++k) chosen.push_back(cells <= windows ? k : (2 * k + 1) * cells / (2L * windows));
+  std::vector<NoiseSample> samples;
+  for (long cell : chosen) {
+    const cv::Rect window = cv::Rect(int(cell % cols) * window_px, int(cell / cols) * window_px, window_px, window_px) &
+                            cv::Rect(0, 0, raster.width, raster.height);
+    const ContourResult traced = extract_contours(mask.read(window), transform.window(window.x, window.y), contour,
+                                                  [&](const cv::Rect& box, const cv::Point&) { return !touches_inner_border(box, window, raster); });
+    const std::vector<NoiseSample> found = samples_of(start_buildings(traced.buildings, transform.pixel_size(), options, nullptr));
+    samples.insert(samples.end(), found.begin(), found.end());
+    ++survey.windows;
+  }
+  survey.buildings = measured(samples);
+  survey.floor_m = pooled_noise_floor(samples, options);
+  return survey;
+}
+
+}  // namespace lodforge

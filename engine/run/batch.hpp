@@ -1,0 +1,44 @@
+// The buildings of one mask (regularize) or one tile (run) through a regularizer, in parallel,
+// and the boundary noise pooled over a mask's buildings that each of them allows for.
+#pragma once
+#include <cstddef>
+#include <functional>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "contour/contour.hpp"
+#include "pipeline/building.hpp"
+
+namespace lodforge {
+
+class MaskWindowReader;
+
+struct RegularizedBatch {
+  std::vector<BuildingResult> results;  // in the buildings' order
+  double noise_floor_m = 0;             // the noise floor they were regularized with
+  std::size_t noise_samples = 0;        // how many of them it was pooled over (0: given, or none)
+};
+
+// The buildings through the regularizer. For the deformation chain, with the noise floor given
+// (a run's survey), or else pooled over these buildings: each one started (start_building), their
+// noise samples pooled (pooled_noise_floor), and each regularized from its start. The same results
+// whatever the thread count: samples are pooled in the buildings' order. A building's seconds
+// count its start's. on_done is called after each building (from any thread).
+RegularizedBatch regularize_batch(const std::string& regularizer, const std::vector<BuildingContour>& buildings,
+                                  double pixel_size, const CoreOptions& options, std::optional<double> noise_floor_m = std::nullopt,
+                                  const std::function<void()>& on_done = {});
+
+// The noise floor of a raster too large to read whole: pooled over the whole buildings of up to
+// `windows` windows of window_px pixels, cells of a grid laid over the raster from its corner and
+// taken evenly in raster order (all of them when there are no more). The same for every tiling
+// and shard of the raster.
+struct NoiseSurvey {
+  double floor_m = 0;
+  std::size_t buildings = 0;  // sampled
+  int windows = 0;            // read
+};
+NoiseSurvey survey_noise(const MaskWindowReader& mask, cv::Size raster, const GeoTransform& transform, const ContourOptions& contour,
+                         const CoreOptions& options, int window_px, int windows);
+
+}  // namespace lodforge
