@@ -546,5 +546,31 @@ TEST(PooledNoise, ASmallBuildingTakesTheNoiseItsWallsAreTooShortToMeasure) {
   EXPECT_GE(pooled_iou, own_iou + 0.005) << pooled_iou << " against " << own_iou;
 }
 
+// A building with a courtyard, started first, gives the chain's result as it would have alone;
+// a start of other rings is not taken.
+TEST(PooledNoise, AStartWithACourtyardGivesTheSameOutline) {
+  const PolygonWithHoles yard = test::rotated(
+      PolygonWithHoles{{{0, 0}, {30, 0}, {30, 24}, {0, 24}}, {{{10, 8}, {10, 16}, {20, 16}, {20, 8}}}}, 11.0);
+  const test::RasterizedShape shape = test::rasterize_shape_m(yard, 0.25, 0.5, 8.0, 1.0, 3);
+  ASSERT_EQ(shape.buildings.size(), 1u);
+  const std::vector<Ring>& rings = shape.buildings[0].rings;
+  ASSERT_EQ(rings.size(), 2u);
+  BuildingStart start = start_building(rings, 0.25, CoreOptions{});
+  ASSERT_EQ(start.normals.size(), 2u);
+  EXPECT_GT(start.sample.weight_m, 0.0);
+  const BuildingResult alone = regularize_building(rings, 0.25, CoreOptions{}, 0.3);
+  const BuildingResult started = regularize_building(rings, 0.25, CoreOptions{}, 0.3, std::move(start));
+  ASSERT_TRUE(alone.ok) << alone.reason;
+  ASSERT_EQ(alone.footprint.holes.size(), 1u);
+  EXPECT_EQ(started.footprint.outer, alone.footprint.outer);
+  EXPECT_EQ(started.footprint.holes, alone.footprint.holes);
+  // Another building's start (its one ring) is not this building's: the chain starts itself.
+  const test::RasterizedShape other = test::rasterize_shape_m(test::rotated(kHouse, 11.0), 0.25, 0.5, 8.0, 1.0, 3);
+  BuildingStart wrong = start_building(other.buildings[0].rings, 0.25, CoreOptions{});
+  wrong.normals.push_back({});  // as many rings, other sizes
+  const BuildingResult guarded = regularize_building(rings, 0.25, CoreOptions{}, 0.3, std::move(wrong));
+  EXPECT_EQ(guarded.footprint.outer, alone.footprint.outer);
+}
+
 }  // namespace
 }  // namespace lodforge

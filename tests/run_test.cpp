@@ -13,6 +13,7 @@
 #include <map>
 #include <nlohmann/json.hpp>
 #include <ogrsf_frmts.h>
+#include <set>
 #include <sstream>
 #include <sys/file.h>
 #include <sys/resource.h>
@@ -20,6 +21,7 @@
 #include <thread>
 #include <unistd.h>
 
+#include "run/batch.hpp"
 #include "support/process.hpp"
 #include "support/shapes.hpp"
 
@@ -277,8 +279,9 @@ TEST_F(SynthRun, RerunResumesAndAStageOptionRecomputesOnlyWhatDependsOnIt) {
 // its tile: the same for every tiling. Surveyed in one window, the whole raster, it is the noise
 // `regularize` pools over the same buildings.
 TEST_F(SynthRun, TheNoiseFloorIsTheRastersWhateverTheTiling) {
-  ASSERT_EQ(lodforge("run " + job("t60", seg, 60).string()).code, 0);
-  ASSERT_EQ(lodforge("run " + job("t100", seg, 100).string()).code, 0);
+  // 64 cells of 50 m, of which 16 are surveyed.
+  ASSERT_EQ(lodforge("run " + job("t60", seg, 60).string() + " --set tiling.noise_survey_window_m=50").code, 0);
+  ASSERT_EQ(lodforge("run " + job("t100", seg, 100).string() + " --set tiling.noise_survey_window_m=50").code, 0);
   const double floor60 = report_of(dir / "t60_out" / "report.json").at("noise_floor_m").get<double>();
   EXPECT_GT(floor60, 0.0);
   EXPECT_LT(floor60, 1.0);
@@ -289,9 +292,50 @@ TEST_F(SynthRun, TheNoiseFloorIsTheRastersWhateverTheTiling) {
   const nlohmann::json stats = report_of(dir / "r.json");
   EXPECT_GT(stats.at("noise_samples").get<int>(), 20) << stats;
   EXPECT_DOUBLE_EQ(report_of(dir / "whole_out" / "report.json").at("noise_floor_m").get<double>(), stats.at("noise_floor_m").get<double>());
-  // Off: each building its own noise.
+  // Off: each building its own noise, and some footprints change.
   ASSERT_EQ(lodforge("run " + job("off", seg, 100).string() + " --set tiling.noise_survey_windows=0").code, 0);
   EXPECT_EQ(report_of(dir / "off_out" / "report.json").at("noise_floor_m").get<double>(), 0.0);
+  auto on = output_bytes(dir / "t100_out"), off = output_bytes(dir / "off_out");
+  on.erase("report.json");
+  off.erase("report.json");
+  on.erase("tile_index.geojson");
+  off.erase("tile_index.geojson");
+  ASSERT_EQ(on.size(), off.size());
+  EXPECT_FALSE(on == off);
+}
+
+// The survey's cells spread over both axes of the raster, not along one column; a raster of
+// fewer cells than windows is surveyed whole.
+TEST(NoiseSurvey, CellsSpreadOverBothAxes) {
+  for (const int side : {16, 32, 64}) {
+    const std::vector<cv::Rect> cells = survey_cells(cv::Size(side * 100, side * 100), 100, 16);
+    ASSERT_EQ(cells.size(), 16u) << side;
+    std::set<int> rows, cols;
+    for (const cv::Rect& c : cells) {
+      rows.insert(c.y);
+      cols.insert(c.x);
+      EXPECT_EQ(c.area(), 100 * 100);
+    }
+    EXPECT_EQ(rows.size(), 4u) << side;
+    EXPECT_EQ(cols.size(), 4u) << side;
+    EXPECT_GT(*cols.begin(), 0) << side;  // not at the edges
+    EXPECT_LT(*cols.rbegin(), (side - 1) * 100) << side;
+  }
+  // A strip: its rows and columns in proportion.
+  const std::vector<cv::Rect> strip = survey_cells(cv::Size(6400, 1600), 100, 16);  // 64 x 16 cells
+  std::set<int> strip_rows, strip_cols;
+  for (const cv::Rect& c : strip) {
+    strip_rows.insert(c.y);
+    strip_cols.insert(c.x);
+  }
+  EXPECT_EQ(strip.size(), 16u);
+  EXPECT_EQ(strip_rows.size(), 2u);
+  EXPECT_EQ(strip_cols.size(), 8u);
+  // Fewer cells than windows: all of them, the last cut by the raster's edge.
+  const std::vector<cv::Rect> all = survey_cells(cv::Size(250, 130), 100, 16);
+  ASSERT_EQ(all.size(), 6u);
+  EXPECT_EQ(all.back(), cv::Rect(200, 100, 50, 30));
+  EXPECT_TRUE(survey_cells(cv::Size(250, 130), 100, 0).empty());
 }
 
 TEST_F(SynthRun, ShardsTogetherGiveTheSingleRunOutputs) {

@@ -1,6 +1,7 @@
 // lodforge run JOB.yaml: the tiled batch engine.
 #include <atomic>
 #include <chrono>
+#include <cstdio>
 #include <filesystem>
 #include <tuple>
 #include <fstream>
@@ -13,7 +14,6 @@
 #include <set>
 #include <sstream>
 #include <sys/stat.h>
-#include <cstdio>
 #include <tbb/global_control.h>
 #include <tbb/info.h>
 #include <tbb/parallel_for.h>
@@ -226,11 +226,18 @@ int run_job(int argc, char** argv) {
   NoiseSurvey survey;
   if (job.regularizer == "deformation" && job.stages.core.noise.pooled_floor > 0 && job.tiling.noise_survey_windows > 0) {
     const auto surveying = Clock::now();
+    // (At most the raster's side, and the largest window a tile may read.)
+    const double window_px = std::min({job.tiling.noise_survey_window_m / pixel, double(std::max(seg.size.width, seg.size.height)),
+                                       job.tiling.max_window_m / pixel});
     survey = survey_noise(MaskWindowReader(job.inputs.segmentation.path, selector), seg.size, seg.transform, job.stages.contour,
-                          job.stages.core, std::max(1, int(std::lround(job.tiling.noise_survey_window_m / pixel))),
-                          job.tiling.noise_survey_windows);
-    spdlog::info("boundary noise pooled over {} buildings in {} window(s) of {} m: {:.3f} m ({:.1f} s)", survey.buildings, survey.windows,
-                 job.tiling.noise_survey_window_m, survey.floor_m, seconds_since(surveying));
+                          job.stages.core, std::max(16, int(std::ceil(window_px))), job.tiling.noise_survey_windows);
+    if (survey.buildings == 0)
+      spdlog::warn("tiling.noise_survey_windows: no building found whole in the survey's {} window(s) of {} m; each building "
+                   "allows for its own boundary noise only (more or larger windows survey more)",
+                   survey.windows, job.tiling.noise_survey_window_m);
+    else
+      spdlog::info("boundary noise pooled over {} buildings in {} window(s) of {} m: {:.3f} m ({:.1f} s)", survey.buildings, survey.windows,
+                   job.tiling.noise_survey_window_m, survey.floor_m, seconds_since(surveying));
   }
 
   // Keys: everything an output depends on.

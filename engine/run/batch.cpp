@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cmath>
 
 #include <tbb/parallel_for.h>
 
@@ -66,21 +67,39 @@ RegularizedBatch regularize_batch(const std::string& regularizer, const std::vec
   return batch;
 }
 
+std::vector<cv::Rect> survey_cells(cv::Size raster, int window_px, int windows) {
+  std::vector<cv::Rect> cells;
+  if (windows <= 0 || raster.width <= 0 || raster.height <= 0) return cells;
+  window_px = std::max(1, window_px);
+  const long cols = (raster.width + window_px - 1) / window_px, rows = (raster.height + window_px - 1) / window_px;
+  const auto cell = [&](long row, long col) {
+    return cv::Rect(int(col * window_px), int(row * window_px), window_px, window_px) & cv::Rect(0, 0, raster.width, raster.height);
+  };
+  if (rows * cols <= windows) {
+    for (long r = 0; r < rows; ++r)
+      for (long c = 0; c < cols; ++c) cells.push_back(cell(r, c));
+    return cells;
+  }
+  const long a = std::clamp(std::lround(std::sqrt(double(windows) * double(rows) / double(cols))), 1L, rows);
+  const long b = std::clamp(windows / a, 1L, cols);
+  for (long i = 0; i < a; ++i)
+    for (long j = 0; j < b; ++j) cells.push_back(cell((2 * i + 1) * rows / (2 * a), (2 * j + 1) * cols / (2 * b)));
+  return cells;
+}
+
 NoiseSurvey survey_noise(const MaskWindowReader& mask, cv::Size raster, const GeoTransform& transform, const ContourOptions& contour,
                          const CoreOptions& options, int window_px, int windows) {
   NoiseSurvey survey;
-  if (options.noise.pooled_floor <= 0 || windows <= 0 || raster.width <= 0 || raster.height <= 0) return survey;
-  window_px = std::max(1, window_px);
-  const int cols = (raster.width + window_px - 1) / window_px, rows = (raster.height + window_px - 1) / window_px;
-  const long cells = long(cols) * rows;
-  std::vector<long> chosen;
-  for (long k = 0; k < std::min<long>(cells, windows); ++k) chosen.push_back(cells <= windows ? k : (2 * k + 1) * cells / (2L * windows));
+  if (options.noise.pooled_floor <= 0) return survey;
+  const int margin = std::max(1, window_px / 4);
   std::vector<NoiseSample> samples;
-  for (long cell : chosen) {
-    const cv::Rect window = cv::Rect(int(cell % cols) * window_px, int(cell / cols) * window_px, window_px, window_px) &
+  for (const cv::Rect& cell : survey_cells(raster, window_px, windows)) {
+    const cv::Rect window = cv::Rect(cell.x - margin, cell.y - margin, cell.width + 2 * margin, cell.height + 2 * margin) &
                             cv::Rect(0, 0, raster.width, raster.height);
-    const ContourResult traced = extract_contours(mask.read(window), transform.window(window.x, window.y), contour,
-                                                  [&](const cv::Rect& box, const cv::Point&) { return !touches_inner_border(box, window, raster); });
+    const ContourResult traced =
+        extract_contours(mask.read(window), transform.window(window.x, window.y), contour, [&](const cv::Rect& box, const cv::Point& first) {
+          return cell.contains(first + window.tl()) && !touches_inner_border(box, window, raster);
+        });
     const std::vector<NoiseSample> found = samples_of(start_buildings(traced.buildings, transform.pixel_size(), options, nullptr));
     samples.insert(samples.end(), found.begin(), found.end());
     ++survey.windows;

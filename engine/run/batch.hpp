@@ -29,10 +29,16 @@ RegularizedBatch regularize_batch(const std::string& regularizer, const std::vec
                                   double pixel_size, const CoreOptions& options, std::optional<double> noise_floor_m = std::nullopt,
                                   const std::function<void()>& on_done = {});
 
-// The noise floor of a raster too large to read whole: pooled over the whole buildings of up to
-// `windows` windows of window_px pixels, cells of a grid laid over the raster from its corner and
-// taken evenly in raster order (all of them when there are no more). The same for every tiling
-// and shard of the raster.
+// The cells a survey reads: squares of window_px pixels of a grid laid over the raster from its
+// corner (the last row and column cut by the raster's edges), all of them when there are at most
+// `windows`, else rows and columns of them spread evenly over both axes (a x b <= windows, a / b
+// about the grid's rows / columns).
+std::vector<cv::Rect> survey_cells(cv::Size raster, int window_px, int windows);
+
+// The noise floor of a raster too large to read whole: pooled over the buildings whose first pixel
+// lies in one of the survey's cells, each read with a margin of a quarter of window_px so that a
+// building crossing the cell's edge is whole (larger ones are left out). The same for every
+// tiling and shard of the raster.
 struct NoiseSurvey {
   double floor_m = 0;
   std::size_t buildings = 0;  // sampled

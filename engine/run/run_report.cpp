@@ -313,9 +313,11 @@ void merge_run_reports(const std::vector<fs::path>& parts, const fs::path& targe
     try {
       for (const char* list : {"failed_buildings", "too_large_buildings", "per_tile"})
         if (!report.at(list).is_array()) throw std::runtime_error(std::string("'") + list + "' is not a list");
+      // (Every shard's the same, the survey of the whole raster: not a count.)
+      if (!merged.is_null() && merged.value("noise_floor_m", 0.0) != report.value("noise_floor_m", 0.0))
+        throw std::runtime_error("its noise_floor_m differs from the other shards': a run with other inputs or options");
       if (merged.is_null()) merged = report;
       else add_numbers(merged, report);
-      // (Every shard's: the survey of the whole raster, not a count.)
       if (report.contains("noise_floor_m")) merged["noise_floor_m"] = report.at("noise_floor_m");
       for (const Json& f : report.at("failed_buildings")) failed.emplace_back(f.at("tile").get<std::string>(), f);
       for (const Json& t : report.at("per_tile")) per_tile.emplace_back(t.at("tile").get<std::string>(), t);

@@ -31,8 +31,9 @@ struct PartOptions {
 
 // The building's parts where its roof steps, largest first, covering footprint exactly; empty when
 // it has one part (or the split fails). dsm: a window holding the footprint. Each part's outline
-// is its cells' regularization by `regularizer` (the building's: regularize_with), then the parts
-// are fitted to the footprint.
+// is its cells' regularization by `regularizer` (the building's: regularize_with, each part with its
+// own noise: the cells are the DSM's, not the segmentation's), then the parts are fitted to the
+// footprint.
 std::vector<PolygonWithHoles> split_by_roof_steps(const PolygonWithHoles& footprint, const HeightRaster& dsm, double pixel_size,
                                                   const std::string& regularizer, const CoreOptions& core, const PartOptions& options);
 

@@ -394,7 +394,9 @@ void run_chain(const std::vector<Ring>& rings, double pixel_size, const CoreOpti
   if (edges > std::size_t(o.budget.max_edges))
     throw StageError("input", "contour has " + std::to_string(edges) + " edges, more than budget.max_edges = " +
                                   std::to_string(o.budget.max_edges));
-  if (start.normals.size() != rings.size()) start = start_building(rings, pixel_size, o);
+  bool started = start.normals.size() == rings.size();
+  for (std::size_t r = 0; started && r < rings.size(); ++r) started = start.normals[r].size() == rings[r].size();
+  if (!started) start = start_building(rings, pixel_size, o, false);
   LabelingInput input;
   input.normals = std::move(start.normals);
   std::vector<Vec2> all_normals;
@@ -627,17 +629,18 @@ PolygonWithHoles fallback_footprint(const std::vector<Ring>& rings, double toler
   return raw;
 }
 
-BuildingStart start_building(const std::vector<Ring>& rings, double pixel_size, const CoreOptions& o) {
+BuildingStart start_building(const std::vector<Ring>& rings, double pixel_size, const CoreOptions& o, bool measure_noise) {
   BuildingStart start;
   std::size_t edges = 0;
   for (const Ring& r : rings) edges += r.size();
   if (rings.empty() || rings[0].size() < 4 || edges > std::size_t(o.budget.max_edges)) return start;  // (the chain says why)
   for (const Ring& ring : rings) start.normals.push_back(smooth_normals(ring, pixel_size, o.smoothing));
   start.chord = chord_lattice(rings, o.lattice);
+  if (!measure_noise) return start;
   double arc_noise = 0;
   double noise = lattice_noise(rings, start.normals, start.chord.direction, pixel_size, o.noise, &arc_noise);
   if (o.models.arc_noise_ratio > 0) noise = std::min(noise, o.models.arc_noise_ratio * arc_noise);
-  start.sample = {noise, perimeter(rings[0])};
+  if (noise > 0) start.sample = {noise, perimeter(rings[0])};
   return start;
 }
 

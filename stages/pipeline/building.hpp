@@ -22,8 +22,8 @@ struct BuildingResult {
   double alignment_rms_deg = -1, alignment_max_deg = -1;  // after deformation, if run
   int deformation_iterations = 0;
   int mesh_vertices = 0;         // of the deformation mesh, if one was built
-  double noise_m = -1;          // the boundary noise measured on the contour (m), when labeled
-  double arc_noise_m = -1;      // ... and measured about parabolas along the same runs, which an arc does not inflate (m)
+  double noise_m = -1;          // the boundary noise measured on the contour (m), when labeled; at least the floor it was given
+  double arc_noise_m = -1;      // ... and measured about parabolas along the same runs, which an arc does not inflate (m); the same
   std::string model;            // the outline chosen: "regular" (walls held to the lattice; also after its oblique
                                 // walls are redrawn per stretch), "lines" (pixel thresholds), "lattice", "rectangle";
                                 // empty for the fallback
@@ -37,27 +37,29 @@ struct BuildingResult {
 // What one building's contour tells of the boundary noise of the mask it was traced from: its
 // noise about the lattice of its contour's chords (lattice_noise; at most models.arc_noise_ratio
 // times the spread about parabolas, as the model choice takes it), and the weight of that
-// measure, the length of its outline (m; 0 for a contour too small to measure).
+// measure, the length of its contour (m; 0 when nothing was measured: a contour the chain does not
+// take, or no run along the lattice long enough to measure on).
 struct NoiseSample {
   double noise_m = 0;
   double weight_m = 0;
 };
 
-// The chain's first steps, which measure that sample on the way: the buildings regularized
-// together (a mask, a tile) are started first, their samples pooled (pooled_noise_floor), and
-// each then regularized from its start.
+// The chain's first steps, which measure that sample on the way (when measure_noise): the
+// buildings of a mask are started first, their samples pooled (pooled_noise_floor), and each then
+// regularized from its start. (A run pools over a survey of its raster, and starts none.)
 struct BuildingStart {
   std::vector<std::vector<Vec2>> normals;  // per ring, per edge: the smoothed outward normals (empty: not started)
   ChordLattice chord;                      // the lattice of the contour's chords
   NoiseSample sample;
 };
-BuildingStart start_building(const std::vector<Ring>& rings, double pixel_size, const CoreOptions& options);
+BuildingStart start_building(const std::vector<Ring>& rings, double pixel_size, const CoreOptions& options,
+                             bool measure_noise = true);
 
 // rings: [0] outer counter-clockwise, then clockwise holes, in map metres (from
 // extract_contours). pixel_size: the raster's ground sampling distance in metres.
-// noise_floor_m: the boundary noise the building is taken to have at least, pooled over the
-// buildings regularized with it (0: its own, as measured). start: from start_building on the same
-// rings and options, or empty (the chain starts itself); the result is the same.
+// noise_floor_m: the boundary noise the building is taken to have at least, pooled over its
+// mask's buildings (0: its own, as measured). start: from start_building on the same rings and
+// options, or empty (the chain starts itself); the result is the same.
 BuildingResult regularize_building(const std::vector<Ring>& rings, double pixel_size, const CoreOptions& options,
                                    double noise_floor_m = 0, BuildingStart start = {});
 
