@@ -18,6 +18,7 @@ ContourOptions no_minimum(int connectivity = 8) {
   o.connectivity = connectivity;
   o.min_area_m2 = 0;
   o.min_hole_area_m2 = 0;
+  o.min_pixels = 0;
   return o;
 }
 
@@ -57,6 +58,22 @@ TEST(Contour, SmallHolesAreFilledAndSmallComponentsDropped) {
   ASSERT_EQ(result.buildings.size(), 1u);
   EXPECT_EQ(result.buildings[0].rings.size(), 1u);
   EXPECT_EQ(result.dropped_small, 1);
+}
+
+// At 2 m a pixel is 4 m^2, as large as the area filters: a lone pixel, a component or a hole,
+// is dropped or filled by min_pixels; two pixels stay.
+TEST(Contour, ALonePixelIsNoBuildingAndNoCourtyardAtCoarsePixels) {
+  ContourOptions o;  // min_area_m2 = min_hole_area_m2 = 4, min_pixels = 2
+  const cv::Mat m = mask_from({"#######..#.", "#.#####....", "#######..##", "#...###....", "#######...."});
+  const auto result = extract_contours(m, transform(0, 0, 2), o);
+  ASSERT_EQ(result.buildings.size(), 2u);        // the block and the pair; the lone pixel dropped
+  EXPECT_EQ(result.dropped_small, 1);
+  EXPECT_EQ(result.buildings[0].rings.size(), 2u);  // the 3-pixel courtyard stays, the 1-pixel one is filled
+  EXPECT_NEAR(std::abs(signed_area(result.buildings[0].rings[1])), 3 * 4.0, 1e-9);
+  o.min_pixels = 0;
+  const auto all = extract_contours(m, transform(0, 0, 2), o);
+  EXPECT_EQ(all.buildings.size(), 3u);
+  EXPECT_EQ(all.buildings[0].rings.size(), 3u);
 }
 
 TEST(Contour, DiagonalContactsGiveSimpleRings) {

@@ -15,6 +15,7 @@ std::vector<Ring> contour_of(const cv::Mat& mask) {
   ContourOptions o;
   o.min_area_m2 = 0;
   o.min_hole_area_m2 = 0;
+  o.min_pixels = 0;
   auto result = extract_contours(mask, t, o);
   EXPECT_EQ(result.buildings.size(), 1u);
   return result.buildings.at(0).rings;

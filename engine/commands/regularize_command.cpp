@@ -104,9 +104,11 @@ int run_regularize(int argc, char** argv) {
   const ContourResult contours = extract_contours(raster.mask, raster.transform, options.contour);
   const std::size_t count = contours.buildings.size();
   if (count == 0)
-    throw InputError("'" + mask_path + "': no building of at least " + std::to_string(options.contour.min_area_m2) +
-                     " m^2 (" + std::to_string(contours.dropped_small) + " smaller components dropped)");
-  spdlog::info("{} buildings, {} components below {} m^2 dropped", count, contours.dropped_small, options.contour.min_area_m2);
+    throw InputError("'" + mask_path + "': no building of at least " + std::to_string(options.contour.min_area_m2) + " m^2 and " +
+                     std::to_string(options.contour.min_pixels) + " pixels (" + std::to_string(contours.dropped_small) +
+                     " smaller components dropped)");
+  spdlog::info("{} buildings, {} components below {} m^2 or {} pixels dropped", count, contours.dropped_small, options.contour.min_area_m2,
+               options.contour.min_pixels);
 
   std::atomic<std::size_t> done{0};
   std::unique_ptr<tbb::global_control> limit;

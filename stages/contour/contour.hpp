@@ -17,12 +17,14 @@ struct ContourOptions {
   int connectivity = 8;           // pixels touching at a corner belong to one building (8) or not (4)
   double min_area_m2 = 4.0;       // smaller components are noise, not buildings
   double min_hole_area_m2 = 4.0;  // smaller holes are filled (segmentation speckle)
+  int min_pixels = 2;             // components and holes of fewer pixels are dropped / filled too
 
   template <class V>
   void visit(V& v) {
     v("connectivity", connectivity, "pixel connectivity of a building: 4 or 8", Check::one_of_numbers({4, 8}));
     v("min_area_m2", min_area_m2, "components smaller than this are dropped (m^2)", Check::at_least(0));
     v("min_hole_area_m2", min_hole_area_m2, "holes smaller than this are filled (m^2)", Check::at_least(0));
+    v("min_pixels", min_pixels, "components of fewer pixels than this are dropped and holes of fewer filled, whatever their area: a lone pixel is a speckle of the segmentation as likely as a building or a courtyard (at pixels over 1.4 m, where min_area_m2 and min_hole_area_m2 let one through)", Check::at_least(0));
   }
 };
 

@@ -77,7 +77,7 @@ std::vector<std::pair<Vec2, double>> run_middle(const Ring& ring, int first, int
 }  // namespace
 
 double lattice_noise(const std::vector<Ring>& rings, const std::vector<std::vector<Vec2>>& normals, const Vec2& lattice,
-                     double pixel_size, const NoiseOptions& o, double* arc_noise) {
+                     double pixel_size, const NoiseOptions& o, double* arc_noise, double* measured) {
   const Vec2 axes[4] = {lattice, Vec2(-lattice.y(), lattice.x()), -lattice, Vec2(lattice.y(), -lattice.x())};
   std::vector<std::pair<double, double>> residuals, arc_residuals;  // |distance|, weight
   for (std::size_t r = 0; r < rings.size(); ++r) {
@@ -144,6 +144,10 @@ double lattice_noise(const std::vector<Ring>& rings, const std::vector<std::vect
     }
   }
   const double z = gaussian_abs_quantile(o.quantile);
+  if (measured) {
+    *measured = 0;
+    for (const auto& r : residuals) *measured += r.second;
+  }
   if (arc_noise) *arc_noise = weighted_quantile(std::move(arc_residuals), o.quantile) / z;
   return weighted_quantile(std::move(residuals), o.quantile) / z;
 }

@@ -38,8 +38,10 @@ struct NoiseOptions {
 // lattice: the building's main wall direction (unit normal). *arc_noise, when asked: the same
 // measure about a parabola fitted across each run's line, which an arc's spread does not inflate
 // (a round building's contour, far from lattice lines, measures a "noise" of metres about them).
+// *measured, when asked: the length of contour the distances were taken on (0: no run to measure
+// on, and the noise 0 says nothing).
 double lattice_noise(const std::vector<Ring>& rings, const std::vector<std::vector<Vec2>>& normals, const Vec2& lattice,
-                     double pixel_size, const NoiseOptions& options, double* arc_noise = nullptr);
+                     double pixel_size, const NoiseOptions& options, double* arc_noise = nullptr, double* measured = nullptr);
 
 // The building's lattice fitted to its contour: the contour cut into runs along the axes of
 // `start` (a run keeps its axis until a smoothed normal turns lattice.fit_hysteresis_deg past 45

@@ -90,6 +90,7 @@ std::vector<PolygonWithHoles> split_by_roof_steps(const PolygonWithHoles& footpr
   contour.connectivity = 4;
   contour.min_area_m2 = 0;
   contour.min_hole_area_m2 = options.min_part_area_m2;
+  contour.min_pixels = 0;  // (the parts' own areas decide)
   std::vector<std::vector<PolygonWithHoles>> outlines;
   for (const auto& [size, root] : order) {
     cv::Mat mask = cv::Mat::zeros(rows, cols, CV_8U);

@@ -637,10 +637,10 @@ BuildingStart start_building(const std::vector<Ring>& rings, double pixel_size, 
   for (const Ring& ring : rings) start.normals.push_back(smooth_normals(ring, pixel_size, o.smoothing));
   start.chord = chord_lattice(rings, o.lattice);
   if (!measure_noise) return start;
-  double arc_noise = 0;
-  double noise = lattice_noise(rings, start.normals, start.chord.direction, pixel_size, o.noise, &arc_noise);
+  double arc_noise = 0, measured = 0;
+  double noise = lattice_noise(rings, start.normals, start.chord.direction, pixel_size, o.noise, &arc_noise, &measured);
   if (o.models.arc_noise_ratio > 0) noise = std::min(noise, o.models.arc_noise_ratio * arc_noise);
-  if (noise > 0) start.sample = {noise, perimeter(rings[0])};
+  if (measured > 0) start.sample = {noise, perimeter(rings[0])};  // (a clean contour may measure 0, and says so)
   return start;
 }
 
