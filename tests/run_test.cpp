@@ -292,6 +292,20 @@ TEST_F(SynthRun, TheNoiseFloorIsTheRastersWhateverTheTiling) {
   const nlohmann::json stats = report_of(dir / "r.json");
   EXPECT_GT(stats.at("noise_samples").get<int>(), 20) << stats;
   EXPECT_DOUBLE_EQ(report_of(dir / "whole_out" / "report.json").at("noise_floor_m").get<double>(), stats.at("noise_floor_m").get<double>());
+  // ... and the run's footprints are regularize's, outline for outline.
+  std::multiset<std::string> run_outlines, regularized;
+  for (const auto& [id, text] : footprints(dir / "whole_out")) run_outlines.insert(text.substr(0, text.rfind(' ')));
+  GDALDataset* d = static_cast<GDALDataset*>(GDALOpenEx((dir / "r.gpkg").c_str(), GDAL_OF_VECTOR, nullptr, nullptr, nullptr));
+  ASSERT_NE(d, nullptr);
+  for (auto& f : *d->GetLayer(0)) {
+    char* wkt = nullptr;
+    f->GetGeometryRef()->exportToWkt(&wkt);
+    regularized.insert(wkt);
+    CPLFree(wkt);
+  }
+  GDALClose(d);
+  EXPECT_GT(run_outlines.size(), 20u);
+  EXPECT_TRUE(run_outlines == regularized) << run_outlines.size() << " against " << regularized.size();
   // Off: each building its own noise, and some footprints change.
   ASSERT_EQ(lodforge("run " + job("off", seg, 100).string() + " --set tiling.noise_survey_windows=0").code, 0);
   EXPECT_EQ(report_of(dir / "off_out" / "report.json").at("noise_floor_m").get<double>(), 0.0);
