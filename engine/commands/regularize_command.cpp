@@ -113,12 +113,14 @@ int run_regularize(int argc, char** argv) {
   std::atomic<std::size_t> done{0};
   std::unique_ptr<tbb::global_control> limit;
   if (threads > 0) limit = std::make_unique<tbb::global_control>(tbb::global_control::max_allowed_parallelism, threads);
+  if (regularizer == "deformation" && options.core.noise.pooled_floor > 0)
+    spdlog::info("measuring the boundary noise of {} buildings, to pool it (stages.noise.pooled_floor)", count);
   const RegularizedBatch batch = regularize_batch(regularizer, contours.buildings, pixel_size, options.core, std::nullopt, [&] {
     const std::size_t n = ++done;
     if (count >= 20 && n % (count / 10) == 0) spdlog::info("{}/{} buildings", n, count);
   });
   if (batch.noise_samples > 0)
-    spdlog::info("boundary noise pooled over {} buildings: {:.3f} m (noise.pooled_floor = {})", batch.noise_samples,
+    spdlog::info("boundary noise pooled over {} buildings: {:.3f} m (stages.noise.pooled_floor = {})", batch.noise_samples,
                  batch.noise_floor_m, options.core.noise.pooled_floor);
   const std::vector<BuildingResult>& results = batch.results;
 
