@@ -113,7 +113,7 @@ int run_regularize(int argc, char** argv) {
   std::atomic<std::size_t> done{0};
   std::unique_ptr<tbb::global_control> limit;
   if (threads > 0) limit = std::make_unique<tbb::global_control>(tbb::global_control::max_allowed_parallelism, threads);
-  if (regularizer == "deformation" && options.core.noise.pooled_floor > 0)
+  if (pools_noise(regularizer, options.core))
     spdlog::info("measuring the boundary noise of {} buildings, to pool it (stages.noise.pooled_floor)", count);
   const RegularizedBatch batch = regularize_batch(regularizer, contours.buildings, pixel_size, options.core, std::nullopt, [&] {
     const std::size_t n = ++done;

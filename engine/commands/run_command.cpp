@@ -224,7 +224,7 @@ int run_job(int argc, char** argv) {
   // The boundary noise every building allows for, pooled over a survey of the raster (not per
   // tile: the same for every tiling and shard).
   NoiseSurvey survey;
-  if (job.regularizer == "deformation" && job.stages.core.noise.pooled_floor > 0 && job.tiling.noise_survey_windows > 0) {
+  if (pools_noise(job.regularizer, job.stages.core) && job.tiling.noise_survey_windows > 0) {
     const auto surveying = Clock::now();
     // (At most the raster's side, and the largest window a tile may read.)
     const double window_px = std::min({job.tiling.noise_survey_window_m / pixel, double(std::max(seg.size.width, seg.size.height)),

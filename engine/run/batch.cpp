@@ -43,6 +43,10 @@ std::size_t measured(const std::vector<NoiseSample>& samples) {
 
 }  // namespace
 
+bool pools_noise(const std::string& regularizer, const CoreOptions& options) {
+  return regularizer == "deformation" && options.noise.pooled_floor > 0;
+}
+
 RegularizedBatch regularize_batch(const std::string& regularizer, const std::vector<BuildingContour>& buildings,
                                   double pixel_size, const CoreOptions& options, std::optional<double> noise_floor_m,
                                   const std::function<void()>& on_done) {
@@ -52,7 +56,7 @@ RegularizedBatch regularize_batch(const std::string& regularizer, const std::vec
   std::vector<double> start_seconds;  // each building's time counts its start's
   if (noise_floor_m) {
     batch.noise_floor_m = *noise_floor_m;
-  } else if (regularizer == "deformation" && options.noise.pooled_floor > 0) {
+  } else if (pools_noise(regularizer, options)) {
     starts = start_buildings(buildings, pixel_size, options, &start_seconds);
     const std::vector<NoiseSample> samples = samples_of(starts);
     batch.noise_samples = measured(samples);

@@ -14,6 +14,10 @@ namespace lodforge {
 
 class MaskWindowReader;
 
+// Whether buildings regularized together pool their noise: the deformation chain with
+// noise.pooled_floor above 0 (the peers use no noise).
+bool pools_noise(const std::string& regularizer, const CoreOptions& options);
+
 struct RegularizedBatch {
   std::vector<BuildingResult> results;  // in the buildings' order
   double noise_floor_m = 0;             // the noise floor they were regularized with

@@ -122,7 +122,8 @@ ContourResult extract_contours(const Components& components, const GeoTransform&
   std::vector<int> order;
   for (int k = 1; k < count; ++k) {
     if (keep && !keep(component_box(components, k), first[k])) continue;
-    if (stats.at<int>(k, cv::CC_STAT_AREA) * pixel_area < options.min_area_m2 || stats.at<int>(k, cv::CC_STAT_AREA) < options.min_pixels) {
+    const int pixels = stats.at<int>(k, cv::CC_STAT_AREA);
+    if (pixels * pixel_area < options.min_area_m2 || pixels < options.min_pixels) {
       ++result.dropped_small;
       continue;
     }
@@ -147,9 +148,8 @@ ContourResult extract_contours(const Components& components, const GeoTransform&
       if (orientation > 0) std::reverse(ring.begin(), ring.end());
       const bool is_outer = b.rings.empty();
       // (A hole's area is a whole number of pixels: half a pixel is margin enough.)
-      if (!is_outer && (std::abs(signed_area(ring)) < options.min_hole_area_m2 ||
-                        std::abs(signed_area(ring)) < (options.min_pixels - 0.5) * pixel_area))
-        continue;
+      const double area = is_outer ? 0.0 : std::abs(signed_area(ring));
+      if (!is_outer && (area < options.min_hole_area_m2 || area < (options.min_pixels - 0.5) * pixel_area)) continue;
       b.rings.push_back(std::move(ring));
     }
     result.buildings.push_back(std::move(b));

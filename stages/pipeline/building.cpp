@@ -38,6 +38,16 @@ struct BudgetExceeded : StageError {
 
 using Clock = std::chrono::steady_clock;
 
+// Why the chain does not take these rings (fewer than 4 edges, more than budget.max_edges), or empty.
+std::string contour_problem(const std::vector<Ring>& rings, const CoreOptions& o) {
+  if (rings.empty() || rings[0].size() < 4) return "contour has fewer than 4 edges";
+  std::size_t edges = 0;
+  for (const Ring& r : rings) edges += r.size();
+  if (edges > std::size_t(o.budget.max_edges))
+    return "contour has " + std::to_string(edges) + " edges, more than budget.max_edges = " + std::to_string(o.budget.max_edges);
+  return "";
+}
+
 std::vector<Ring> translate(const std::vector<Ring>& rings, const Vec2& offset, double scale) {
   std::vector<Ring> out = rings;
   for (Ring& ring : out) for (Vec2& p : ring) p = (p - offset) / scale;
@@ -388,12 +398,9 @@ double outline_reach(const PolygonWithHoles& polygon, const PolygonWithHoles& co
 
 void run_chain(const std::vector<Ring>& rings, double pixel_size, const CoreOptions& o, double noise_floor_m,
                BuildingStart start, BuildingResult& result, const std::function<bool()>& over_budget) {
+  if (const std::string problem = contour_problem(rings, o); !problem.empty()) throw StageError("input", problem);
   std::size_t edges = 0;
   for (const Ring& r : rings) edges += r.size();
-  if (rings.empty() || rings[0].size() < 4) throw StageError("input", "contour has fewer than 4 edges");
-  if (edges > std::size_t(o.budget.max_edges))
-    throw StageError("input", "contour has " + std::to_string(edges) + " edges, more than budget.max_edges = " +
-                                  std::to_string(o.budget.max_edges));
   bool started = start.normals.size() == rings.size();
   for (std::size_t r = 0; started && r < rings.size(); ++r) started = start.normals[r].size() == rings[r].size();
   if (!started) start = start_building(rings, pixel_size, o, false);
@@ -631,9 +638,7 @@ PolygonWithHoles fallback_footprint(const std::vector<Ring>& rings, double toler
 
 BuildingStart start_building(const std::vector<Ring>& rings, double pixel_size, const CoreOptions& o, bool measure_noise) {
   BuildingStart start;
-  std::size_t edges = 0;
-  for (const Ring& r : rings) edges += r.size();
-  if (rings.empty() || rings[0].size() < 4 || edges > std::size_t(o.budget.max_edges)) return start;  // (the chain says why)
+  if (!contour_problem(rings, o).empty()) return start;  // (the chain says why)
   for (const Ring& ring : rings) start.normals.push_back(smooth_normals(ring, pixel_size, o.smoothing));
   start.chord = chord_lattice(rings, o.lattice);
   if (!measure_noise) return start;
