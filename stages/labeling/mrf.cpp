@@ -33,27 +33,42 @@ double smooth_weight(const LabelingInput& in, std::size_t r, std::size_t i, cons
 }
 
 // Every term of the energy that does not depend on the labeling, computed once per building
-// (an expansion cycle visits each label, and each candidate's energy is evaluated): the same
-// values as computed on the spot, so the labeling is unchanged.
+// (an expansion cycle visits each label, and each candidate's energy is evaluated), over groups
+// of consecutive edges whose normals lie within group_deg of the group's first one's: a group's
+// data term is its edges' summed, its smoothness weight to the next group that of its last edge
+// to the next one's first, so the energy of a labeling constant on every group is the same as
+// edge by edge. Labels change only between groups: a change between edges that face the same
+// way within a degree or two is seldom the cheaper, and at fine pixels a wall's straight
+// stretches are hundreds of edges, which the expansions' graphs no longer carry one by one.
 struct Terms {
   int labels = 0;
-  std::vector<int> offset;            // first edge of each ring in the flat numbering
-  std::vector<double> data;           // per flat edge, per label
-  std::vector<double> smooth;         // per flat edge: weight to its ring successor
+  std::vector<int> offset;            // first group of each ring in the flat numbering
+  std::vector<int> first;             // per ring, per group: its first edge (ring's index)
+  std::vector<double> data;           // per flat group, per label
+  std::vector<double> smooth;         // per flat group: weight to its ring successor
   std::vector<double> distance;       // per pair of labels
   std::vector<double> label_cost;     // per label
 
   Terms(const LabelingInput& in, const MrfOptions& o) : labels(int(in.directions.size())), offset(in.normals.size() + 1, 0) {
-    for (std::size_t r = 0; r < in.normals.size(); ++r) offset[r + 1] = offset[r] + int(in.normals[r].size());
-    data.resize(std::size_t(offset.back()) * labels);
-    smooth.resize(std::size_t(offset.back()), 0.0);
+    const double tolerance = 2.0 * std::sin(0.5 * o.group_deg * M_PI / 180.0);
     for (std::size_t r = 0; r < in.normals.size(); ++r) {
       const std::size_t m = in.normals[r].size();
-      for (std::size_t i = 0; i < m; ++i) {
-        const std::size_t p = std::size_t(offset[r]) + i;
-        for (int l = 0; l < labels; ++l) data[p * labels + l] = data_term(in, r, i, l, o);
-        if (m >= 2) smooth[p] = smooth_weight(in, r, i, o);
+      std::size_t groups = 0;
+      for (std::size_t i = 0; i < m;) {
+        std::size_t j = i + 1;
+        while (j < m && (in.normals[r][j] - in.normals[r][i]).norm() < tolerance) ++j;
+        first.push_back(int(i));
+        const std::size_t g = data.size() / std::size_t(labels);
+        data.resize(data.size() + std::size_t(labels), 0.0);
+        for (std::size_t k = i; k < j; ++k)
+          for (int l = 0; l < labels; ++l) data[g * labels + l] += data_term(in, r, k, l, o);
+        // The weight to the next group: from this group's last edge (the ring's last edge's
+        // to edge 0, the first group's first edge).
+        smooth.push_back(m >= 2 ? smooth_weight(in, r, j - 1, o) : 0.0);
+        ++groups;
+        i = j;
       }
+      offset[r + 1] = offset[r] + int(groups);
     }
     distance.resize(std::size_t(labels) * labels);
     for (int a = 0; a < labels; ++a)
@@ -62,6 +77,16 @@ struct Terms {
   }
   double d(int p, int l) const { return data[std::size_t(p) * labels + l]; }
   double dist(int a, int b) const { return distance[std::size_t(a) * labels + b]; }
+  int groups(std::size_t r) const { return offset[r + 1] - offset[r]; }
+  // A ring's edge labels from its group labels.
+  std::vector<int> edge_labels(const std::vector<int>& group_labels, std::size_t r, std::size_t edges) const {
+    std::vector<int> out(edges);
+    for (int g = 0; g < groups(r); ++g) {
+      const std::size_t end = g + 1 < groups(r) ? std::size_t(first[std::size_t(offset[r] + g + 1)]) : edges;
+      std::fill(out.begin() + first[std::size_t(offset[r] + g)], out.begin() + long(end), group_labels[std::size_t(g)]);
+    }
+    return out;
+  }
 };
 
 double energy(const Terms& t, const EdgeLabels& labels) {
@@ -139,22 +164,30 @@ EdgeLabels expand(const Terms& t, const EdgeLabels& labels, int alpha) {
 }  // namespace
 
 double labeling_energy(const LabelingInput& in, const EdgeLabels& labels, const MrfOptions& o) {
-  return energy(Terms(in, o), labels);
+  MrfOptions each_edge = o;  // any labeling, edge by edge
+  each_edge.group_deg = 0;
+  return energy(Terms(in, each_edge), labels);
 }
 
 EdgeLabels label_edges(const LabelingInput& in, const MrfOptions& o) {
+  if (in.directions.size() < 2) {
+    EdgeLabels labels(in.normals.size());
+    for (std::size_t r = 0; r < in.normals.size(); ++r) labels[r].assign(in.normals[r].size(), 0);
+    return labels;
+  }
+  const Terms terms(in, o);
+  // From the nearest direction of every group (the least data term).
   EdgeLabels labels(in.normals.size());
   for (std::size_t r = 0; r < in.normals.size(); ++r) {
-    labels[r].resize(in.normals[r].size());
-    for (std::size_t i = 0; i < in.normals[r].size(); ++i) {
+    labels[r].resize(std::size_t(terms.groups(r)));
+    for (int g = 0; g < terms.groups(r); ++g) {
+      const int p = terms.offset[r] + g;
       int best = 0;
-      for (std::size_t l = 1; l < in.directions.size(); ++l)
-        if (in.normals[r][i].dot(in.directions[l]) > in.normals[r][i].dot(in.directions[best])) best = int(l);
-      labels[r][i] = best;
+      for (int l = 1; l < terms.labels; ++l)
+        if (terms.d(p, l) < terms.d(p, best)) best = l;
+      labels[r][std::size_t(g)] = best;
     }
   }
-  if (in.directions.size() < 2) return labels;
-  const Terms terms(in, o);
   double e0 = energy(terms, labels);
   // An expansion is a function of the labeling: one already tried and refused on the current
   // labeling would be refused again, so it is skipped until the labeling changes.
@@ -176,6 +209,7 @@ EdgeLabels label_edges(const LabelingInput& in, const MrfOptions& o) {
     }
     if (!improved) break;
   }
+  for (std::size_t r = 0; r < labels.size(); ++r) labels[r] = terms.edge_labels(labels[r], r, in.normals[r].size());
   return labels;
 }
 

@@ -14,6 +14,7 @@ struct MrfOptions {
   double sigma = 0.5;    // smoothness width of eq. 6 (on normal differences, unitless)
   double unit_length_m = 0.1;  // data and smoothness are counted per this much contour length
   int max_cycles = 10;         // expansion cycles over all labels at most
+  double group_deg = 2.0;      // consecutive edges whose normals lie this close are labeled as one
 
   template <class V>
   void visit(V& v) {
@@ -22,6 +23,7 @@ struct MrfOptions {
     v("sigma", sigma, "width of the smoothness weight of eq. 6", Check::above(0));
     v("unit_length_m", unit_length_m, "contour length counted as one term of eq. 5-6 (m), so the energy does not depend on the pixel size", Check::above(0));
     v("max_cycles", max_cycles, "alpha-expansion cycles at most", Check::at_least(1));
+    v("group_deg", group_deg, "consecutive edges of a ring whose smoothed normals lie within this of the first one's are labeled as one: their terms summed, the energy of every labeling that keeps them together is unchanged, a label change between them is not tried (degrees; 0 = each edge on its own)", Check::between(0, 10));
   }
 };
 
