@@ -163,6 +163,31 @@ double mean_distance_to_boundary(const Ring& ring, const PolygonWithHoles& polyg
   return weight > 0 ? sum / weight : 0.0;
 }
 
+bool leaves_a_stretch(const std::vector<std::pair<double, double>>& simple, const std::vector<std::pair<double, double>>& fine,
+                      double noise, double correlation, double k) {
+  const std::size_t n = simple.size();
+  if (n == 0 || fine.size() != n || noise <= 0 || correlation <= 0) return false;
+  // Prefix sums over the ring twice round: length, and length times the excess distance.
+  std::vector<double> length(2 * n + 1, 0.0), excess(2 * n + 1, 0.0);
+  for (std::size_t i = 0; i < 2 * n; ++i) {
+    const std::size_t e = i % n;
+    length[i + 1] = length[i] + simple[e].second;
+    excess[i + 1] = excess[i] + simple[e].second * (simple[e].first - fine[e].first);
+  }
+  const double perimeter = length[n];
+  for (double window = correlation; window <= 0.5 * perimeter; window *= 2) {
+    std::size_t end = 0;
+    for (std::size_t first = 0; first < n; ++first) {
+      end = std::max(end, first + 1);
+      while (end < first + n && length[end] - length[first] < window) ++end;
+      const double l = length[end] - length[first];
+      if (l <= 0) continue;
+      if ((excess[end] - excess[first]) / l > k * noise * std::sqrt(correlation / l)) return true;
+    }
+  }
+  return false;
+}
+
 Ring best_rectangle(const Ring& ring, const std::vector<Vec2>& normals, double* fit) {
   *fit = std::numeric_limits<double>::infinity();
   if (ring.size() < 3) return {};

@@ -21,6 +21,7 @@ struct ModelOptions {
   double stretch_fit_noise = 1.0;  // a wall off the lattice takes the lattice outline's walls where they explain its contour within this many noises of the regular outline
   double rectangle_tolerance = 1.0;  // ... and a rectangle, by a high percentile of the distances ...
   double rectangle_quantile = 0.95;  // ... this one
+  double rectangle_stretch_noise = 6.0;  // ... and leaving no stretch of contour farther than the outline by this many standard errors
   double min_noise_px = 0.3;         // the noise assumed at least (a staircase's quantization)
   double fallback_fit_px = 0.5;      // a rectangle replaces a failed building's fallback when it fits within this ...
   double fallback_fit_ratio = 2.0;   // ... or this many times as far as the fallback (mean distances)
@@ -36,6 +37,7 @@ struct ModelOptions {
     v("rescue_fit_noise", rescue_fit_noise, "when the chain fails, the lattice outline stands in for the fallback if the contour lies within this many times the boundary noise of it (mean distance), or as close to it as to the fallback", Check::at_least(0));
     v("rectangle_tolerance", rectangle_tolerance, "a building becomes the oriented rectangle of its contour's moments when that explains the contour no worse than the regularized outline plus this many times the boundary noise (a high percentile of the distances of the contour to each, rectangle_quantile: a rectangle must follow the contour everywhere, not on average; 0 = off)", Check::at_least(0));
     v("rectangle_quantile", rectangle_quantile, "... that percentile, as a share (0.95: the rectangle may leave 5 % of the contour, by length, farther than the outline does plus the tolerance)", Check::between(0.5, 1));
+    v("rectangle_stretch_noise", rectangle_stretch_noise, "... and when it leaves no stretch of contour that the outline explains: along no stretch (from corners.snap_correlation_m long, doubling, to half the ring) may the contour lie farther from the rectangle than from the outline, on average, by more than this many standard errors of such a mean (the boundary noise times sqrt(corners.snap_correlation_m / the stretch's length)): a wing, a notch or the bow of an arc, metres long, that a percentile passes over (0 = off)", Check::at_least(0));
     v("arc_noise_ratio", arc_noise_ratio, "the boundary noise the model choice allows for (every tolerance in noises above) is at most this many times the contour's spread about parabolas fitted along the same runs of the lattice: a round building's contour lies metres off lattice lines, which is no noise, and a rectangle or a pentagon would explain it 'within the noise'; the floor min_noise_px still applies, and the outlines themselves (runs, steps, curves) are drawn with the noise as measured (0 = no bound)", Check::at_least(0));
     v("min_noise_px", min_noise_px, "the boundary noise is taken as at least this (pixels; a staircase's own)", Check::at_least(0));
     v("fallback_fit_px", fallback_fit_px, "when the chain fails, the rectangle replaces the Douglas-Peucker fallback if the contour lies within this (pixels, mean distance) of it ...", Check::at_least(0));
@@ -59,6 +61,13 @@ double mean_distance_to_boundary(const Ring& ring, const PolygonWithHoles& polyg
 
 // ... and the length-weighted q-quantile of those distances.
 double distance_quantile_to_boundary(const Ring& ring, const PolygonWithHoles& polygon, double q);
+
+// Whether along some stretch of the ring (cyclic; lengths from `correlation`, doubling, up to
+// half the ring) the ring's mean distance to a simpler outline (`simple`) exceeds its mean
+// distance to a finer one (`fine`) by more than k * noise * sqrt(correlation / length): the two
+// per-edge (distance, length) lists of boundary_distances, for the same ring.
+bool leaves_a_stretch(const std::vector<std::pair<double, double>>& simple, const std::vector<std::pair<double, double>>& fine,
+                      double noise, double correlation, double k);
 
 // The best moment rectangle of the ring over the candidate normals, its principal axes and
 // every 3 degrees: the one whose boundary lies closest to the ring. *fit: its mean distance.

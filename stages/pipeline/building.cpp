@@ -305,17 +305,25 @@ double fit_tolerance(const std::vector<Ring>& rings, double pixel_size, const Bu
 }
 
 // Replaces the chain's outline by the building's moment rectangle when that explains the contour
-// (a high percentile, models.rectangle_quantile, of the contour's distances to each) no worse than the outline plus the allowed noise:
+// (a high percentile, models.rectangle_quantile, of the contour's distances to each) no worse than the outline plus the allowed noise,
+// and leaves out no stretch of it that the outline explains (a wing, a notch, an arc's bow):
 // the simplest outline that explains the contour within its noise.
-void choose_rectangle(const std::vector<Ring>& rings, double pixel_size, const ModelOptions& o, BuildingResult& result) {
+void choose_rectangle(const std::vector<Ring>& rings, double pixel_size, const CoreOptions& co, BuildingResult& result) {
+  const ModelOptions& o = co.models;
   if (o.rectangle_tolerance <= 0 || rings.size() != 1 || result.footprint.outer.size() <= 4) return;
   double mean_fit = 0;  // the best rectangle's mean distance, which chose it
   Ring rectangle = best_rectangle(rings[0], result.directions, &mean_fit);
   if (rectangle.empty()) return;
   PolygonWithHoles candidate{std::move(rectangle), {}};
-  const double outline_fit = distance_quantile_to_boundary(rings[0], result.footprint, o.rectangle_quantile);
-  const double rectangle_fit = distance_quantile_to_boundary(rings[0], candidate, o.rectangle_quantile);
-  if (rectangle_fit > outline_fit + o.rectangle_tolerance * model_noise(result, pixel_size, o)) return;
+  const auto outline_distances = boundary_distances(rings[0], result.footprint);
+  const auto rectangle_distances = boundary_distances(rings[0], candidate);
+  const double outline_fit = weighted_quantile(outline_distances, o.rectangle_quantile);
+  const double rectangle_fit = weighted_quantile(rectangle_distances, o.rectangle_quantile);
+  const double noise = model_noise(result, pixel_size, o);
+  if (rectangle_fit > outline_fit + o.rectangle_tolerance * noise) return;
+  if (o.rectangle_stretch_noise > 0 &&
+      leaves_a_stretch(rectangle_distances, outline_distances, noise, std::max(co.corners.snap_correlation_m, pixel_size), o.rectangle_stretch_noise))
+    return;
   if (!polygon_problem(candidate).empty()) return;
   result.footprint = std::move(candidate);
   result.model = "rectangle";
@@ -583,7 +591,7 @@ void run_chain(const std::vector<Ring>& rings, double pixel_size, const CoreOpti
       }
     }
   }
-  if (on_lattice) choose_rectangle(rings, pixel_size, o.models, result);  // a round shape is no rectangle
+  if (on_lattice) choose_rectangle(rings, pixel_size, o, result);  // a round shape is no rectangle
   // Per stretch of contour, the simpler model where it explains the stretch as well: the regular
   // outline's walls off the lattice redrawn with the lattice outline's walls where those explain
   // their contour within stretch_fit_noise noises (an oblique cut across a wobble or a notch).
