@@ -43,7 +43,7 @@ double smooth_weight(const LabelingInput& in, std::size_t r, std::size_t i, cons
 struct Terms {
   int labels = 0;
   std::vector<int> offset;            // first group of each ring in the flat numbering
-  std::vector<int> first;             // per ring, per group: its first edge (ring's index)
+  std::vector<int> first;             // per flat group: its first edge (the ring's index)
   std::vector<double> data;           // per flat group, per label
   std::vector<double> smooth;         // per flat group: weight to its ring successor
   std::vector<double> distance;       // per pair of labels
@@ -58,7 +58,7 @@ struct Terms {
         std::size_t j = i + 1;
         while (j < m && (in.normals[r][j] - in.normals[r][i]).norm() < tolerance) ++j;
         first.push_back(int(i));
-        const std::size_t g = data.size() / std::size_t(labels);
+        const std::size_t g = std::size_t(offset[r]) + groups;
         data.resize(data.size() + std::size_t(labels), 0.0);
         for (std::size_t k = i; k < j; ++k)
           for (int l = 0; l < labels; ++l) data[g * labels + l] += data_term(in, r, k, l, o);

@@ -175,6 +175,7 @@ bool leaves_a_stretch(const std::vector<std::pair<double, double>>& simple, cons
     excess[i + 1] = excess[i] + simple[e].second * (simple[e].first - fine[e].first);
   }
   const double perimeter = length[n];
+  if (!std::isfinite(perimeter)) return false;
   for (double window = correlation; window <= 0.5 * perimeter; window *= 2) {
     std::size_t end = 0;
     for (std::size_t first = 0; first < n; ++first) {
