@@ -392,6 +392,7 @@ TEST(Models, AStretchTheOutlineExplainsIsLeftOutOnlyBeyondTheNoise) {
   EXPECT_TRUE(leaves_a_stretch(to_house, to_notched, 0.1, 1.0, 6.0));
   EXPECT_FALSE(leaves_a_stretch(to_house, to_notched, 1.0, 1.0, 6.0));
   EXPECT_FALSE(leaves_a_stretch(to_notched, to_notched, 0.1, 1.0, 6.0));
+  EXPECT_FALSE(leaves_a_stretch(to_notched, to_house, 0.1, 1.0, 6.0));  // (the notched outline leaves none the house explains)
   std::vector<std::pair<double, double>> even = to_notched;
   for (auto& [d, length] : even) d += 0.01;
   EXPECT_FALSE(leaves_a_stretch(even, to_notched, 0.1, 1.0, 6.0));

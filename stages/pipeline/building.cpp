@@ -306,7 +306,8 @@ double fit_tolerance(const std::vector<Ring>& rings, double pixel_size, const Bu
 
 // Replaces the chain's outline by the building's moment rectangle when that explains the contour
 // (a high percentile, models.rectangle_quantile, of the contour's distances to each) no worse than the outline plus the allowed noise,
-// and leaves out no stretch of it that the outline explains (a wing, a notch, an arc's bow):
+// and leaves out no stretch of it that the outline explains (a wing, a notch, an arc's bow)
+// unless the outline leaves one the rectangle explains:
 // the simplest outline that explains the contour within its noise.
 void choose_rectangle(const std::vector<Ring>& rings, double pixel_size, const CoreOptions& co, BuildingResult& result) {
   const ModelOptions& o = co.models;
@@ -321,8 +322,12 @@ void choose_rectangle(const std::vector<Ring>& rings, double pixel_size, const C
   const double rectangle_fit = weighted_quantile(rectangle_distances, o.rectangle_quantile);
   const double noise = model_noise(result, pixel_size, o);
   if (rectangle_fit > outline_fit + o.rectangle_tolerance * noise) return;
+  // (Unless the outline itself leaves a stretch the rectangle explains: then it is no better an
+  // explanation, only a more intricate one, as where a chain's outline went astray.)
+  const double correlation = std::max(co.corners.snap_correlation_m, pixel_size);
   if (o.rectangle_stretch_noise > 0 &&
-      leaves_a_stretch(rectangle_distances, outline_distances, noise, std::max(co.corners.snap_correlation_m, pixel_size), o.rectangle_stretch_noise))
+      leaves_a_stretch(rectangle_distances, outline_distances, noise, correlation, o.rectangle_stretch_noise) &&
+      !leaves_a_stretch(outline_distances, rectangle_distances, noise, correlation, o.rectangle_stretch_noise))
     return;
   if (!polygon_problem(candidate).empty()) return;
   result.footprint = std::move(candidate);
