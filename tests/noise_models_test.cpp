@@ -3,9 +3,11 @@
 // metres, on shapes whose truth is known.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <iostream>
 #include <limits>
+#include <numeric>
 #include <optional>
 
 #include "directions/lattice.hpp"
@@ -28,6 +30,33 @@ BuildingResult regularize(const test::RasterizedShape& shape, double pixel_size)
   EXPECT_EQ(shape.buildings.size(), 1u);
   if (shape.buildings.empty()) return {};
   return regularize_building(shape.buildings[0].rings, pixel_size, CoreOptions{});
+}
+
+// A shape's masks (seeds 1 .. masks, wobble and rounding in metres) regularized with the
+// defaults and with other options: per run, the vertex count and the IoU with the truth.
+struct Compared {
+  std::vector<std::size_t> vertices, vertices_other;
+  std::vector<double> iou, iou_other;
+  double mean_iou() const { return std::accumulate(iou.begin(), iou.end(), 0.0) / double(iou.size()); }
+  double mean_iou_other() const { return std::accumulate(iou_other.begin(), iou_other.end(), 0.0) / double(iou_other.size()); }
+};
+
+Compared regularize_with_and_without(const PolygonWithHoles& truth, double pixel, double wobble_m, double radius_m, int masks,
+                                     const CoreOptions& other) {
+  Compared c;
+  for (std::uint64_t seed = 1; seed <= std::uint64_t(masks); ++seed) {
+    const test::RasterizedShape shape = test::rasterize_shape_m(truth, pixel, wobble_m, 8.0, radius_m, seed);
+    EXPECT_EQ(shape.buildings.size(), 1u);
+    if (shape.buildings.size() != 1) continue;
+    const BuildingResult r = regularize_building(shape.buildings[0].rings, pixel, CoreOptions{});
+    const BuildingResult r_other = regularize_building(shape.buildings[0].rings, pixel, other);
+    EXPECT_TRUE(r.ok && r_other.ok) << "seed " << seed << ": " << r.reason << r_other.reason;
+    c.vertices.push_back(r.footprint.outer.size());
+    c.vertices_other.push_back(r_other.footprint.outer.size());
+    c.iou.push_back(test::iou(r.footprint, truth));
+    c.iou_other.push_back(test::iou(r_other.footprint, truth));
+  }
+  return c;
 }
 
 // The boundary noise measured on a contour follows the wobble's amplitude in metres, whatever
@@ -411,23 +440,13 @@ TEST(NoisyMasks, ABlockWithSetBackEndsIsNoRectangle) {
       {{{0, 0}, {60, 0}, {60, 3}, {58, 3}, {58, 11}, {60, 11}, {60, 14}, {0, 14}, {0, 11}, {2, 11}, {2, 3}, {0, 3}}, {}}, 20.0);
   CoreOptions without;
   without.models.rectangle_stretch_noise = 0;
-  int kept = 0, kept_without = 0;
-  double iou = 0, iou_without = 0;
-  for (std::uint64_t seed = 1; seed <= 8; ++seed) {
-    const test::RasterizedShape shape = test::rasterize_shape_m(block, 0.5, 0.5, 8.0, 1.0, seed);
-    ASSERT_EQ(shape.buildings.size(), 1u);
-    const BuildingResult r = regularize_building(shape.buildings[0].rings, 0.5, CoreOptions{});
-    const BuildingResult r_without = regularize_building(shape.buildings[0].rings, 0.5, without);
-    ASSERT_TRUE(r.ok && r_without.ok) << r.reason << r_without.reason;
-    kept += r.footprint.outer.size() > 4;
-    kept_without += r_without.footprint.outer.size() > 4;
-    iou += test::iou(r.footprint, block) / 8;
-    iou_without += test::iou(r_without.footprint, block) / 8;
-  }
-  std::cout << "set-backs kept on " << kept << " of 8 masks (" << kept_without << " without the rule), mean IoU " << iou << " ("
-            << iou_without << ")\n";
-  EXPECT_GE(kept, kept_without + 2);
-  EXPECT_GE(iou, iou_without + 0.002);
+  const Compared c = regularize_with_and_without(block, 0.5, 0.5, 1.0, 8, without);
+  ASSERT_EQ(c.iou.size(), 8u);
+  const auto kept = [](const std::vector<std::size_t>& v) { return std::count_if(v.begin(), v.end(), [](std::size_t n) { return n > 4; }); };
+  std::cout << "set-backs kept on " << kept(c.vertices) << " of 8 masks (" << kept(c.vertices_other) << " without the rule), mean IoU "
+            << c.mean_iou() << " (" << c.mean_iou_other() << ")\n";
+  EXPECT_GE(kept(c.vertices), kept(c.vertices_other) + 2);
+  EXPECT_GE(c.mean_iou(), c.mean_iou_other() + 0.002);
 }
 
 // The paper's deformed route on a fine raster: a 40 x 30 m house at 5 cm (a 2,800-pixel
@@ -530,22 +549,13 @@ TEST(NoisyMasks, AtTenCentimetresTheOutlineDoesNotTraceAMetreOfWobble) {
   const PolygonWithHoles truth = test::rotated(PolygonWithHoles{{{0, 0}, {30, 0}, {30, 14}, {0, 14}}, {}}, 17.0);
   CoreOptions off;
   off.models.regular_fit_noise = 0;
-  std::size_t vertices = 0, vertices_off = 0;
-  double iou = 0, iou_off = 0;
-  for (std::uint64_t seed = 1; seed <= 6; ++seed) {
-    const test::RasterizedShape shape = test::rasterize_shape_m(truth, 0.1, 1.0, 8.0, 2.0, seed);
-    ASSERT_EQ(shape.buildings.size(), 1u);
-    const BuildingResult r = regularize_building(shape.buildings[0].rings, 0.1, CoreOptions{});
-    const BuildingResult r_off = regularize_building(shape.buildings[0].rings, 0.1, off);
-    ASSERT_TRUE(r.ok && r_off.ok) << "seed " << seed << ": " << r.reason << r_off.reason;
-    vertices += r.footprint.outer.size();
-    vertices_off += r_off.footprint.outer.size();
-    iou += test::iou(r.footprint, truth) / 6;
-    iou_off += test::iou(r_off.footprint, truth) / 6;
-  }
+  const Compared c = regularize_with_and_without(truth, 0.1, 1.0, 2.0, 6, off);
+  ASSERT_EQ(c.iou.size(), 6u);
+  const std::size_t vertices = std::accumulate(c.vertices.begin(), c.vertices.end(), std::size_t(0));
+  const std::size_t vertices_off = std::accumulate(c.vertices_other.begin(), c.vertices_other.end(), std::size_t(0));
   EXPECT_LE(double(vertices), 0.75 * double(vertices_off)) << vertices << " against " << vertices_off;
   EXPECT_LE(vertices, 6u * 12u);
-  EXPECT_GE(iou, iou_off - 0.002) << "without the rule: " << iou_off;
+  EXPECT_GE(c.mean_iou(), c.mean_iou_other() - 0.002) << "without the rule: " << c.mean_iou_other();
 }
 
 // The noise pooled over a mask is the median of its buildings' samples weighted by outline
