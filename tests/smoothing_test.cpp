@@ -93,9 +93,9 @@ TEST(Smoothing, SharedPairWeightsGiveEquationTwo) {
   for (const auto& [ring, options] : {std::pair{stairs, SmoothingOptions{}}, std::pair{stairs, wide}, std::pair{few, wide}, std::pair{few, whole}}) {
     const std::vector<Vec2> got = smooth_normals(ring, 0.1, options), want = smooth_reference(ring, 0.1, options);
     ASSERT_EQ(got.size(), want.size());
-    // (The angle weights come from tables within about 1e-8 of eq. 2's exponential: the normals
+    // (The angle weights come from tables within about 1e-9 of eq. 2's exponential: the normals
     // agree to better than 1e-9, not to the last bit.)
-    for (std::size_t i = 0; i < got.size(); ++i) EXPECT_LT((got[i] - want[i]).norm(), 1e-8) << "edge " << i << " of " << got.size();
+    for (std::size_t i = 0; i < got.size(); ++i) EXPECT_LT((got[i] - want[i]).norm(), 1e-9) << "edge " << i << " of " << got.size();
   }
 }
 
