@@ -148,8 +148,10 @@ ContourResult extract_contours(const Components& components, const GeoTransform&
       if (orientation > 0) std::reverse(ring.begin(), ring.end());
       const bool is_outer = b.rings.empty();
       // (A hole's area is a whole number of pixels: half a pixel is margin enough.)
-      const double area = is_outer ? 0.0 : std::abs(signed_area(ring));
-      if (!is_outer && (area < options.min_hole_area_m2 || area < (options.min_pixels - 0.5) * pixel_area)) continue;
+      if (!is_outer) {
+        const double area = std::abs(signed_area(ring));
+        if (area < options.min_hole_area_m2 || area < (options.min_pixels - 0.5) * pixel_area) continue;
+      }
       b.rings.push_back(std::move(ring));
     }
     result.buildings.push_back(std::move(b));

@@ -253,7 +253,7 @@ void snap_to_lattice(const Ring& ring, const std::vector<std::pair<int, int>>& r
                      const Vec2& lattice, const CornerOptions& o, double pixel_size, double noise) {
   if (o.snap_max_deg <= 0) return;
   const double min_cos = std::cos(o.snap_max_deg * M_PI / 180.0);
-  const double correlation = std::max(o.snap_correlation_m, pixel_size);
+  const double correlation = noise_correlation_m(o, pixel_size);
   for (std::size_t r = 0; r < runs.size(); ++r) {
     const Vec2 target = nearest_lattice_axis(lines[r].normal, lattice);
     const double cos_turn = std::clamp(target.dot(lines[r].normal), -1.0, 1.0);

@@ -3,6 +3,7 @@
 // with the direction fixed, the offset is the length-weighted mean of the edge midpoints'
 // projections); corners are the intersections of consecutive lines.
 #pragma once
+#include <algorithm>
 #include <string>
 #include <vector>
 
@@ -80,6 +81,10 @@ struct CornerOptions {
     v("split_max_rms_noise", split_max_rms_noise, "... or at most this many times the building's boundary noise, which also stands for split_max_residual (a wobbling wall lies about its line by the noise)", Check::at_least(0));
   }
 };
+
+// The length over which the boundary noise is taken to be correlated: snap_correlation_m, at
+// least a pixel (for the standard error of a mean or a fit along the contour).
+inline double noise_correlation_m(const CornerOptions& o, double pixel_size) { return std::max(o.snap_correlation_m, pixel_size); }
 
 // Absorbs runs shorter than min_run_px pixel lengths into their longer neighbour, in place.
 void absorb_short_runs(const Ring& ring, std::vector<int>& labels, double min_length);

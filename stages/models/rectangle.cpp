@@ -1,7 +1,5 @@
 #include "models/rectangle.hpp"
 
-#include "models/statistics.hpp"
-
 #include "geometry/polygon.hpp"
 
 #include <Eigen/Eigenvalues>
@@ -148,10 +146,6 @@ std::vector<std::pair<double, double>> boundary_distances(const Ring& ring, cons
     if (nearest_segments) nearest_segments->push_back(nearest);
   }
   return distances;
-}
-
-double distance_quantile_to_boundary(const Ring& ring, const PolygonWithHoles& polygon, double q) {
-  return weighted_quantile(boundary_distances(ring, polygon), q);
 }
 
 double mean_distance_to_boundary(const Ring& ring, const PolygonWithHoles& polygon) {

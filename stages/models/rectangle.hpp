@@ -59,9 +59,6 @@ std::vector<std::pair<double, double>> boundary_distances(const Ring& ring, cons
 // The length-weighted mean distance from the ring's edge midpoints to the polygon's boundary.
 double mean_distance_to_boundary(const Ring& ring, const PolygonWithHoles& polygon);
 
-// ... and the length-weighted q-quantile of those distances.
-double distance_quantile_to_boundary(const Ring& ring, const PolygonWithHoles& polygon, double q);
-
 // Whether along some stretch of the ring (cyclic; lengths from `correlation`, doubling, up to
 // half the ring) the ring's mean distance to a simpler outline (`simple`) exceeds its mean
 // distance to a finer one (`fine`) by more than k * noise * sqrt(correlation / length): the two

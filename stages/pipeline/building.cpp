@@ -300,7 +300,7 @@ double model_noise(const BuildingResult& result, double pixel_size, const ModelO
 double fit_tolerance(const std::vector<Ring>& rings, double pixel_size, const BuildingResult& result, const CoreOptions& o) {
   double perimeter_m = 0;
   for (const Ring& ring : rings) perimeter_m += perimeter(ring);
-  const double correlation = std::max(o.corners.snap_correlation_m, pixel_size);
+  const double correlation = noise_correlation_m(o.corners, pixel_size);
   return o.models.lattice_tolerance * model_noise(result, pixel_size, o.models) * std::sqrt(correlation / std::max(perimeter_m, correlation));
 }
 
@@ -324,7 +324,7 @@ void choose_rectangle(const std::vector<Ring>& rings, double pixel_size, const C
   if (rectangle_fit > outline_fit + o.rectangle_tolerance * noise) return;
   // (Unless the outline itself leaves a stretch the rectangle explains: then it is no better an
   // explanation, only a more intricate one, as where a chain's outline went astray.)
-  const double correlation = std::max(co.corners.snap_correlation_m, pixel_size);
+  const double correlation = noise_correlation_m(co.corners, pixel_size);
   if (o.rectangle_stretch_noise > 0 &&
       leaves_a_stretch(rectangle_distances, outline_distances, noise, correlation, o.rectangle_stretch_noise) &&
       !leaves_a_stretch(outline_distances, rectangle_distances, noise, correlation, o.rectangle_stretch_noise))
