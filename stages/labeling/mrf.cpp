@@ -202,7 +202,10 @@ EdgeLabels label_edges(const LabelingInput& in, const MrfOptions& o) {
         e0 = e;
         labels.swap(candidate);
         improved = true;
+        // (Expanding alpha again at once is refused: every labeling that move reaches, this one's
+        // move reached too, and this is the least of them.)
         std::fill(refused.begin(), refused.end(), 0);
+        refused[alpha] = 1;
       } else {
         refused[alpha] = 1;
       }
