@@ -40,7 +40,7 @@ struct CornerOptions {
   double merge_noise = 0.5;          // ... or this many times the boundary noise are one wall
   double max_cut_m = 3.0;            // an oblique wall shorter than this between square walls is a rounded corner
   double split_px = 1.0;             // a run whose parts lie this far apart (parallel) becomes lines and steps (0 = off)
-  double split_m = 0.5;              // ... and at least this far in metres
+  double split_m = 0.0;              // ... and at least this far in metres (0: the pixel and noise terms alone)
   double split_noise = 5.0;          // ... and at least this many times the boundary noise
   double split_max_residual = 0.15;  // ... when the parts leave at most this share of the spread about one line
   double split_max_rms_px = 0.5;     // ... and at most this RMS distance to their own lines
@@ -74,7 +74,7 @@ struct CornerOptions {
     v("merge_noise", merge_noise, "... or by less than this many times the building's boundary noise", Check::at_least(0));
     v("max_cut_m", max_cut_m, "an oblique wall shorter than this (m) between two square walls of the lattice is a corner the segmentation rounded: the two walls meet at their intersection (0 = off)", Check::at_least(0));
     v("split_px", split_px, "a straight run whose contour is explained by parallel lines this far apart or more (pixels, and split_m; each part at least 4 times as long) becomes those lines joined by steps (0 = off)", Check::at_least(0));
-    v("split_m", split_m, "the least offset between parallel parts of a run that splits it, in metres (the larger of this and split_px applies)", Check::at_least(0));
+    v("split_m", split_m, "the least offset between parallel parts of a run that splits it, in metres (the largest of this, split_px and split_noise applies; 0 = none: a step of a few decimetres is real where the pixels and the noise resolve it, and split_noise keeps a wobble from splitting a wall)", Check::at_least(0));
     v("split_noise", split_noise, "... and at least this many times the building's boundary noise (a step smaller than that is the noise's)", Check::at_least(0));
     v("split_max_residual", split_max_residual, "parts split a run only when they leave at most this share of its contour's spread about one line", Check::between(0, 1));
     v("split_max_rms_px", split_max_rms_px, "... and at most this RMS distance of the contour to the parts' lines (pixels)", Check::above(0));
