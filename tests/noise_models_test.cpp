@@ -9,12 +9,14 @@
 #include <limits>
 #include <numeric>
 #include <optional>
+#include <random>
 
 #include "directions/lattice.hpp"
 #include "eval/metrics.hpp"
 #include "geometry/polygon.hpp"
 #include "models/noise.hpp"
 #include "models/rectangle.hpp"
+#include "models/statistics.hpp"
 #include "normals/smoothing.hpp"
 #include "pipeline/building.hpp"
 #include "support/shapes.hpp"
@@ -587,6 +589,48 @@ TEST(NoisyMasks, AtTenCentimetresTheOutlineDoesNotTraceAMetreOfWobble) {
   EXPECT_LE(double(vertices), 0.75 * double(vertices_off)) << vertices << " against " << vertices_off;
   EXPECT_LE(vertices, 6u * 12u);
   EXPECT_GE(c.mean_iou(), c.mean_iou_other() - 0.002) << "without the rule: " << c.mean_iou_other();
+}
+
+// The weighted quantile by selection is the one a full sort gives: the least value whose weight
+// and the weights of all smaller values reach q of the total, on many values with ties (a
+// contour's distances repeat), a few values, and at q = 0 and 1.
+TEST(Statistics, TheWeightedQuantileIsTheSortedOne) {
+  const auto by_sort = [](std::vector<std::pair<double, double>> v, double q) {
+    std::sort(v.begin(), v.end());
+    double total = 0, acc = 0;
+    for (const auto& x : v) total += x.second;
+    for (const auto& [value, weight] : v)
+      if ((acc += weight) >= q * total) return value;
+    return v.back().first;
+  };
+  std::mt19937_64 random(7);
+  std::uniform_int_distribution<int> level(0, 40);      // values on a grid: ties
+  std::uniform_int_distribution<int> weight(0, 1000);  // integer weights: sums exact in any order
+  int checked = 0;
+  for (const std::size_t n : {1, 2, 5, 31, 33, 100, 1000, 5000}) {
+    for (int trial = 0; trial < 20; ++trial) {
+      std::vector<std::pair<double, double>> v;
+      for (std::size_t k = 0; k < n; ++k) v.push_back({0.05 * level(random), double(weight(random))});
+      for (const double q : {0.0, 0.05, 0.3, 0.5, 0.95, 1.0}) {
+        EXPECT_EQ(weighted_quantile(v, q), by_sort(v, q)) << "n " << n << " trial " << trial << " q " << q;
+        ++checked;
+      }
+    }
+  }
+  EXPECT_EQ(checked, 8 * 20 * 6);
+  // The quantile reached exactly at a value (q of the total a sum of whole weights): that value,
+  // not the next, whatever the order the values come in.
+  for (const std::size_t n : {64, 128, 1000}) {
+    std::vector<std::pair<double, double>> v;
+    for (std::size_t k = 1; k <= n; ++k) v.push_back({double(k), 1.0});
+    for (int trial = 0; trial < 3; ++trial) {
+      for (const double q : {0.25, 0.5, 0.75})
+        EXPECT_EQ(weighted_quantile(v, q), q * double(n)) << "n " << n << " trial " << trial << " q " << q;
+      std::shuffle(v.begin(), v.end(), random);
+    }
+  }
+  EXPECT_EQ(weighted_quantile({}, 0.5), 0.0);
+  EXPECT_EQ(weighted_quantile({{3.0, 1.0}, {1.0, 1.0}, {2.0, 2.0}}, 0.5), 2.0);  // 1: 1/4, 2: 3/4
 }
 
 // The noise pooled over a mask is the median of its buildings' samples weighted by outline

@@ -7,17 +7,46 @@
 namespace lodforge {
 
 // The weighted q-quantile of (value, weight) pairs: the least value whose weight and the weights
-// of all smaller values reach q of the total. 0 for no values.
+// of all smaller values reach q of the total. 0 for no values. (A selection, not a sort: each
+// round splits the values about a pivot and keeps the side the quantile lies on; a few dozen
+// left are sorted. The models take a quantile of every contour edge several times a building.)
 inline double weighted_quantile(std::vector<std::pair<double, double>> values, double q) {
   if (values.empty()) return 0.0;
-  std::sort(values.begin(), values.end());
-  double total = 0, acc = 0;
+  double total = 0;
   for (const auto& v : values) total += v.second;
-  for (const auto& [value, weight] : values) {
-    acc += weight;
-    if (acc >= q * total) return value;
+  const double target = q * total;
+  std::size_t lo = 0, hi = values.size();
+  double below = 0;  // the weight of the values left of lo, all less than those in [lo, hi)
+  while (hi - lo > 32) {
+    // The median of three as pivot; [lo, hi) split into less than, equal to and more than it.
+    const double a = values[lo].first, b = values[lo + (hi - lo) / 2].first, c = values[hi - 1].first;
+    const double pivot = std::max(std::min(a, b), std::min(std::max(a, b), c));
+    if (!(pivot == pivot)) break;  // (a NaN: the sort below orders it as the full sort did)
+    std::size_t less = lo, more = hi;
+    for (std::size_t k = lo; k < more;) {
+      if (values[k].first < pivot) std::swap(values[k++], values[less++]);
+      else if (values[k].first > pivot) std::swap(values[k], values[--more]);
+      else ++k;
+    }
+    double w_less = 0, w_equal = 0;
+    for (std::size_t k = lo; k < less; ++k) w_less += values[k].second;
+    for (std::size_t k = less; k < more; ++k) w_equal += values[k].second;
+    if (below + w_less >= target && less > lo) {
+      hi = less;
+    } else if (below + w_less + w_equal >= target || more == hi) {
+      return pivot;
+    } else {
+      below += w_less + w_equal;
+      lo = more;
+    }
   }
-  return values.back().first;
+  std::sort(values.begin() + long(lo), values.begin() + long(hi));
+  double acc = below;
+  for (std::size_t k = lo; k < hi; ++k) {
+    acc += values[k].second;
+    if (acc >= target) return values[k].first;
+  }
+  return values[hi - 1].first;
 }
 
 }  // namespace lodforge
