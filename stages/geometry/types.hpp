@@ -20,7 +20,7 @@ struct PolygonWithHoles {
 
 // Edge i of a ring goes from ring[i] to ring[(i+1) % size].
 inline Vec2 edge_vector(const Ring& ring, std::size_t i) {
-  return ring[(i + 1) % ring.size()] - ring[i];
+  return ring[i + 1 < ring.size() ? i + 1 : 0] - ring[i];  // (no division: every stage calls this per edge)
 }
 
 // Outward unit normal of a direction vector, for rings with the interior on the left.

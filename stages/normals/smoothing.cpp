@@ -106,16 +106,19 @@ std::vector<Vec2> smooth_normals(const Ring& ring, double pixel_size, const Smoo
   }
   first[n] = distance_weight.size();
   ahead.resize(distance_weight.size());
+  std::vector<Vec2> twice(2 * n);  // the normals twice round: edge j's at j and j + n, read without a modulo
   for (int pass = 0; pass < o.passes; ++pass) {
+    std::copy(normals.begin(), normals.end(), twice.begin());
+    std::copy(normals.begin(), normals.end(), twice.begin() + long(n));
     for (std::size_t i = 0; i < n; ++i)
       for (std::size_t s = 0; first[i] + s < first[i + 1]; ++s)
-        ahead[first[i] + s] = distance_weight[first[i] + s] * angle(normals[i], normals[(i + 1 + s) % n]);
+        ahead[first[i] + s] = distance_weight[first[i] + s] * angle(normals[i], twice[i + 1 + s]);
     for (std::size_t i = 0; i < n; ++i) {
       Vec2 sum = normals[i];  // w(i, i) = 1
-      for (std::size_t s = 0; first[i] + s < first[i + 1]; ++s) sum += ahead[first[i] + s] * normals[(i + 1 + s) % n];
+      for (std::size_t s = 0; first[i] + s < first[i + 1]; ++s) sum += ahead[first[i] + s] * twice[i + 1 + s];
       // Walk backward: edge i is the s-th successor of edge k = i - s.
       for (std::size_t s = 1; s <= (n - 1) / 2; ++s) {
-        const std::size_t k = (i + n - s) % n;
+        const std::size_t k = i >= s ? i - s : i + n - s;
         double w;
         if (first[k] + s <= first[k + 1]) {
           w = ahead[first[k] + s - 1];
@@ -124,7 +127,7 @@ std::vector<Vec2> smooth_normals(const Ring& ring, double pixel_size, const Smoo
           if (d >= threshold) break;
           w = weight(i, k, d);
         }
-        sum += w * normals[k];
+        sum += w * twice[i + n - s];
       }
       const double len = sum.norm();
       next[i] = len > 1e-12 ? Vec2(sum / len) : normals[i];
