@@ -9,7 +9,9 @@ namespace lodforge {
 // The weighted q-quantile of (value, weight) pairs: the least value whose weight and the weights
 // of all smaller values reach q of the total. 0 for no values. (A selection, not a sort: each
 // round splits the values about a pivot and keeps the side the quantile lies on; a few dozen
-// left are sorted. The models take a quantile of every contour edge several times a building.)
+// left are sorted. The models take a quantile of every contour edge several times a building.
+// The weights are summed in another order than a sort's, so where q of the total falls exactly
+// on a sum of weights, rounding may pick the neighbouring value.)
 inline double weighted_quantile(std::vector<std::pair<double, double>> values, double q) {
   if (values.empty()) return 0.0;
   double total = 0;
@@ -21,7 +23,7 @@ inline double weighted_quantile(std::vector<std::pair<double, double>> values, d
     // The median of three as pivot; [lo, hi) split into less than, equal to and more than it.
     const double a = values[lo].first, b = values[lo + (hi - lo) / 2].first, c = values[hi - 1].first;
     const double pivot = std::max(std::min(a, b), std::min(std::max(a, b), c));
-    if (!(pivot == pivot)) break;  // (a NaN: the sort below orders it as the full sort did)
+    if (!(pivot == pivot)) break;  // (a NaN, which no caller gives: left to the sort, as before)
     std::size_t less = lo, more = hi;
     for (std::size_t k = lo; k < more;) {
       if (values[k].first < pivot) std::swap(values[k++], values[less++]);
