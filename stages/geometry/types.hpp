@@ -18,10 +18,12 @@ struct PolygonWithHoles {
   std::vector<Ring> holes;
 };
 
+// The index after i (< n) round a ring of n: (i + 1) % n without a division, which every stage
+// would pay per edge.
+inline std::size_t next_index(std::size_t i, std::size_t n) { return i + 1 < n ? i + 1 : 0; }
+
 // Edge i of a ring goes from ring[i] to ring[(i+1) % size].
-inline Vec2 edge_vector(const Ring& ring, std::size_t i) {
-  return ring[i + 1 < ring.size() ? i + 1 : 0] - ring[i];  // (no division: every stage calls this per edge)
-}
+inline Vec2 edge_vector(const Ring& ring, std::size_t i) { return ring[next_index(i, ring.size())] - ring[i]; }
 
 // Outward unit normal of a direction vector, for rings with the interior on the left.
 inline Vec2 outward_normal(const Vec2& t) { return Vec2(t.y(), -t.x()).normalized(); }

@@ -26,7 +26,7 @@ double data_term(const LabelingInput& in, std::size_t r, std::size_t i, int l, c
 // with the difference, the opposite of what the text says).
 double smooth_weight(const LabelingInput& in, std::size_t r, std::size_t i, const MrfOptions& o) {
   const std::size_t n = in.normals[r].size();
-  const std::size_t j = i + 1 < n ? i + 1 : 0;
+  const std::size_t j = next_index(i, n);
   const double diff = (in.normals[r][i] - in.normals[r][j]).norm();
   const double length = 0.5 * (in.lengths[r][i] + in.lengths[r][j]) / o.unit_length_m;
   return o.kappa1 * length * std::exp(-diff / (2.0 * o.sigma * o.sigma));
@@ -98,7 +98,7 @@ double energy(const Terms& t, const EdgeLabels& labels) {
       const int p = t.offset[r] + int(i);
       e += t.d(p, labels[r][i]);
       used[labels[r][i]] = 1;
-      if (m >= 2) e += t.smooth[p] * t.dist(labels[r][i], labels[r][i + 1 < m ? i + 1 : 0]);
+      if (m >= 2) e += t.smooth[p] * t.dist(labels[r][i], labels[r][next_index(i, m)]);
     }
   }
   for (std::size_t l = 0; l < used.size(); ++l) if (used[l]) e += t.label_cost[l];
@@ -127,7 +127,7 @@ EdgeLabels expand(const Terms& t, const EdgeLabels& labels, int alpha) {
       const int p = t.offset[r] + int(i);
       add_unary(g, p, t.d(p, labels[r][i]), t.d(p, alpha));
       if (m < 2) continue;
-      const std::size_t j = i + 1 < m ? i + 1 : 0;
+      const std::size_t j = next_index(i, m);
       const int q = t.offset[r] + int(j);
       const double w = t.smooth[p];
       const int a = labels[r][i], b = labels[r][j];

@@ -106,7 +106,7 @@ std::vector<Vec2> smooth_normals(const Ring& ring, double pixel_size, const Smoo
   }
   first[n] = distance_weight.size();
   ahead.resize(distance_weight.size());
-  std::vector<Vec2> twice(2 * n);  // the normals twice round: edge j's at j and j + n, read without a modulo
+  std::vector<Vec2> twice(2 * n);  // the normals twice round: a successor i + 1 + s read without a modulo
   for (int pass = 0; pass < o.passes; ++pass) {
     std::copy(normals.begin(), normals.end(), twice.begin());
     std::copy(normals.begin(), normals.end(), twice.begin() + long(n));
@@ -127,7 +127,7 @@ std::vector<Vec2> smooth_normals(const Ring& ring, double pixel_size, const Smoo
           if (d >= threshold) break;
           w = weight(i, k, d);
         }
-        sum += w * twice[i + n - s];
+        sum += w * normals[k];
       }
       const double len = sum.norm();
       next[i] = len > 1e-12 ? Vec2(sum / len) : normals[i];
