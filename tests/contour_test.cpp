@@ -1,5 +1,9 @@
 #include <gtest/gtest.h>
 
+#include <map>
+#include <opencv2/imgproc.hpp>
+#include <random>
+
 #include "contour/contour.hpp"
 #include "geometry/polygon.hpp"
 
@@ -124,6 +128,104 @@ TEST(Contour, AnyNonZeroValueIsBuildingAndTheFirstPixelIsTheLeftmostOfTheTopRow)
   EXPECT_EQ(b.buildings[0].first_row, 1);
   EXPECT_EQ(b.buildings[0].first_col, 3);
   EXPECT_EQ(b.buildings[0].pixel_count, 8);
+}
+
+
+// Random masks of blobs and speckles (a segmentation's), some touching only at a corner.
+cv::Mat random_mask(std::mt19937& rng, int rows, int cols, double density) {
+  cv::Mat m = cv::Mat::zeros(rows, cols, CV_8U);
+  std::uniform_int_distribution<int> x(0, cols - 1), y(0, rows - 1), size(1, 6);
+  const int blobs = int(density * rows * cols / 9);
+  for (int i = 0; i < blobs; ++i) {
+    const cv::Rect r(x(rng), y(rng), size(rng), size(rng));
+    m(r & cv::Rect(0, 0, cols, rows)).setTo(i % 7 == 0 ? 0 : 200);  // some bites out of earlier blobs
+  }
+  return m;
+}
+
+TEST(Contour, TheComponentsAreOpenCvsComponentsAsRuns) {
+  std::mt19937 rng(7);
+  for (int trial = 0; trial < 40; ++trial) {
+    const int connectivity = trial % 2 ? 4 : 8;
+    const cv::Mat mask = random_mask(rng, 20 + trial, 31 + 2 * trial, 0.1 + 0.02 * (trial % 10));
+    const Components c = label_components(mask, connectivity);
+    cv::Mat labels, stats, centroids;
+    const int count = cv::connectedComponentsWithStats(mask, labels, stats, centroids, connectivity, CV_32S);
+    ASSERT_EQ(c.count, count) << "trial " << trial;
+    // The same partition of the pixels (labels may be numbered otherwise), and per component
+    // its box and pixel count.
+    std::map<int, int> ours_of;
+    for (int yy = 0; yy < mask.rows; ++yy)
+      for (int xx = 0; xx < mask.cols; ++xx) {
+        const int theirs = labels.at<int>(yy, xx), ours = c.label_at({xx, yy});
+        ASSERT_EQ(theirs == 0, ours == 0) << "trial " << trial << " pixel " << xx << ", " << yy;
+        if (theirs == 0) continue;
+        const auto [it, added] = ours_of.try_emplace(theirs, ours);
+        ASSERT_EQ(it->second, ours) << "trial " << trial << " pixel " << xx << ", " << yy;
+        if (added) {
+          // Its first pixel in raster order is the component's first.
+          EXPECT_EQ(c.firsts[std::size_t(ours)], cv::Point(xx, yy));
+          EXPECT_EQ(c.areas[std::size_t(ours)], stats.at<int>(theirs, cv::CC_STAT_AREA));
+          EXPECT_EQ(component_box(c, ours), cv::Rect(stats.at<int>(theirs, cv::CC_STAT_LEFT), stats.at<int>(theirs, cv::CC_STAT_TOP),
+                                                     stats.at<int>(theirs, cv::CC_STAT_WIDTH), stats.at<int>(theirs, cv::CC_STAT_HEIGHT)));
+        }
+      }
+    ASSERT_EQ(int(ours_of.size()), count - 1);
+    // Numbered by first pixel in raster order.
+    for (int k = 2; k < c.count; ++k)
+      EXPECT_LT(std::make_pair(c.firsts[std::size_t(k - 1)].y, c.firsts[std::size_t(k - 1)].x),
+                std::make_pair(c.firsts[std::size_t(k)].y, c.firsts[std::size_t(k)].x));
+  }
+}
+
+bool inside(const std::vector<Ring>& rings, const Vec2& p) {  // even-odd
+  bool in = false;
+  for (const Ring& r : rings)
+    for (std::size_t i = 0, j = r.size() - 1; i < r.size(); j = i++)
+      if ((r[i].y() > p.y()) != (r[j].y() > p.y()) &&
+          p.x() < (r[j].x() - r[i].x()) * (p.y() - r[i].y()) / (r[j].y() - r[i].y()) + r[i].x())
+        in = !in;
+  return in;
+}
+
+TEST(Contour, TracedRingsHoldTheirComponentsPixelsAndOnlyDiagonalFills) {
+  std::mt19937 rng(11);
+  for (int trial = 0; trial < 30; ++trial) {
+    const cv::Mat mask = random_mask(rng, 18 + trial, 25 + trial, 0.15 + 0.02 * (trial % 8));
+    const Components c = label_components(mask, 8);
+    for (int k = 1; k < c.count; ++k) {
+      const cv::Mat m = c.mask_of(k, 0);
+      const std::vector<Ring> rings = trace_component(m);
+      ASSERT_FALSE(rings.empty());
+      double area = 0;
+      for (const Ring& r : rings) {
+        area += signed_area(r);
+        for (std::size_t i = 0; i < r.size(); ++i) ASSERT_DOUBLE_EQ((r[(i + 1) % r.size()] - r[i]).norm(), 1.0);  // pixel sides
+      }
+      // In pixel coordinates (y down) the outer ring turns clockwise: negative area.
+      EXPECT_LT(signed_area(rings[0]), 0);
+      long filled = 0;
+      for (int yy = 0; yy < m.rows; ++yy)
+        for (int xx = 0; xx < m.cols; ++xx) {
+          const bool in = inside(rings, Vec2(xx + 0.5, yy + 0.5));
+          if (m.at<uint8_t>(yy, xx)) {
+            ASSERT_TRUE(in) << "trial " << trial << " component " << k << " pixel " << xx << ", " << yy;
+            continue;
+          }
+          if (!in) continue;
+          // A pixel added only where two of the component's pixels touch at a corner beside it.
+          ++filled;
+          bool diagonal = false;
+          for (int dy : {-1, 1})
+            for (int dx : {-1, 1}) {
+              auto at = [&](int x, int y) { return x >= 0 && y >= 0 && x < m.cols && y < m.rows && m.at<uint8_t>(y, x); };
+              diagonal |= at(xx + dx, yy) && at(xx, yy + dy) && !at(xx + dx, yy + dy);
+            }
+          EXPECT_TRUE(diagonal) << "trial " << trial << " component " << k << " pixel " << xx << ", " << yy;
+        }
+      EXPECT_DOUBLE_EQ(-area, double(c.areas[std::size_t(k)] + filled));
+    }
+  }
 }
 
 }  // namespace

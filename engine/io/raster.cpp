@@ -1,5 +1,7 @@
 #include "io/raster.hpp"
 
+#include <algorithm>
+#include <cstdint>
 #include <filesystem>
 #include <gdal_priv.h>
 #include <memory>
@@ -33,11 +35,23 @@ Dataset open_raster(const std::string& path, const std::string& key) {
 
 namespace {
 
-cv::Mat read_band(GDALDataset& d, int band, const std::string& path) {
-  cv::Mat m(d.GetRasterYSize(), d.GetRasterXSize(), CV_32S);
-  if (d.GetRasterBand(band)->RasterIO(GF_Read, 0, 0, m.cols, m.rows, m.data, m.cols, m.rows, GDT_Int32, 0, 0) != CE_None)
-    throw InputError("'" + path + "': cannot read band " + std::to_string(band) + ": " + CPLGetLastErrorMsg());
-  return m;
+// Reads band `band` in strips of rows (the band's block height, at least 64 rows) as 32-bit
+// integers and hands each strip to `use(first_row, strip)`: a strip at a time, not the whole band
+// at 4 bytes a pixel.
+template <class Use>
+void read_band_strips(GDALDataset& d, int band, const std::string& path, Use use) {
+  GDALRasterBand* b = d.GetRasterBand(band);
+  int block_x = 0, block_y = 0;
+  b->GetBlockSize(&block_x, &block_y);
+  const int rows = d.GetRasterYSize(), cols = d.GetRasterXSize();
+  const int strip = std::max(64, block_y > 0 ? (64 + block_y - 1) / block_y * block_y : 64);
+  cv::Mat buffer(std::min(strip, rows), cols, CV_32S);
+  for (int y = 0; y < rows; y += strip) {
+    cv::Mat part = buffer.rowRange(0, std::min(strip, rows - y));
+    if (b->RasterIO(GF_Read, 0, y, cols, part.rows, part.data, cols, part.rows, GDT_Int32, 0, 0) != CE_None)
+      throw InputError("'" + path + "': cannot read band " + std::to_string(band) + ": " + CPLGetLastErrorMsg());
+    use(y, part);
+  }
 }
 
 }  // namespace
@@ -54,31 +68,34 @@ MaskRaster read_building_mask(const std::string& path, const BuildingSelector& s
     out.crs_wkt = wkt ? wkt : "";
     CPLFree(wkt);
   }
-  // The whole mask is read at once (4 bytes a pixel and more): a raster of a region is run in tiles.
+  // The whole mask is held at once (a byte a pixel, and the labeling and tracing on it): a raster of a
+  // region is run in tiles.
   constexpr double kMaxPixels = 1e9;
   if (double(d->GetRasterXSize()) * double(d->GetRasterYSize()) > kMaxPixels)
     throw InputError("'" + path + "': " + std::to_string(d->GetRasterXSize()) + " x " + std::to_string(d->GetRasterYSize()) +
                      " pixels is more than this command reads at once (10^9); process it in tiles with `lodforge run JOB.yaml` " +
                      "(lodforge config --defaults prints a job)");
-  if (selector.rgb) {
-    if (d->GetRasterCount() < 3)
-      throw InputError("'" + path + "': has " + std::to_string(d->GetRasterCount()) +
-                       " band(s); a building colour needs an RGB raster with 3 bands");
-    cv::Mat mask = cv::Mat::ones(d->GetRasterYSize(), d->GetRasterXSize(), CV_8U);
-    for (int b = 0; b < 3; ++b) {
-      cv::Mat match = read_band(*d, b + 1, path) == (*selector.rgb)[b];
-      cv::bitwise_and(mask, match / 255, mask);
-    }
-    out.mask = mask;
-  } else {
-    const cv::Mat band = read_band(*d, 1, path);
-    cv::Mat mask = cv::Mat::zeros(band.size(), CV_8U);
-    for (int v : selector.values) {
-      cv::Mat match = band == v;
-      cv::bitwise_or(mask, match / 255, mask);
-    }
-    out.mask = mask;
-  }
+  if (selector.rgb && d->GetRasterCount() < 3)
+    throw InputError("'" + path + "': has " + std::to_string(d->GetRasterCount()) +
+                     " band(s); a building colour needs an RGB raster with 3 bands");
+  // 1 where the pixel is a building: every band at its colour's value, or the band at any of the
+  // class values.
+  out.mask = selector.rgb ? cv::Mat::ones(d->GetRasterYSize(), d->GetRasterXSize(), CV_8U)
+                          : cv::Mat::zeros(d->GetRasterYSize(), d->GetRasterXSize(), CV_8U);
+  for (int b = 0; b < (selector.rgb ? 3 : 1); ++b)
+    read_band_strips(*d, b + 1, path, [&](int first_row, const cv::Mat& strip) {
+      for (int r = 0; r < strip.rows; ++r) {
+        const int* in = strip.ptr<int>(r);
+        uint8_t* m = out.mask.ptr<uint8_t>(first_row + r);
+        if (selector.rgb) {
+          const int value = (*selector.rgb)[std::size_t(b)];
+          for (int x = 0; x < strip.cols; ++x) m[x] &= uint8_t(in[x] == value);
+        } else {
+          for (int v : selector.values)
+            for (int x = 0; x < strip.cols; ++x) m[x] |= uint8_t(in[x] == v);
+        }
+      }
+    });
   if (cv::countNonZero(out.mask) == 0)
     throw InputError("'" + path + "': no building pixel (" + selector.describe() + ") in the raster");
   return out;

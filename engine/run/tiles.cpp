@@ -156,7 +156,7 @@ cv::Point mark_footprint(cv::Mat& window_mask, const cv::Rect& window, const Cad
 
 // Does the tile own block g of the window: its first pixel in the tile, and whole in the window?
 bool owns_block(const TileWindow& w, int g, const cv::Rect& tile_rect, cv::Size raster) {
-  return g > 0 && tile_rect.contains(w.group_first[std::size_t(g)] + w.window.tl()) && !touches_inner_border(component_box(w.groups, g), w.window, raster);
+  return g > 0 && tile_rect.contains(w.groups.firsts[std::size_t(g)] + w.window.tl()) && !touches_inner_border(component_box(w.groups, g), w.window, raster);
 }
 
 
@@ -212,10 +212,6 @@ TileWindow find_tile_window(const MaskWindowReader& reader, const TileGrid& grid
   if (cadastre) {
     // The blocks own; the buildings in them are the mask's components.
     out.groups = std::move(out.components);
-    out.group_first.assign(std::size_t(out.groups.count), cv::Point(-1, -1));
-    for (int y = 0; y < out.groups.labels.rows; ++y)
-      for (int x = 0; x < out.groups.labels.cols; ++x)
-        if (cv::Point& first = out.group_first[std::size_t(out.groups.labels.at<int>(y, x))]; first.x < 0) first = {x, y};
     const auto labeling = std::chrono::steady_clock::now();
     out.components = label_components(out.mask, connectivity);
     out.label_seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - labeling).count();
@@ -237,7 +233,7 @@ TileBuildings trace_tile(const TileWindow& w, const TileGrid& grid, int tile, co
   const GeoTransform local = transform.window(window.x, window.y);
   const cv::Size raster = grid.raster;
   const ContourResult contours = extract_contours(w.components, local, options, [&](const cv::Rect& box, const cv::Point& first) {
-    if (w.groups.count > 0) return owns_block(w, w.groups.labels.at<int>(first), tile_rect, raster);  // with a cadastre
+    if (w.groups.count > 0) return owns_block(w, w.groups.label_at(first), tile_rect, raster);  // with a cadastre
     // Owned (first pixel in the tile) and whole (else it was reported as too large).
     return tile_rect.contains(first + window.tl()) && !touches_inner_border(box, window, raster);
   });
@@ -262,18 +258,18 @@ std::vector<TileGroup> tile_groups(const TileWindow& w, const TileGrid& grid, in
     if (!owns_block(w, g, tile_rect, grid.raster)) return nullptr;
     auto [it, added] = owned.try_emplace(g);
     if (added) {
-      const cv::Point first = w.group_first[std::size_t(g)] + w.window.tl();
+      const cv::Point first = w.groups.firsts[std::size_t(g)] + w.window.tl();
       it->second.id = std::int64_t(first.y) * grid.raster.width + first.x;
     }
     return &it->second;
   };
   for (std::size_t i = 0; i < buildings.buildings.size(); ++i) {
     const BuildingContour& b = buildings.buildings[i];
-    if (TileGroup* t = group(w.groups.labels.at<int>(b.first_row - w.window.y, b.first_col - w.window.x))) t->buildings.push_back(int(i));
+    if (TileGroup* t = group(w.groups.label_at({b.first_col - w.window.x, b.first_row - w.window.y}))) t->buildings.push_back(int(i));
   }
   const GeoTransform local = transform.window(w.window.x, w.window.y);
   for (const auto& [f, seed] : w.footprint_seeds) {
-    TileGroup* t = group(w.groups.labels.at<int>(seed));
+    TileGroup* t = group(w.groups.label_at(seed));
     if (!t) continue;
     // The share of the footprint's pixels (centres inside it) that is building in the mask.
     const CadastralFootprint& footprint = cadastre.footprints()[std::size_t(f)];

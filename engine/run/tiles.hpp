@@ -64,7 +64,6 @@ struct TileWindow {
   // (8-connected), which tiles own as they own buildings without one; and for each footprint
   // in the window (by index in the cadastre) a pixel of it in the window.
   Components groups;
-  std::vector<cv::Point> group_first;  // each block's first pixel in raster order (window pixels)
   std::vector<std::pair<int, cv::Point>> footprint_seeds;
 };
 // The margin of a tile's first window: two halos (a building crossing a one-halo window and the

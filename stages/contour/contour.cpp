@@ -29,50 +29,51 @@ void resolve_diagonal_contacts(cv::Mat& m) {
   }
 }
 
-struct DirectedEdge {
-  int64_t from, to;
-};
-
-}  // namespace
-
-std::vector<Ring> trace_component(cv::Mat m) {
-  // Pad by one pixel so that neighbours never fall outside.
-  cv::copyMakeBorder(m, m, 1, 1, 1, 1, cv::BORDER_CONSTANT, 0);
-  resolve_diagonal_contacts(m);
-  const int64_t stride = m.cols + 1;
-  auto id = [stride](int64_t x, int64_t y) { return y * stride + x; };
-  std::vector<DirectedEdge> edges;
-  for (int y = 1; y + 1 < m.rows; ++y) {
-    for (int x = 1; x + 1 < m.cols; ++x) {
-      if (!m.at<uint8_t>(y, x)) continue;
-      // Interior on the left in map coordinates (rows grow southwards).
-      if (!m.at<uint8_t>(y - 1, x)) edges.push_back({id(x + 1, y), id(x, y)});
-      if (!m.at<uint8_t>(y + 1, x)) edges.push_back({id(x, y + 1), id(x + 1, y + 1)});
-      if (!m.at<uint8_t>(y, x + 1)) edges.push_back({id(x + 1, y + 1), id(x + 1, y)});
-      if (!m.at<uint8_t>(y, x - 1)) edges.push_back({id(x, y), id(x, y + 1)});
-    }
-  }
-  std::sort(edges.begin(), edges.end(),
-            [](const DirectedEdge& a, const DirectedEdge& b) { return a.from < b.from; });
-  std::vector<char> used(edges.size(), 0);
-  auto find_from = [&edges](int64_t v) {
-    auto it = std::lower_bound(edges.begin(), edges.end(), v,
-                               [](const DirectedEdge& e, int64_t key) { return e.from < key; });
-    return static_cast<std::size_t>(it - edges.begin());
+// Traces every ring of a 0/1 image whose border rows and columns are 0 and whose pixels touch
+// diagonally nowhere. A pixel corner (x, y) has an edge out of it for each side of a building pixel
+// that borders the background there (interior on the left in map coordinates, rows growing
+// southwards): with no diagonal contact, at most one. Rings start at their first corner in raster
+// order and come in that order.
+std::vector<Ring> trace_padded(const cv::Mat& m) {
+  enum : uint8_t { kNone, kLeft, kRight, kUp, kDown };
+  // The edge out of corner (x, y), from the four pixels around it.
+  auto out_of = [&m](int x, int y) -> uint8_t {
+    if (x < 1 || y < 1 || x >= m.cols || y >= m.rows) return kNone;
+    const uint8_t* above = m.ptr<uint8_t>(y - 1);
+    const uint8_t* below = m.ptr<uint8_t>(y);
+    const bool tl = above[x - 1], tr = above[x], bl = below[x - 1], br = below[x];
+    if (bl && !tl) return kLeft;
+    if (tr && !br) return kRight;
+    if (tl && !tr) return kUp;
+    if (br && !bl) return kDown;
+    return kNone;
   };
+  const int width = m.cols + 1;
+  std::vector<char> visited(std::size_t(width) * std::size_t(m.rows + 1), 0);
   std::vector<Ring> rings;
-  for (std::size_t start = 0; start < edges.size(); ++start) {
-    if (used[start]) continue;
-    Ring ring;
-    std::size_t e = start;
-    while (!used[e]) {
-      used[e] = 1;
-      const int64_t v = edges[e].from;
-      // Pixel-corner coordinates without the padding.
-      ring.emplace_back(double(v % stride) - 1.0, double(v / stride) - 1.0);
-      e = find_from(edges[e].to);
+  for (int y = 1; y < m.rows; ++y) {
+    const uint8_t* above = m.ptr<uint8_t>(y - 1);
+    const uint8_t* below = m.ptr<uint8_t>(y);
+    for (int x = 1; x < m.cols; ++x) {
+      // (Quick test: a corner with an edge out has a building pixel among the four.)
+      if (!(above[x - 1] | above[x] | below[x - 1] | below[x])) continue;
+      if (visited[std::size_t(y) * width + x] || out_of(x, y) == kNone) continue;
+      Ring ring;
+      int cx = x, cy = y;
+      while (!visited[std::size_t(cy) * width + cx]) {
+        visited[std::size_t(cy) * width + cx] = 1;
+        // Pixel-corner coordinates without the padding.
+        ring.emplace_back(double(cx) - 1.0, double(cy) - 1.0);
+        switch (out_of(cx, cy)) {
+          case kLeft: --cx; break;
+          case kRight: ++cx; break;
+          case kUp: --cy; break;
+          case kDown: ++cy; break;
+          default: break;
+        }
+      }
+      rings.push_back(std::move(ring));
     }
-    rings.push_back(std::move(ring));
   }
   // In pixel coordinates (y down) the outer ring has negative shoelace area; the largest
   // |area| ring is the outer one. Put it first.
@@ -82,17 +83,107 @@ std::vector<Ring> trace_component(cv::Mat m) {
   return rings;
 }
 
-cv::Rect component_box(const Components& c, int k) {
-  return {c.stats.at<int>(k, cv::CC_STAT_LEFT), c.stats.at<int>(k, cv::CC_STAT_TOP), c.stats.at<int>(k, cv::CC_STAT_WIDTH),
-          c.stats.at<int>(k, cv::CC_STAT_HEIGHT)};
+}  // namespace
+
+std::vector<Ring> trace_component(cv::Mat m) {
+  // Pad by one pixel so that neighbours never fall outside.
+  cv::copyMakeBorder(m, m, 1, 1, 1, 1, cv::BORDER_CONSTANT, 0);
+  resolve_diagonal_contacts(m);
+  return trace_padded(m);
+}
+
+int Components::label_at(cv::Point p) const {
+  if (p.y < 0 || p.y >= rows || p.x < 0 || p.x >= cols) return 0;
+  const auto first = runs.begin() + long(row_begin[std::size_t(p.y)]), last = runs.begin() + long(row_begin[std::size_t(p.y) + 1]);
+  auto it = std::upper_bound(first, last, p.x, [](int x, const Run& r) { return x < r.x0; });
+  if (it == first) return 0;
+  --it;
+  return p.x < it->x1 ? it->label : 0;
+}
+
+cv::Mat Components::mask_of(int label, int pad) const {
+  const cv::Rect box = boxes[std::size_t(label)];
+  cv::Mat m = cv::Mat::zeros(box.height + 2 * pad, box.width + 2 * pad, CV_8U);
+  for (int y = box.y; y < box.y + box.height; ++y) {
+    uint8_t* row = m.ptr<uint8_t>(y - box.y + pad);
+    for (std::size_t i = row_begin[std::size_t(y)]; i < row_begin[std::size_t(y) + 1]; ++i)
+      if (runs[i].label == label) std::fill(row + runs[i].x0 - box.x + pad, row + runs[i].x1 - box.x + pad, uint8_t(1));
+  }
+  return m;
 }
 
 Components label_components(const cv::Mat& mask, int connectivity) {
   CV_Assert(mask.type() == CV_8U);
   Components c;
-  cv::Mat centroids;
-  // Any non-zero pixel is foreground to OpenCV's labeling: no 0/1 copy of the mask is needed.
-  c.count = cv::connectedComponentsWithStats(mask, c.labels, c.stats, centroids, connectivity == 4 ? 4 : 8, CV_32S);
+  c.rows = mask.rows;
+  c.cols = mask.cols;
+  c.row_begin.assign(std::size_t(mask.rows) + 1, 0);
+  // The runs, and a union-find over them: runs of consecutive rows that touch (share a column,
+  // or with 8-connectivity a corner) are one component.
+  std::vector<std::size_t> parent;
+  auto find = [&parent](std::size_t i) {
+    while (parent[i] != i) i = parent[i] = parent[parent[i]];
+    return i;
+  };
+  const int slack = connectivity == 4 ? 0 : 1;
+  for (int y = 0; y < mask.rows; ++y) {
+    c.row_begin[std::size_t(y)] = c.runs.size();
+    const uint8_t* m = mask.ptr<uint8_t>(y);
+    for (int x = 0; x < mask.cols;) {
+      while (x < mask.cols && !m[x]) ++x;
+      if (x == mask.cols) break;
+      const int start = x;
+      while (x < mask.cols && m[x]) ++x;
+      c.runs.push_back({start, x, 0});
+      parent.push_back(parent.size());
+    }
+    if (y == 0) continue;
+    std::size_t i = c.row_begin[std::size_t(y) - 1], j = c.row_begin[std::size_t(y)];
+    const std::size_t above_end = j, end = c.runs.size();
+    while (i < above_end && j < end) {
+      const Components::Run &a = c.runs[i], &b = c.runs[j];
+      if (a.x1 + slack <= b.x0) { ++i; continue; }
+      if (b.x1 + slack <= a.x0) { ++j; continue; }
+      // Touch: the later root joins the earlier one.
+      const std::size_t ra = find(i), rb = find(j);
+      if (ra != rb) parent[std::max(ra, rb)] = std::min(ra, rb);
+      if (a.x1 < b.x1) ++i; else ++j;
+    }
+  }
+  c.row_begin[std::size_t(mask.rows)] = c.runs.size();
+  // Labels by first pixel in raster order: a root is its component's first run.
+  std::vector<int> label_of_root(c.runs.size(), 0);
+  c.count = 1;
+  c.boxes.assign(1, cv::Rect());
+  c.areas.assign(1, 0);
+  c.firsts.assign(1, cv::Point(-1, -1));
+  std::vector<int> right, bottom;  // per label: past its box
+  right.push_back(0);
+  bottom.push_back(0);
+  for (int y = 0; y < mask.rows; ++y) {
+    for (std::size_t i = c.row_begin[std::size_t(y)]; i < c.row_begin[std::size_t(y) + 1]; ++i) {
+      Components::Run& r = c.runs[i];
+      const std::size_t root = find(i);
+      if (root == i) {
+        label_of_root[i] = c.count++;
+        c.boxes.push_back(cv::Rect(r.x0, y, 0, 0));
+        c.areas.push_back(0);
+        c.firsts.push_back(cv::Point(r.x0, y));
+        right.push_back(r.x1);
+        bottom.push_back(y + 1);
+      }
+      r.label = label_of_root[root];
+      const std::size_t k = std::size_t(r.label);
+      c.areas[k] += r.x1 - r.x0;
+      c.boxes[k].x = std::min(c.boxes[k].x, r.x0);
+      right[k] = std::max(right[k], r.x1);
+      bottom[k] = y + 1;
+    }
+  }
+  for (int k = 1; k < c.count; ++k) {
+    c.boxes[std::size_t(k)].width = right[std::size_t(k)] - c.boxes[std::size_t(k)].x;
+    c.boxes[std::size_t(k)].height = bottom[std::size_t(k)] - c.boxes[std::size_t(k)].y;
+  }
   return c;
 }
 
@@ -104,44 +195,31 @@ ContourResult extract_contours(const cv::Mat& mask, const GeoTransform& transfor
 ContourResult extract_contours(const Components& components, const GeoTransform& transform,
                                const ContourOptions& options, const ComponentFilter& keep) {
   ContourResult result;
-  const cv::Mat& labels = components.labels;
-  const cv::Mat& stats = components.stats;
   const int count = components.count;
   // First pixel of each component in raster order, its stable identity: the leftmost in its top row.
-  std::vector<cv::Point> first(count, cv::Point(-1, -1));
-  for (int k = 1; k < count; ++k) {
-    const int top = stats.at<int>(k, cv::CC_STAT_TOP), left = stats.at<int>(k, cv::CC_STAT_LEFT);
-    const int* row = labels.ptr<int>(top);
-    for (int x = left; x < left + stats.at<int>(k, cv::CC_STAT_WIDTH); ++x)
-      if (row[x] == k) {
-        first[k] = {x, top};
-        break;
-      }
-  }
+  const std::vector<cv::Point>& first = components.firsts;
   const double pixel_area = transform.pixel_size() * transform.pixel_size();
   std::vector<int> order;
   for (int k = 1; k < count; ++k) {
-    if (keep && !keep(component_box(components, k), first[k])) continue;
-    const int pixels = stats.at<int>(k, cv::CC_STAT_AREA);
+    if (keep && !keep(component_box(components, k), first[std::size_t(k)])) continue;
+    const double pixels = double(components.areas[std::size_t(k)]);
     if (pixels * pixel_area < options.min_area_m2 || pixels < options.min_pixels) {
       ++result.dropped_small;
       continue;
     }
     order.push_back(k);
   }
-  std::sort(order.begin(), order.end(), [&first](int a, int b) {
-    return std::make_pair(first[a].y, first[a].x) < std::make_pair(first[b].y, first[b].x);
-  });
+  // (Labels are numbered in that order already.)
   const double orientation = transform.c[1] * transform.c[5] - transform.c[2] * transform.c[4];
   for (int k : order) {
     BuildingContour b;
     b.bbox = component_box(components, k);
-    b.pixel_count = stats.at<int>(k, cv::CC_STAT_AREA);
-    b.first_col = first[k].x;
-    b.first_row = first[k].y;
-    cv::Mat component = labels(b.bbox) == k;
-    component /= 255;
-    for (Ring& ring : trace_component(component)) {
+    b.pixel_count = components.areas[std::size_t(k)];
+    b.first_col = first[std::size_t(k)].x;
+    b.first_row = first[std::size_t(k)].y;
+    cv::Mat component = components.mask_of(k, 1);  // padded, so that neighbours never fall outside
+    resolve_diagonal_contacts(component);
+    for (Ring& ring : trace_padded(component)) {
       for (Vec2& p : ring) p = transform.to_map(p.x() + b.bbox.x, p.y() + b.bbox.y);
       // A north-up raster (negative determinant) maps pixel orientation to map orientation
       // flipped, which is what trace_component assumes; any other transform is fixed here.

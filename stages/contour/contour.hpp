@@ -43,14 +43,27 @@ struct ContourResult {
 // A component's pixel bounding box and first pixel, in mask coordinates.
 using ComponentFilter = std::function<bool(const cv::Rect& bbox, const cv::Point& first)>;
 
-// The connected components of a mask (CV_8U, non-zero = building): labels (CV_32S, 0 =
-// background) and OpenCV's per-label stats.
+// The connected components of a mask (CV_8U, non-zero = building), as the runs of building
+// pixels along its rows: a few bytes per run, where a label image takes four a pixel.
 struct Components {
-  cv::Mat labels, stats;
-  int count = 0;  // labels, background included
+  struct Run {
+    int x0 = 0, x1 = 0;  // columns [x0, x1)
+    int label = 0;
+  };
+  int rows = 0, cols = 0;
+  int count = 0;                       // labels, background (0) included
+  std::vector<Run> runs;               // row by row, left to right
+  std::vector<std::size_t> row_begin;  // row y's runs: [row_begin[y], row_begin[y + 1])
+  std::vector<cv::Rect> boxes;         // per label: its pixels' bounding box
+  std::vector<long> areas;             // per label: its pixel count
+  std::vector<cv::Point> firsts;       // per label: its first pixel in raster order
+  int label_at(cv::Point p) const;     // 0 = background
+  // The component's pixels in its box grown by `pad` pixels on every side: CV_8U, 0/1.
+  cv::Mat mask_of(int label, int pad) const;
 };
+// Labels numbered by their first pixel in raster order.
 Components label_components(const cv::Mat& mask, int connectivity);
-cv::Rect component_box(const Components& components, int label);  // its pixels' bounding box
+inline cv::Rect component_box(const Components& components, int label) { return components.boxes[std::size_t(label)]; }
 
 // mask: CV_8U, non-zero = building. keep (optional) selects which components to trace; the others
 // are skipped and not counted.
