@@ -132,9 +132,9 @@ TEST(Contour, AnyNonZeroValueIsBuildingAndTheFirstPixelIsTheLeftmostOfTheTopRow)
 
 
 // Random masks of blobs and speckles (a segmentation's), some touching only at a corner.
-cv::Mat random_mask(std::mt19937& rng, int rows, int cols, double density) {
+cv::Mat random_mask(std::mt19937& rng, int rows, int cols, double density, int max_size = 6) {
   cv::Mat m = cv::Mat::zeros(rows, cols, CV_8U);
-  std::uniform_int_distribution<int> x(0, cols - 1), y(0, rows - 1), size(1, 6);
+  std::uniform_int_distribution<int> x(0, cols - 1), y(0, rows - 1), size(1, max_size);
   const int blobs = int(density * rows * cols / 9);
   for (int i = 0; i < blobs; ++i) {
     const cv::Rect r(x(rng), y(rng), size(rng), size(rng));
@@ -188,10 +188,43 @@ bool inside(const std::vector<Ring>& rings, const Vec2& p) {  // even-odd
   return in;
 }
 
+// Every pixel of m lies inside the rings (even-odd); every other pixel inside is a fill between
+// two pixels inside that touch at a corner, and no two pixels inside touch at a corner alone.
+// Returns the number of fills.
+long check_rings_cover(const cv::Mat& m, const std::vector<Ring>& rings, const std::string& what) {
+  cv::Mat in = cv::Mat::zeros(m.size(), CV_8U);
+  for (int yy = 0; yy < m.rows; ++yy)
+    for (int xx = 0; xx < m.cols; ++xx) in.at<uint8_t>(yy, xx) = inside(rings, Vec2(xx + 0.5, yy + 0.5));
+  auto at = [&in](int x, int y) { return x >= 0 && y >= 0 && x < in.cols && y < in.rows && in.at<uint8_t>(y, x); };
+  long filled = 0;
+  for (int yy = 0; yy < m.rows; ++yy)
+    for (int xx = 0; xx < m.cols; ++xx) {
+      if (m.at<uint8_t>(yy, xx)) {
+        EXPECT_TRUE(at(xx, yy)) << what << " pixel " << xx << ", " << yy;
+        continue;
+      }
+      if (at(xx, yy)) {
+        ++filled;
+        bool between = false;
+        for (int dy : {-1, 1})
+          for (int dx : {-1, 1}) between |= at(xx + dx, yy) && at(xx, yy + dy);
+        EXPECT_TRUE(between) << what << " pixel " << xx << ", " << yy;
+      }
+    }
+  for (int yy = -1; yy < m.rows; ++yy)
+    for (int xx = -1; xx < m.cols; ++xx) {
+      const bool a = at(xx, yy), b = at(xx + 1, yy), c = at(xx, yy + 1), d = at(xx + 1, yy + 1);
+      EXPECT_FALSE((a && d && !b && !c) || (b && c && !a && !d)) << what << " diagonal block at " << xx << ", " << yy;
+    }
+  return filled;
+}
+
 TEST(Contour, TracedRingsHoldTheirComponentsPixelsAndOnlyDiagonalFills) {
   std::mt19937 rng(11);
-  for (int trial = 0; trial < 30; ++trial) {
-    const cv::Mat mask = random_mask(rng, 18 + trial, 25 + trial, 0.15 + 0.02 * (trial % 8));
+  for (int trial = 0; trial < 60; ++trial) {
+    // Blobs, and lone pixels that touch at corners anywhere along the rows.
+    const cv::Mat mask = trial % 2 ? random_mask(rng, 18 + trial, 25 + trial, 0.15 + 0.02 * (trial % 8))
+                                   : random_mask(rng, 12 + trial / 4, 40 + trial, 1.5, 1);
     const Components c = label_components(mask, 8);
     for (int k = 1; k < c.count; ++k) {
       const cv::Mat m = c.mask_of(k, 0);
@@ -204,27 +237,13 @@ TEST(Contour, TracedRingsHoldTheirComponentsPixelsAndOnlyDiagonalFills) {
       }
       // In pixel coordinates (y down) the outer ring turns clockwise: negative area.
       EXPECT_LT(signed_area(rings[0]), 0);
-      long filled = 0;
-      for (int yy = 0; yy < m.rows; ++yy)
-        for (int xx = 0; xx < m.cols; ++xx) {
-          const bool in = inside(rings, Vec2(xx + 0.5, yy + 0.5));
-          if (m.at<uint8_t>(yy, xx)) {
-            ASSERT_TRUE(in) << "trial " << trial << " component " << k << " pixel " << xx << ", " << yy;
-            continue;
-          }
-          if (!in) continue;
-          // A pixel added only where two of the component's pixels touch at a corner beside it.
-          ++filled;
-          bool diagonal = false;
-          for (int dy : {-1, 1})
-            for (int dx : {-1, 1}) {
-              auto at = [&](int x, int y) { return x >= 0 && y >= 0 && x < m.cols && y < m.rows && m.at<uint8_t>(y, x); };
-              diagonal |= at(xx + dx, yy) && at(xx, yy + dy) && !at(xx + dx, yy + dy);
-            }
-          EXPECT_TRUE(diagonal) << "trial " << trial << " component " << k << " pixel " << xx << ", " << yy;
-        }
+      const long filled = check_rings_cover(m, rings, "trial " + std::to_string(trial) + " component " + std::to_string(k));
       EXPECT_DOUBLE_EQ(-area, double(c.areas[std::size_t(k)] + filled));
     }
+    // The whole mask at once: every component's rings.
+    cv::Mat ones;
+    mask.convertTo(ones, CV_8U, 1.0 / 200);
+    check_rings_cover(ones, trace_component(ones), "trial " + std::to_string(trial) + " whole mask");
   }
 }
 

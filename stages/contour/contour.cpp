@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <cstring>
 #include <opencv2/imgproc.hpp>
 
 #include "geometry/polygon.hpp"
@@ -10,6 +11,18 @@
 namespace lodforge {
 
 namespace {
+
+// Eight pixels from p on, as one word (to skip stretches of a row eight at a time).
+uint64_t word_at(const uint8_t* p) {
+  uint64_t w;
+  std::memcpy(&w, p, sizeof w);
+  return w;
+}
+
+bool no_zero_byte(uint64_t w) {
+  constexpr uint64_t low = 0x0101010101010101ULL, high = low << 7;
+  return ((w - low) & ~w & high) == 0;
+}
 
 // Fills one pixel of every 2x2 block whose pixels touch only diagonally, until none is left,
 // so that every corner vertex has at most one incoming and one outgoing boundary edge.
@@ -21,6 +34,10 @@ void resolve_diagonal_contacts(cv::Mat& m) {
       uint8_t* r0 = m.ptr<uint8_t>(y);
       uint8_t* r1 = m.ptr<uint8_t>(y + 1);
       for (int x = 0; x + 1 < m.cols; ++x) {
+        // Where the two rows agree on eight pixels, none of the eight blocks starting on them is
+        // diagonal (a diagonal block's rows differ in both its columns).
+        while (x + 8 <= m.cols && word_at(r0 + x) == word_at(r1 + x)) x += 8;
+        if (x + 1 >= m.cols) break;
         const bool a = r0[x], b = r0[x + 1], c = r1[x], d = r1[x + 1];
         if (a && d && !b && !c) { r0[x + 1] = 1; changed = true; }
         else if (b && c && !a && !d) { r0[x] = 1; changed = true; }
@@ -55,8 +72,13 @@ std::vector<Ring> trace_padded(const cv::Mat& m) {
     const uint8_t* above = m.ptr<uint8_t>(y - 1);
     const uint8_t* below = m.ptr<uint8_t>(y);
     for (int x = 1; x < m.cols; ++x) {
-      // (Quick test: a corner with an edge out has a building pixel among the four.)
-      if (!(above[x - 1] | above[x] | below[x - 1] | below[x])) continue;
+      // A ring's first corner has a horizontal edge out of it or into it: the pixels above and
+      // below that edge differ. Where the two rows agree on eight pixels, none of their seven
+      // corners starts a ring.
+      if (x + 7 <= m.cols && word_at(above + x - 1) == word_at(below + x - 1)) {
+        x += 6;
+        continue;
+      }
       if (visited[std::size_t(y) * width + x] || out_of(x, y) == kNone) continue;
       Ring ring;
       int cx = x, cy = y;
@@ -130,9 +152,12 @@ Components label_components(const cv::Mat& mask, int connectivity) {
     c.row_begin[std::size_t(y)] = c.runs.size();
     const uint8_t* m = mask.ptr<uint8_t>(y);
     for (int x = 0; x < mask.cols;) {
+      // (Eight pixels at a time: a word of zeros, a word with no zero byte.)
+      while (x + 8 <= mask.cols && word_at(m + x) == 0) x += 8;
       while (x < mask.cols && !m[x]) ++x;
       if (x == mask.cols) break;
       const int start = x;
+      while (x + 8 <= mask.cols && no_zero_byte(word_at(m + x))) x += 8;
       while (x < mask.cols && m[x]) ++x;
       c.runs.push_back({start, x, 0});
       parent.push_back(parent.size());
