@@ -455,6 +455,11 @@ void run_chain(const std::vector<Ring>& rings, double pixel_size, const CoreOpti
   // noise is its mask's): walls shorter than a wobble's wavelength, or runs cut short by its
   // flanks at fine pixels, measure too little of it.
   noise = std::max(noise, noise_floor_m);
+  // And at most noise.pooled_ceiling times the pooled noise: a contour that lies farther than that
+  // off the lines of its lattice is not noisier than its mask's other buildings, it has arcs or
+  // walls off the lattice (a round building's measures metres), which the noise must not hide.
+  if (noise_floor_m > 0 && o.noise.pooled_floor > 0 && o.noise.pooled_ceiling > 0)
+    noise = std::min(noise, std::max(1.0, o.noise.pooled_ceiling / o.noise.pooled_floor) * noise_floor_m);
   arc_noise = std::max(arc_noise, noise_floor_m);
   // The lattice fitted to the contour's runs along it, from the chords' direction where they give
   // one (under a wobble the labeled main direction follows a flank, degrees off the walls); and
