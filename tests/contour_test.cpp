@@ -219,6 +219,50 @@ long check_rings_cover(const cv::Mat& m, const std::vector<Ring>& rings, const s
   return filled;
 }
 
+// The tracing as it was before session 19, kept as the reference the faster one must equal ring
+// for ring, vertex for vertex: diagonal contacts filled pass by pass over every pixel, every
+// boundary edge listed and sorted by its first corner, rings followed from the first unused edge.
+std::vector<Ring> reference_trace(cv::Mat m) {
+  cv::copyMakeBorder(m, m, 1, 1, 1, 1, cv::BORDER_CONSTANT, 0);
+  for (bool changed = true; changed;) {
+    changed = false;
+    for (int y = 0; y + 1 < m.rows; ++y)
+      for (int x = 0; x + 1 < m.cols; ++x) {
+        uint8_t *r0 = m.ptr<uint8_t>(y), *r1 = m.ptr<uint8_t>(y + 1);
+        const bool a = r0[x], b = r0[x + 1], c = r1[x], d = r1[x + 1];
+        if (a && d && !b && !c) { r0[x + 1] = 1; changed = true; }
+        else if (b && c && !a && !d) { r0[x] = 1; changed = true; }
+      }
+  }
+  const int64_t stride = m.cols + 1;
+  auto id = [stride](int64_t x, int64_t y) { return y * stride + x; };
+  std::vector<std::pair<int64_t, int64_t>> edges;  // (from, to)
+  for (int y = 1; y + 1 < m.rows; ++y)
+    for (int x = 1; x + 1 < m.cols; ++x) {
+      if (!m.at<uint8_t>(y, x)) continue;
+      if (!m.at<uint8_t>(y - 1, x)) edges.push_back({id(x + 1, y), id(x, y)});
+      if (!m.at<uint8_t>(y + 1, x)) edges.push_back({id(x, y + 1), id(x + 1, y + 1)});
+      if (!m.at<uint8_t>(y, x + 1)) edges.push_back({id(x + 1, y + 1), id(x + 1, y)});
+      if (!m.at<uint8_t>(y, x - 1)) edges.push_back({id(x, y), id(x, y + 1)});
+    }
+  std::sort(edges.begin(), edges.end());
+  std::vector<char> used(edges.size(), 0);
+  std::vector<Ring> rings;
+  for (std::size_t start = 0; start < edges.size(); ++start) {
+    if (used[start]) continue;
+    Ring ring;
+    for (std::size_t e = start; !used[e];) {
+      used[e] = 1;
+      ring.emplace_back(double(edges[e].first % stride) - 1.0, double(edges[e].first / stride) - 1.0);
+      e = std::size_t(std::lower_bound(edges.begin(), edges.end(), std::make_pair(edges[e].second, int64_t(-1))) - edges.begin());
+    }
+    rings.push_back(std::move(ring));
+  }
+  std::stable_sort(rings.begin(), rings.end(), [](const Ring& a, const Ring& b) { return std::abs(signed_area(a)) > std::abs(signed_area(b)); });
+  return rings;
+}
+
+// ... and the rings are those of the reference above, in the same order, from the same corners.
 TEST(Contour, TracedRingsHoldTheirComponentsPixelsAndOnlyDiagonalFills) {
   std::mt19937 rng(11);
   for (int trial = 0; trial < 60; ++trial) {
@@ -230,6 +274,7 @@ TEST(Contour, TracedRingsHoldTheirComponentsPixelsAndOnlyDiagonalFills) {
       const cv::Mat m = c.mask_of(k, 0);
       const std::vector<Ring> rings = trace_component(m);
       ASSERT_FALSE(rings.empty());
+      ASSERT_EQ(rings, reference_trace(m)) << "trial " << trial << " component " << k;
       double area = 0;
       for (const Ring& r : rings) {
         area += signed_area(r);
@@ -243,7 +288,9 @@ TEST(Contour, TracedRingsHoldTheirComponentsPixelsAndOnlyDiagonalFills) {
     // The whole mask at once: every component's rings.
     cv::Mat ones;
     mask.convertTo(ones, CV_8U, 1.0 / 200);
-    check_rings_cover(ones, trace_component(ones), "trial " + std::to_string(trial) + " whole mask");
+    const std::vector<Ring> all = trace_component(ones);
+    ASSERT_EQ(all, reference_trace(ones)) << "trial " << trial << " whole mask";
+    check_rings_cover(ones, all, "trial " + std::to_string(trial) + " whole mask");
   }
 }
 

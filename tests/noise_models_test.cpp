@@ -686,7 +686,8 @@ TEST(PooledNoise, ASmallBuildingTakesTheNoiseItsWallsAreTooShortToMeasure) {
 
 // A hall whose outline is one long straight wall and an arc of 120 m (58 x 39 m), among houses of
 // a clean mask at 5 and 10 cm: about the lines of its lattice its contour measures a "noise" of
-// 0.4-1.1 m, twenty to a hundred times the houses' staircase, which takes its arc for noise and
+// over a metre in the chain (0.4 m in its sample, bounded by its spread about parabolas; 1.1-1.3 m
+// on the campus masks of bench/sweep.sh), thirty to a hundred times the houses' staircase, which takes its arc for noise and
 // draws chords across it (at 5 cm: 11 vertices, IoU 0.968). Its noise held to
 // noise.pooled_ceiling times the pooled one, the arc stays an arc (30 vertices, IoU 0.990).
 TEST(PooledNoise, ACurvedHallAmongHousesKeepsItsArc) {

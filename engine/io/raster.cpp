@@ -35,16 +35,17 @@ Dataset open_raster(const std::string& path, const std::string& key) {
 
 namespace {
 
-// Reads band `band` in strips of rows (the band's block height, at least 64 rows) as 32-bit
-// integers and hands each strip to `use(first_row, strip)`: a strip at a time, not the whole band
-// at 4 bytes a pixel.
+// Reads band `band` in strips of rows (a whole number of the band's blocks, at least 64 rows;
+// 512 rows where a block is taller, as in a GeoTIFF of one strip, whose block GDAL's cache then
+// keeps) as 32-bit integers and hands each strip to `use(first_row, strip)`: a strip at a time,
+// not the whole band at 4 bytes a pixel.
 template <class Use>
 void read_band_strips(GDALDataset& d, int band, const std::string& path, Use use) {
   GDALRasterBand* b = d.GetRasterBand(band);
   int block_x = 0, block_y = 0;
   b->GetBlockSize(&block_x, &block_y);
   const int rows = d.GetRasterYSize(), cols = d.GetRasterXSize();
-  const int strip = std::max(64, block_y > 0 ? (64 + block_y - 1) / block_y * block_y : 64);
+  const int strip = block_y > 512 ? 512 : std::max(64, block_y > 0 ? (64 + block_y - 1) / block_y * block_y : 64);
   cv::Mat buffer(std::min(strip, rows), cols, CV_32S);
   for (int y = 0; y < rows; y += strip) {
     cv::Mat part = buffer.rowRange(0, std::min(strip, rows - y));

@@ -50,7 +50,7 @@ void resolve_diagonal_contacts(cv::Mat& m) {
 // diagonally nowhere. A pixel corner (x, y) has an edge out of it for each side of a building pixel
 // that borders the background there (interior on the left in map coordinates, rows growing
 // southwards): with no diagonal contact, at most one. Rings start at their first corner in raster
-// order and come in that order.
+// order and are found in that order; the outer ring is then put first.
 std::vector<Ring> trace_padded(const cv::Mat& m) {
   enum : uint8_t { kNone, kLeft, kRight, kUp, kDown };
   // The edge out of corner (x, y), from the four pixels around it.
@@ -116,7 +116,8 @@ std::vector<Ring> trace_component(cv::Mat m) {
 
 int Components::label_at(cv::Point p) const {
   if (p.y < 0 || p.y >= rows || p.x < 0 || p.x >= cols) return 0;
-  const auto first = runs.begin() + long(row_begin[std::size_t(p.y)]), last = runs.begin() + long(row_begin[std::size_t(p.y) + 1]);
+  const auto first = runs.begin() + std::ptrdiff_t(row_begin[std::size_t(p.y)]),
+             last = runs.begin() + std::ptrdiff_t(row_begin[std::size_t(p.y) + 1]);
   auto it = std::upper_bound(first, last, p.x, [](int x, const Run& r) { return x < r.x0; });
   if (it == first) return 0;
   --it;
@@ -128,8 +129,13 @@ cv::Mat Components::mask_of(int label, int pad) const {
   cv::Mat m = cv::Mat::zeros(box.height + 2 * pad, box.width + 2 * pad, CV_8U);
   for (int y = box.y; y < box.y + box.height; ++y) {
     uint8_t* row = m.ptr<uint8_t>(y - box.y + pad);
-    for (std::size_t i = row_begin[std::size_t(y)]; i < row_begin[std::size_t(y) + 1]; ++i)
-      if (runs[i].label == label) std::fill(row + runs[i].x0 - box.x + pad, row + runs[i].x1 - box.x + pad, uint8_t(1));
+    // The row's runs that reach into the box: from the first ending past its left side (a
+    // row of a wide mask crosses many buildings) to the first starting past its right side.
+    const auto end = runs.begin() + std::ptrdiff_t(row_begin[std::size_t(y) + 1]);
+    auto it = std::lower_bound(runs.begin() + std::ptrdiff_t(row_begin[std::size_t(y)]), end, box.x,
+                               [](const Run& r, int x) { return r.x1 <= x; });
+    for (; it != end && it->x0 < box.x + box.width; ++it)
+      if (it->label == label) std::fill(row + it->x0 - box.x + pad, row + it->x1 - box.x + pad, uint8_t(1));
   }
   return m;
 }
