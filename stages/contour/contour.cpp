@@ -46,12 +46,13 @@ void resolve_diagonal_contacts(cv::Mat& m) {
   }
 }
 
-// Traces every ring of a 0/1 image whose border rows and columns are 0 and whose pixels touch
-// diagonally nowhere. A pixel corner (x, y) has an edge out of it for each side of a building pixel
+// Traces every ring of a 0/1 image whose border rows and columns are 0, after filling its
+// diagonal contacts (resolve_diagonal_contacts). A pixel corner (x, y) has an edge out of it for each side of a building pixel
 // that borders the background there (interior on the left in map coordinates, rows growing
 // southwards): with no diagonal contact, at most one. Rings start at their first corner in raster
 // order and are found in that order; the outer ring is then put first.
-std::vector<Ring> trace_padded(const cv::Mat& m) {
+std::vector<Ring> trace_padded(cv::Mat& m) {
+  resolve_diagonal_contacts(m);
   enum : uint8_t { kNone, kLeft, kRight, kUp, kDown };
   // The edge out of corner (x, y), from the four pixels around it.
   auto out_of = [&m](int x, int y) -> uint8_t {
@@ -110,7 +111,6 @@ std::vector<Ring> trace_padded(const cv::Mat& m) {
 std::vector<Ring> trace_component(cv::Mat m) {
   // Pad by one pixel so that neighbours never fall outside.
   cv::copyMakeBorder(m, m, 1, 1, 1, 1, cv::BORDER_CONSTANT, 0);
-  resolve_diagonal_contacts(m);
   return trace_padded(m);
 }
 
@@ -188,32 +188,21 @@ Components label_components(const cv::Mat& mask, int connectivity) {
   c.boxes.assign(1, cv::Rect());
   c.areas.assign(1, 0);
   c.firsts.assign(1, cv::Point(-1, -1));
-  std::vector<int> right, bottom;  // per label: past its box
-  right.push_back(0);
-  bottom.push_back(0);
   for (int y = 0; y < mask.rows; ++y) {
     for (std::size_t i = c.row_begin[std::size_t(y)]; i < c.row_begin[std::size_t(y) + 1]; ++i) {
       Components::Run& r = c.runs[i];
       const std::size_t root = find(i);
       if (root == i) {
         label_of_root[i] = c.count++;
-        c.boxes.push_back(cv::Rect(r.x0, y, 0, 0));
+        c.boxes.push_back(cv::Rect(r.x0, y, r.x1 - r.x0, 1));
         c.areas.push_back(0);
         c.firsts.push_back(cv::Point(r.x0, y));
-        right.push_back(r.x1);
-        bottom.push_back(y + 1);
       }
       r.label = label_of_root[root];
       const std::size_t k = std::size_t(r.label);
       c.areas[k] += r.x1 - r.x0;
-      c.boxes[k].x = std::min(c.boxes[k].x, r.x0);
-      right[k] = std::max(right[k], r.x1);
-      bottom[k] = y + 1;
+      c.boxes[k] |= cv::Rect(r.x0, y, r.x1 - r.x0, 1);
     }
-  }
-  for (int k = 1; k < c.count; ++k) {
-    c.boxes[std::size_t(k)].width = right[std::size_t(k)] - c.boxes[std::size_t(k)].x;
-    c.boxes[std::size_t(k)].height = bottom[std::size_t(k)] - c.boxes[std::size_t(k)].y;
   }
   return c;
 }
@@ -230,7 +219,8 @@ ContourResult extract_contours(const Components& components, const GeoTransform&
   // First pixel of each component in raster order, its stable identity: the leftmost in its top row.
   const std::vector<cv::Point>& first = components.firsts;
   const double pixel_area = transform.pixel_size() * transform.pixel_size();
-  std::vector<int> order;
+  const double orientation = transform.c[1] * transform.c[5] - transform.c[2] * transform.c[4];
+  // (Labels are numbered in that order: the buildings come sorted by first pixel.)
   for (int k = 1; k < count; ++k) {
     if (keep && !keep(component_box(components, k), first[std::size_t(k)])) continue;
     const double pixels = double(components.areas[std::size_t(k)]);
@@ -238,18 +228,12 @@ ContourResult extract_contours(const Components& components, const GeoTransform&
       ++result.dropped_small;
       continue;
     }
-    order.push_back(k);
-  }
-  // (Labels are numbered in that order already.)
-  const double orientation = transform.c[1] * transform.c[5] - transform.c[2] * transform.c[4];
-  for (int k : order) {
     BuildingContour b;
     b.bbox = component_box(components, k);
     b.pixel_count = components.areas[std::size_t(k)];
     b.first_col = first[std::size_t(k)].x;
     b.first_row = first[std::size_t(k)].y;
     cv::Mat component = components.mask_of(k, 1);  // padded, so that neighbours never fall outside
-    resolve_diagonal_contacts(component);
     for (Ring& ring : trace_padded(component)) {
       for (Vec2& p : ring) p = transform.to_map(p.x() + b.bbox.x, p.y() + b.bbox.y);
       // A north-up raster (negative determinant) maps pixel orientation to map orientation
