@@ -638,6 +638,48 @@ void run_chain(const std::vector<Ring>& rings, double pixel_size, const CoreOpti
       }
     }
   }
+  // Opt-in (models.coarse_scale): the chosen outline against those drawn as if the noise were
+  // coarse_scale and its square times as large, by the Bayesian information criterion. A wobble
+  // whose wavelength is a few times its amplitude cuts the contour into runs at each flank, its
+  // noise measures too little, and the outline keeps its crests as notches; the criterion, which
+  // needs no noise level, finds the coarser outline explains the contour about as well.
+  if (o.models.coarse_scale > 1 && on_lattice && vertex_count(result.footprint) > 4 && !over_budget()) {
+    double perimeter_m = 0;
+    for (const Ring& ring : rings) perimeter_m += perimeter(ring);
+    const double correlation = std::max(pixel_size, o.models.coarse_correlation_noise * noise);
+    const double samples = std::max(2.0, perimeter_m / correlation);
+    // n ln(sigma^2) + k ln(n) with sigma the mean distance (at least a tenth of a pixel) and two
+    // parameters a vertex.
+    const auto criterion = [&](const PolygonWithHoles& p) {
+      const double fit = std::max(0.1 * pixel_size, contour_fit(rings, p));
+      return samples * std::log(fit * fit) + 2.0 * std::log(samples) * double(vertex_count(p));
+    };
+    double best = criterion(result.footprint);
+    const auto compete = [&](PolygonWithHoles& candidate) {
+      if (vertex_count(candidate) >= vertex_count(result.footprint)) return;
+      const double c = criterion(candidate);
+      if (c < best) {
+        best = c;
+        result.footprint = std::move(candidate);
+        result.model = "coarse";
+      }
+    };
+    CornerOptions straight = o.corners;  // the lattice outline's walls are straight
+    straight.curve_px = 0;
+    double scale = 1;
+    for (int k = 0; k < 2; ++k) {
+      scale *= o.models.coarse_scale;
+      CornerContext coarse = context;
+      coarse.noise = scale * noise;
+      const double min_run_px = std::max(o.corners.min_run_px, o.corners.min_run_noise * coarse.noise / pixel_size);
+      PolygonWithHoles candidate;
+      if (outline(fit_rings, labels, result.directions, o.corners, origin, pixel_size, coarse, min_run_px, candidate).second.empty())
+        compete(candidate);
+      if (lattice_ok &&
+          outline(fit_rings, axis_labels, input.directions, straight, origin, pixel_size, coarse, min_run_px, candidate).second.empty())
+        compete(candidate);
+    }
+  }
 }
 
 }  // namespace
