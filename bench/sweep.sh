@@ -6,12 +6,16 @@
 # section of docs/quality.md (between its sweep markers).
 #
 #   bench/sweep.sh [--work DIR] [--sets synth,campus] [--pixels 0.1,0.25,0.5,1,2]
-#                  [--wobbles 0,0.25,0.5,1] [--methods lodforge,cgal,douglas_peucker,none] [--no-docs]
+#                  [--wobbles 0,0.25,0.5,1] [--wavelength 8]
+#                  [--methods lodforge,cgal,douglas_peucker,none] [--no-docs]
 #
 # A row (pixel size P, wobble W metres): `lodforge synth --pixel-size P --set boundary_noise_m=W
-# --set noise_wavelength_m=8 --set corner_radius_m=2W --set speckle_per_km2=400 --set
-# speckle_size_m=0.5` (W = 0: the exact rasterization, no rounding, no speckles). The synthetic
-# city is 500 m x 500 m (seed 11); the campus is its 1,529 BAG footprints (seed 1).
+# --set noise_wavelength_m=L --set corner_radius_m=2W --set speckle_per_km2=400 --set
+# speckle_size_m=0.5` (W = 0: the exact rasterization, no rounding, no speckles), L = 8 m unless
+# --wavelength says otherwise (its rows then go to their own section, sweep-results-lL, and their
+# files are named ROW.lL). The synthetic city is 500 m x 500 m (seed 11); the campus is its 1,529
+# BAG footprints (seed 1). Methods: lodforge (the default), paper (the deformed route), coarse
+# (the default with models.coarse_scale = 2), cgal, douglas_peucker, none (the raw contour).
 set -euo pipefail
 root="$(cd "$(dirname "$0")/.." && pwd)"
 lodforge="${LODFORGE:-$root/build/lodforge}"
@@ -20,6 +24,7 @@ work="$root/build/bench-sweep"
 sets="synth,campus"
 pixels="0.1,0.25,0.5,1,2"
 wobbles="0,0.25,0.5,1"
+wavelength=8
 methods="lodforge,cgal,douglas_peucker,none"
 docs=1
 while [ $# -gt 0 ]; do
@@ -28,9 +33,10 @@ while [ $# -gt 0 ]; do
     --sets) sets="$2"; shift 2 ;;
     --pixels) pixels="$2"; shift 2 ;;
     --wobbles) wobbles="$2"; shift 2 ;;
+    --wavelength) wavelength="$2"; shift 2 ;;
     --methods) methods="$2"; shift 2 ;;
     --no-docs) docs=0; shift ;;
-    -h|--help) sed -n '2,15p' "$0"; exit 0 ;;
+    -h|--help) sed -n '2,19p' "$0"; exit 0 ;;
     *) echo "bench/sweep.sh: unknown argument '$1' (see --help)" >&2; exit 2 ;;
   esac
 done
@@ -48,13 +54,14 @@ for s in "${set_list[@]}"; do
   esac
 done
 for m in "${method_list[@]}"; do
-  case "$m" in lodforge|paper|cgal|douglas_peucker|none) ;; *) echo "bench/sweep.sh: unknown method '$m'" >&2; exit 2 ;; esac
+  case "$m" in lodforge|paper|coarse|cgal|douglas_peucker|none) ;; *) echo "bench/sweep.sh: unknown method '$m'" >&2; exit 2 ;; esac
 done
 
 method_args() {
   case "$1" in
     lodforge) echo "" ;;
     paper) echo "--regularizer deformation --route deformed" ;;
+    coarse) echo "--set stages.models.coarse_scale=2" ;;
     *) echo "--regularizer $1" ;;
   esac
 }
@@ -64,12 +71,13 @@ for s in "${set_list[@]}"; do
   for p in "${pixel_list[@]}"; do
     for w in "${wobble_list[@]}"; do
       row="$s.p$p.w$w"
+      [ "$wavelength" = 8 ] || row="$row.l$wavelength"
       data="$work/data/$row"
       if [ ! -f "$data/seg_class.tif" ]; then
         degrade=(--set boundary_noise_m=0 --set corner_radius_m=0 --set speckle_per_km2=0)
         if [ "$w" != 0 ]; then
           radius=$(/usr/bin/python3 -c "print(2 * $w)")
-          degrade=(--set "boundary_noise_m=$w" --set noise_wavelength_m=8 --set "corner_radius_m=$radius"
+          degrade=(--set "boundary_noise_m=$w" --set "noise_wavelength_m=$wavelength" --set "corner_radius_m=$radius"
                    --set speckle_per_km2=400 --set speckle_size_m=0.5)
         fi
         if [ "$s" = synth ]; then
@@ -90,7 +98,7 @@ for s in "${set_list[@]}"; do
     done
   done
 done
-table_args=("$work" --sets "$sets" --pixels "$pixels" --wobbles "$wobbles" --methods "$methods")
+table_args=("$work" --sets "$sets" --pixels "$pixels" --wobbles "$wobbles" --wavelength "$wavelength" --methods "$methods")
 if [ "$docs" = 1 ]; then
   /usr/bin/python3 "$root/bench/sweep_table.py" "${table_args[@]}" --doc "$root/docs/quality.md"
   echo "bench/sweep.sh: results written to docs/quality.md" >&2

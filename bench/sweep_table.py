@@ -1,17 +1,19 @@
 #!/usr/bin/python3
 """Builds the sweep tables of docs/quality.md from bench/sweep.sh's work directory.
-usage: sweep_table.py WORK --sets a,b --pixels p,q --wobbles w,v --methods m,n [--doc DOC.md]"""
+usage: sweep_table.py WORK --sets a,b --pixels p,q --wobbles w,v [--wavelength 8] --methods m,n [--doc DOC.md]
+Rows of a wavelength other than 8 m are read from ROW.lL files and written to the sweep-results-lL section."""
 import argparse, json, os
 
 from doc_section import write_section
 
 PEERS = ["cgal", "douglas_peucker"]
-SHORT = {"lodforge": "ours", "cgal": "CGAL", "douglas_peucker": "DP", "none": "raw", "paper": "paper"}
+SHORT = {"lodforge": "ours", "cgal": "CGAL", "douglas_peucker": "DP", "none": "raw", "paper": "paper", "coarse": "coarse"}
 TITLES = {"synth": "Synthetic city, 500 m x 500 m (seed 11)", "campus": "TU Delft campus, 1,529 BAG footprints (seed 1)"}
 
 ap = argparse.ArgumentParser()
 ap.add_argument("work")
 for key in ("sets", "pixels", "wobbles", "methods"): ap.add_argument("--" + key, required=True)
+ap.add_argument("--wavelength", default="8")
 ap.add_argument("--doc")
 a = ap.parse_args()
 sets, pixels, wobbles, methods = (getattr(a, k).split(",") for k in ("sets", "pixels", "wobbles", "methods"))
@@ -24,9 +26,9 @@ def load(row, m):
     return metrics, stats
 
 
-def targets(r):
-    """The issue's targets for the default on one row: the names of those missed."""
-    ours, ostats = r["lodforge"]
+def targets(r, method="lodforge"):
+    """The issue's targets for one of our methods on one row: the names of those missed."""
+    ours, ostats = r[method]
     missed = []
     raw = r.get("none", (None,))[0]
     peers = [r[p][0] for p in PEERS if p in r]
@@ -42,18 +44,20 @@ def targets(r):
 
 out, met, rows_total = [], 0, 0
 for s in sets:
-    out.append(f"#### {TITLES.get(s, s)}\n")
+    title = TITLES.get(s, s) + ("" if a.wavelength == "8" else f", wobble wavelength {a.wavelength} m")
+    out.append(f"#### {title}\n")
     head = ["pixel (m)", "wobble (m)"]
     head += [f"IoU {SHORT[m]}" for m in methods]
     head += [f"N-ratio {SHORT[m]}" for m in methods]
     head += ["right angles ours / truth"] + [f"right angles {SHORT[m]}" for m in methods if m != "lodforge"]
     head += [f"tangent ° {SHORT[m]}" for m in methods] + [f"PoLiS {SHORT[m]}" for m in methods]
     head += ["fallbacks ours", "ms ours (median)", "targets missed"]
+    if "coarse" in methods: head.append("targets missed (coarse)")
     out.append("| " + " | ".join(head) + " |")
     out.append("|---" * len(head) + "|")
     for p in pixels:
         for w in wobbles:
-            row = f"{s}.p{p}.w{w}"
+            row = f"{s}.p{p}.w{w}" + ("" if a.wavelength == "8" else f".l{a.wavelength}")
             try:
                 r = {m: load(row, m) for m in methods}
             except FileNotFoundError:
@@ -73,6 +77,7 @@ for s in sets:
             rows_total += 1
             met += not missed
             cells.append(", ".join(missed) if missed else "none")
+            if "coarse" in methods: cells.append(", ".join(targets(r, "coarse")) or "none")
             out.append("| " + " | ".join(cells) + " |")
     out.append("")
 out.append(f"Rows meeting every target: {met} of {rows_total}.\n")
@@ -80,6 +85,7 @@ text = "\n".join(out)
 if not a.doc:
     print(text)
 else:
-    write_section(a.doc, "sweep-results",
-                  f"bench/sweep.sh --sets {a.sets} --pixels {a.pixels} --wobbles {a.wobbles} --methods {a.methods}",
+    section, wavelength = ("sweep-results", "") if a.wavelength == "8" else (f"sweep-results-l{a.wavelength}", f" --wavelength {a.wavelength}")
+    write_section(a.doc, section,
+                  f"bench/sweep.sh --sets {a.sets} --pixels {a.pixels} --wobbles {a.wobbles}{wavelength} --methods {a.methods}",
                   "ms: each building's regularization on one core.", text)
