@@ -409,6 +409,25 @@ double outline_reach(const PolygonWithHoles& polygon, const PolygonWithHoles& co
   return reach;
 }
 
+// True when a ring of the polygon turns by less than 20 degrees (and more than half of one) at
+// three consecutive vertices: an arc drawn by its chords, whose vertices are samples of one
+// curved wall, not corners a criterion should count.
+bool has_arc(const PolygonWithHoles& polygon) {
+  for (const Ring* r : rings_of(polygon)) {
+    const Ring& ring = *r;
+    const std::size_t n = ring.size();
+    if (n < 3) continue;
+    int run = 0;
+    for (std::size_t i = 0; i < n + 2; ++i) {
+      const Vec2 a = ring[(i + n - 1) % n], b = ring[i % n], c = ring[(i + 1) % n];
+      const double turn = std::abs(std::atan2(cross(b - a, c - b), (b - a).dot(c - b))) * 180.0 / M_PI;
+      run = turn > 0.5 && turn < 20.0 ? run + 1 : 0;
+      if (run >= 3) return true;
+    }
+  }
+  return false;
+}
+
 void run_chain(const std::vector<Ring>& rings, double pixel_size, const CoreOptions& o, double noise_floor_m,
                BuildingStart start, BuildingResult& result, const std::function<bool()>& over_budget) {
   if (const std::string problem = contour_problem(rings, o); !problem.empty()) throw StageError("input", problem);
@@ -638,32 +657,26 @@ void run_chain(const std::vector<Ring>& rings, double pixel_size, const CoreOpti
       }
     }
   }
-  // Opt-in (models.coarse_scale): the chosen outline against those drawn as if the noise were
-  // coarse_scale and its square times as large, by the Bayesian information criterion. A wobble
-  // whose wavelength is a few times its amplitude cuts the contour into runs at each flank, its
-  // noise measures too little, and the outline keeps its crests as notches; the criterion, which
-  // needs no noise level, finds the coarser outline explains the contour about as well.
-  if (o.models.coarse_scale > 1 && on_lattice && vertex_count(result.footprint) > 4 && !over_budget()) {
+  // The lattice outline drawn as if the noise were coarse_scale and its square times as large
+  // (models.coarse_scale), against the chosen outline, by the Bayesian information criterion. A
+  // wobble whose wavelength is a few times its amplitude cuts the contour into a run at each
+  // flank, the noise measured about those runs is too low, and the outline keeps the wobble's
+  // crests as notches; the criterion, which needs no noise level, finds that the coarser square
+  // outline explains the contour about as well. (Only the lattice outline competes: the chain's,
+  // drawn coarser, also drops real steps of a metre between row houses under a noise that large.)
+  if (o.models.coarse_scale > 1 && lattice_ok && vertex_count(result.footprint) > 4 && !has_arc(result.footprint) &&
+      !over_budget()) {
     double perimeter_m = 0;
     for (const Ring& ring : rings) perimeter_m += perimeter(ring);
     const double correlation = std::max(pixel_size, o.models.coarse_correlation_noise * noise);
     const double samples = std::max(2.0, perimeter_m / correlation);
-    // n ln(sigma^2) + k ln(n) with sigma the mean distance (at least a tenth of a pixel) and two
+    // n ln(sigma^2) + k ln(n), sigma the mean distance (at least a tenth of a pixel), two
     // parameters a vertex.
     const auto criterion = [&](const PolygonWithHoles& p) {
       const double fit = std::max(0.1 * pixel_size, contour_fit(rings, p));
       return samples * std::log(fit * fit) + 2.0 * std::log(samples) * double(vertex_count(p));
     };
     double best = criterion(result.footprint);
-    const auto compete = [&](PolygonWithHoles& candidate) {
-      if (vertex_count(candidate) >= vertex_count(result.footprint)) return;
-      const double c = criterion(candidate);
-      if (c < best) {
-        best = c;
-        result.footprint = std::move(candidate);
-        result.model = "coarse";
-      }
-    };
     CornerOptions straight = o.corners;  // the lattice outline's walls are straight
     straight.curve_px = 0;
     double scale = 1;
@@ -673,11 +686,15 @@ void run_chain(const std::vector<Ring>& rings, double pixel_size, const CoreOpti
       coarse.noise = scale * noise;
       const double min_run_px = std::max(o.corners.min_run_px, o.corners.min_run_noise * coarse.noise / pixel_size);
       PolygonWithHoles candidate;
-      if (outline(fit_rings, labels, result.directions, o.corners, origin, pixel_size, coarse, min_run_px, candidate).second.empty())
-        compete(candidate);
-      if (lattice_ok &&
-          outline(fit_rings, axis_labels, input.directions, straight, origin, pixel_size, coarse, min_run_px, candidate).second.empty())
-        compete(candidate);
+      if (!outline(fit_rings, axis_labels, input.directions, straight, origin, pixel_size, coarse, min_run_px, candidate).second.empty() ||
+          vertex_count(candidate) >= vertex_count(result.footprint))
+        continue;
+      const double c = criterion(candidate);
+      if (c < best) {
+        best = c;
+        result.footprint = std::move(candidate);
+        result.model = "coarse lattice";
+      }
     }
   }
 }
