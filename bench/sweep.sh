@@ -43,6 +43,18 @@ while [ $# -gt 0 ]; do
 done
 [ -x "$lodforge" ] || { echo "bench/sweep.sh: no lodforge binary at $lodforge; run scripts/build.sh first" >&2; exit 1; }
 campus_gt="$shared/tudelft-campus-bag/tudcampus_bag_footprints.geojson"
+# The wavelength as a number: 8 (also 8.0) is the main sweep's; another has its own rows and section.
+if [ "$(/usr/bin/python3 -c "import sys; print(float(sys.argv[1]) == 8)" "$wavelength" 2>/dev/null)" = True ]; then
+  wavelength=8 section=sweep-results
+else
+  /usr/bin/python3 -c "import sys; assert float(sys.argv[1]) > 0" "$wavelength" 2>/dev/null ||
+    { echo "bench/sweep.sh: --wavelength must be a positive number of metres, not '$wavelength'" >&2; exit 2; }
+  section="sweep-results-l$wavelength"
+fi
+if [ "$docs" = 1 ] && ! grep -q "<!-- $section:begin -->" "$root/docs/quality.md"; then
+  echo "bench/sweep.sh: docs/quality.md has no $section markers (<!-- $section:begin --> ... <!-- $section:end -->); add them or pass --no-docs" >&2
+  exit 2
+fi
 IFS=, read -ra set_list <<< "$sets"
 IFS=, read -ra pixel_list <<< "$pixels"
 IFS=, read -ra wobble_list <<< "$wobbles"

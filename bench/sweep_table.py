@@ -17,6 +17,7 @@ ap.add_argument("--wavelength", default="8")
 ap.add_argument("--doc")
 a = ap.parse_args()
 sets, pixels, wobbles, methods = (getattr(a, k).split(",") for k in ("sets", "pixels", "wobbles", "methods"))
+if float(a.wavelength) == 8: a.wavelength = "8"  # the main sweep's, however written
 
 
 def load(row, m):

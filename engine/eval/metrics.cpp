@@ -187,7 +187,7 @@ std::pair<std::size_t, std::size_t> right_angle_corners(const PolygonWithHoles& 
     for (std::size_t i = 0; i < n; ++i) {
       const Vec2 before = r[i] - r[(i + n - 1) % n], after = r[(i + 1) % n] - r[i];
       if (before.norm() == 0 || after.norm() == 0) continue;
-      const double turn = std::abs(std::atan2(cross(before, after), before.dot(after))) * 180.0 / M_PI;
+      const double turn = turn_deg(before, after);
       if (turn <= min_turn_deg) continue;
       ++total;
       right += std::abs(turn - 90.0) <= tolerance_deg || turn >= 180.0 - tolerance_deg;

@@ -86,6 +86,11 @@ struct CornerOptions {
 // least a pixel (for the standard error of a mean or a fit along the contour).
 inline double noise_correlation_m(const CornerOptions& o, double pixel_size) { return std::max(o.snap_correlation_m, pixel_size); }
 
+// The least run of a regular outline (pixels): min_run_px, and min_run_noise times the noise.
+inline double regular_min_run_px(const CornerOptions& o, double noise, double pixel_size) {
+  return std::max(o.min_run_px, o.min_run_noise * noise / pixel_size);
+}
+
 // Absorbs runs shorter than min_run_px pixel lengths into their longer neighbour, in place.
 void absorb_short_runs(const Ring& ring, std::vector<int>& labels, double min_length);
 

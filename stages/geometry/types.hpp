@@ -33,6 +33,11 @@ inline Vec2 tangent_of_normal(const Vec2& n) { return Vec2(-n.y(), n.x()); }
 
 inline double cross(const Vec2& a, const Vec2& b) { return a.x() * b.y() - a.y() * b.x(); }
 
+// How far a polyline turns (degrees, 0-180) from edge `before` to edge `after`; 0 for a zero edge.
+inline double turn_deg(const Vec2& before, const Vec2& after) {
+  return std::abs(std::atan2(cross(before, after), before.dot(after))) * 180.0 / M_PI;
+}
+
 // Of the four unit normals of a building's lattice (lattice, and it turned by quarter turns), the
 // one nearest to n.
 inline Vec2 nearest_lattice_axis(const Vec2& n, const Vec2& lattice) {

@@ -409,9 +409,9 @@ double outline_reach(const PolygonWithHoles& polygon, const PolygonWithHoles& co
   return reach;
 }
 
-// True when a ring of the polygon turns by less than 20 degrees (and more than half of one) at
-// three consecutive vertices: an arc drawn by its chords, whose vertices are samples of one
-// curved wall, not corners a criterion should count.
+// True when a ring of the polygon turns by 0.5 to 20 degrees at three vertices in a row (vertices
+// that turn less, collinear ones, are passed over): an arc drawn by its chords, whose vertices are
+// samples of one curved wall, not corners a criterion should count.
 bool has_arc(const PolygonWithHoles& polygon) {
   for (const Ring* r : rings_of(polygon)) {
     const Ring& ring = *r;
@@ -420,12 +420,24 @@ bool has_arc(const PolygonWithHoles& polygon) {
     int run = 0;
     for (std::size_t i = 0; i < n + 2; ++i) {
       const Vec2 a = ring[(i + n - 1) % n], b = ring[i % n], c = ring[(i + 1) % n];
-      const double turn = std::abs(std::atan2(cross(b - a, c - b), (b - a).dot(c - b))) * 180.0 / M_PI;
-      run = turn > 0.5 && turn < 20.0 ? run + 1 : 0;
+      const double turn = turn_deg(b - a, c - b);
+      if (turn <= 0.5) continue;
+      run = turn < 20.0 ? run + 1 : 0;
       if (run >= 3) return true;
     }
   }
   return false;
+}
+
+// The lattice outline: the contour's edges labeled among the building's lattice directions alone,
+// every wall straight (no curve), drawn for the noise in `context`.
+StageProblem lattice_outline_of(const std::vector<Ring>& fit_rings, const EdgeLabels& axis_labels, const std::vector<Vec2>& axes,
+                                const CornerOptions& o, const Vec2& origin, double pixel_size, const CornerContext& context,
+                                PolygonWithHoles& footprint) {
+  CornerOptions straight = o;
+  straight.curve_px = 0;
+  return outline(fit_rings, axis_labels, axes, straight, origin, pixel_size, context, regular_min_run_px(o, context.noise, pixel_size),
+                 footprint);
 }
 
 void run_chain(const std::vector<Ring>& rings, double pixel_size, const CoreOptions& o, double noise_floor_m,
@@ -554,9 +566,8 @@ void run_chain(const std::vector<Ring>& rings, double pixel_size, const CoreOpti
   context.noise = noise;
   const double allowed = o.models.outline_tolerance * model_noise(result, pixel_size, o.models);
   PolygonWithHoles regular, plain;
-  const double regular_min_run_px = std::max(o.corners.min_run_px, o.corners.min_run_noise * noise / pixel_size);
   const StageProblem regular_problem =
-      outline(fit_rings, labels, input.directions, o.corners, origin, pixel_size, context, regular_min_run_px, regular);
+      outline(fit_rings, labels, input.directions, o.corners, origin, pixel_size, context, regular_min_run_px(o.corners, noise, pixel_size), regular);
   const StageProblem plain_problem =
       outline(fit_rings, labels, input.directions, o.corners, origin, pixel_size, CornerContext{}, o.corners.min_run_px, plain);
   // The lattice outline: every wall on the building's lattice (its main direction and quarter
@@ -572,10 +583,8 @@ void run_chain(const std::vector<Ring>& rings, double pixel_size, const CoreOpti
     input.directions = {l, Vec2(-l.y(), l.x()), -l, Vec2(l.y(), -l.x())};
     input.support.assign(4, 1.0);
     axis_labels = label_edges(input, o.labeling);
-    CornerOptions straight = o.corners;  // its walls are straight: no curve
-    straight.curve_px = 0;
-    lattice_ok = outline(fit_rings, axis_labels, input.directions, straight, origin, pixel_size, context, regular_min_run_px,
-                         lattice_outline).second.empty();
+    lattice_ok = lattice_outline_of(fit_rings, axis_labels, input.directions, o.corners, origin, pixel_size, context, lattice_outline)
+                     .second.empty();
   }
   // (Each contour fit computed once, when it is needed: they are a good part of the time.)
   double chosen_fit = -1;  // the chosen outline's, unknown yet
@@ -633,7 +642,7 @@ void run_chain(const std::vector<Ring>& rings, double pixel_size, const CoreOpti
     const double noise_m = std::max(o.models.min_noise_px * pixel_size, std::min(model_noise(result, pixel_size, o.models), chosen_fit));
     const double tolerance = o.models.stretch_fit_noise * noise_m;
     const std::vector<Stretch> stretches = lattice_stretches(rings, axis_labels, context.lattice, chosen, lattice_outline,
-                                                             regular_min_run_px * pixel_size, o.corners.snap_max_deg, tolerance);
+                                                             regular_min_run_px(o.corners, noise, pixel_size) * pixel_size, o.corners.snap_max_deg, tolerance);
     if (!stretches.empty()) {
       // The chain's labels with the stretches' edges labeled as the lattice labeling has them
       // (the chain's directions, then the lattice's four).
@@ -649,7 +658,7 @@ void run_chain(const std::vector<Ring>& rings, double pixel_size, const CoreOpti
       // regular outline and reaches no farther from it than that plus the noise (lines of the
       // lattice meeting beyond the contour). It keeps the name "regular".
       PolygonWithHoles candidate;
-      if (outline(fit_rings, mixed, mixed_directions, o.corners, origin, pixel_size, context, regular_min_run_px, candidate)
+      if (outline(fit_rings, mixed, mixed_directions, o.corners, origin, pixel_size, context, regular_min_run_px(o.corners, noise, pixel_size), candidate)
               .second.empty() &&
           contour_fit(rings, candidate) <= chosen_fit + tolerance) {
         const PolygonWithHoles contour{rings[0], {rings.begin() + 1, rings.end()}};
@@ -658,42 +667,42 @@ void run_chain(const std::vector<Ring>& rings, double pixel_size, const CoreOpti
     }
   }
   // The lattice outline drawn as if the noise were coarse_scale and its square times as large
-  // (models.coarse_scale), against the chosen outline, by the Bayesian information criterion. A
+  // (models.coarse_scale), against the chosen outline, by a Bayesian information criterion. A
   // wobble whose wavelength is a few times its amplitude cuts the contour into a run at each
   // flank, the noise measured about those runs is too low, and the outline keeps the wobble's
-  // crests as notches; the criterion, which needs no noise level, finds that the coarser square
-  // outline explains the contour about as well. (Only the lattice outline competes: the chain's,
-  // drawn coarser, also drops real steps of a metre between row houses under a noise that large.)
+  // crests as notches; the criterion weighs the fit against the vertices rather than against that
+  // noise (which only sets how long a sample of contour is), and finds that the coarser square
+  // outline explains the contour about as well. Only the lattice outline competes (the chain's,
+  // drawn coarser, also dropped real steps of a metre between row houses under a noise that
+  // large), and not against an arc. (Skipped past the time budget, as the stretches above.)
   if (o.models.coarse_scale > 1 && lattice_ok && vertex_count(result.footprint) > 4 && !has_arc(result.footprint) &&
       !over_budget()) {
     double perimeter_m = 0;
     for (const Ring& ring : rings) perimeter_m += perimeter(ring);
     const double correlation = std::max(pixel_size, o.models.coarse_correlation_noise * noise);
     const double samples = std::max(2.0, perimeter_m / correlation);
-    // n ln(sigma^2) + k ln(n), sigma the mean distance (at least a tenth of a pixel), two
-    // parameters a vertex.
+    // n ln(d^2) + k ln(n): d the mean distance (at least a tenth of a pixel) for the standard
+    // deviation, two parameters a vertex.
     const auto criterion = [&](const PolygonWithHoles& p) {
       const double fit = std::max(0.1 * pixel_size, contour_fit(rings, p));
       return samples * std::log(fit * fit) + 2.0 * std::log(samples) * double(vertex_count(p));
     };
     double best = criterion(result.footprint);
-    CornerOptions straight = o.corners;  // the lattice outline's walls are straight
-    straight.curve_px = 0;
     double scale = 1;
     for (int k = 0; k < 2; ++k) {
       scale *= o.models.coarse_scale;
       CornerContext coarse = context;
       coarse.noise = scale * noise;
-      const double min_run_px = std::max(o.corners.min_run_px, o.corners.min_run_noise * coarse.noise / pixel_size);
       PolygonWithHoles candidate;
-      if (!outline(fit_rings, axis_labels, input.directions, straight, origin, pixel_size, coarse, min_run_px, candidate).second.empty() ||
+      if (!lattice_outline_of(fit_rings, axis_labels, input.directions, o.corners, origin, pixel_size, coarse, candidate)
+               .second.empty() ||
           vertex_count(candidate) >= vertex_count(result.footprint))
         continue;
       const double c = criterion(candidate);
       if (c < best) {
         best = c;
         result.footprint = std::move(candidate);
-        result.model = "coarse lattice";
+        result.model = "coarse_lattice";
       }
     }
   }

@@ -25,7 +25,8 @@ struct BuildingResult {
   double noise_m = -1;          // the boundary noise measured on the contour (m), when labeled; at least the floor it was given
   double arc_noise_m = -1;      // ... and measured about parabolas along the same runs, which an arc does not inflate (m); the same
   std::string model;            // the outline chosen: "regular" (walls held to the lattice; also after its oblique
-                                // walls are redrawn per stretch), "lines" (pixel thresholds), "lattice", "rectangle";
+                                // walls are redrawn per stretch), "lines" (pixel thresholds), "lattice", "rectangle",
+                                // "coarse_lattice" (the lattice outline drawn for a larger noise, models.coarse_scale);
                                 // empty for the fallback
   std::string route;            // the chain's corner route taken: "original" or "deformed"; empty otherwise
   std::string note;             // when ok: why the route taken is not the one asked for (a budget), else empty
