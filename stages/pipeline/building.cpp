@@ -294,12 +294,18 @@ double model_noise(const BuildingResult& result, double pixel_size, const ModelO
   return std::max(noise, o.min_noise_px * pixel_size);
 }
 
+// The length of all of a building's rings (m).
+double total_perimeter(const std::vector<Ring>& rings) {
+  double length = 0;
+  for (const Ring& ring : rings) length += perimeter(ring);
+  return length;
+}
+
 // How much worse a simpler outline may explain the contour (mean distance) and still be taken:
 // models.lattice_tolerance standard errors of that mean, the noise over the square root of the
 // number of independent stretches of contour (of the noise's correlation length) along the rings.
 double fit_tolerance(const std::vector<Ring>& rings, double pixel_size, const BuildingResult& result, const CoreOptions& o) {
-  double perimeter_m = 0;
-  for (const Ring& ring : rings) perimeter_m += perimeter(ring);
+  const double perimeter_m = total_perimeter(rings);
   const double correlation = noise_correlation_m(o.corners, pixel_size);
   return o.models.lattice_tolerance * model_noise(result, pixel_size, o.models) * std::sqrt(correlation / std::max(perimeter_m, correlation));
 }
@@ -566,8 +572,9 @@ void run_chain(const std::vector<Ring>& rings, double pixel_size, const CoreOpti
   context.noise = noise;
   const double allowed = o.models.outline_tolerance * model_noise(result, pixel_size, o.models);
   PolygonWithHoles regular, plain;
+  const double min_run_px = regular_min_run_px(o.corners, noise, pixel_size);
   const StageProblem regular_problem =
-      outline(fit_rings, labels, input.directions, o.corners, origin, pixel_size, context, regular_min_run_px(o.corners, noise, pixel_size), regular);
+      outline(fit_rings, labels, input.directions, o.corners, origin, pixel_size, context, min_run_px, regular);
   const StageProblem plain_problem =
       outline(fit_rings, labels, input.directions, o.corners, origin, pixel_size, CornerContext{}, o.corners.min_run_px, plain);
   // The lattice outline: every wall on the building's lattice (its main direction and quarter
@@ -642,7 +649,7 @@ void run_chain(const std::vector<Ring>& rings, double pixel_size, const CoreOpti
     const double noise_m = std::max(o.models.min_noise_px * pixel_size, std::min(model_noise(result, pixel_size, o.models), chosen_fit));
     const double tolerance = o.models.stretch_fit_noise * noise_m;
     const std::vector<Stretch> stretches = lattice_stretches(rings, axis_labels, context.lattice, chosen, lattice_outline,
-                                                             regular_min_run_px(o.corners, noise, pixel_size) * pixel_size, o.corners.snap_max_deg, tolerance);
+                                                             min_run_px * pixel_size, o.corners.snap_max_deg, tolerance);
     if (!stretches.empty()) {
       // The chain's labels with the stretches' edges labeled as the lattice labeling has them
       // (the chain's directions, then the lattice's four).
@@ -658,7 +665,7 @@ void run_chain(const std::vector<Ring>& rings, double pixel_size, const CoreOpti
       // regular outline and reaches no farther from it than that plus the noise (lines of the
       // lattice meeting beyond the contour). It keeps the name "regular".
       PolygonWithHoles candidate;
-      if (outline(fit_rings, mixed, mixed_directions, o.corners, origin, pixel_size, context, regular_min_run_px(o.corners, noise, pixel_size), candidate)
+      if (outline(fit_rings, mixed, mixed_directions, o.corners, origin, pixel_size, context, min_run_px, candidate)
               .second.empty() &&
           contour_fit(rings, candidate) <= chosen_fit + tolerance) {
         const PolygonWithHoles contour{rings[0], {rings.begin() + 1, rings.end()}};
@@ -677,10 +684,8 @@ void run_chain(const std::vector<Ring>& rings, double pixel_size, const CoreOpti
   // large), and not against an arc. (Skipped past the time budget, as the stretches above.)
   if (o.models.coarse_scale > 1 && lattice_ok && vertex_count(result.footprint) > 4 && !has_arc(result.footprint) &&
       !over_budget()) {
-    double perimeter_m = 0;
-    for (const Ring& ring : rings) perimeter_m += perimeter(ring);
     const double correlation = std::max(pixel_size, o.models.coarse_correlation_noise * noise);
-    const double samples = std::max(2.0, perimeter_m / correlation);
+    const double samples = std::max(2.0, total_perimeter(rings) / correlation);
     // n ln(d^2) + k ln(n): d the mean distance (at least a tenth of a pixel) for the standard
     // deviation, two parameters a vertex.
     const auto criterion = [&](const PolygonWithHoles& p) {
