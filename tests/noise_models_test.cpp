@@ -17,6 +17,7 @@
 #include "models/noise.hpp"
 #include "models/rectangle.hpp"
 #include "models/statistics.hpp"
+#include "models/steps.hpp"
 #include "normals/smoothing.hpp"
 #include "pipeline/building.hpp"
 #include "support/shapes.hpp"
@@ -761,7 +762,9 @@ TEST(PooledNoise, AStartWithACourtyardGivesTheSameOutline) {
 // the noise were two or four times as large wins where the information criterion prefers it
 // (three seeds of a house and an L: 48 vertices against 56 without, the truth's 30; as close).
 TEST(CoarseModel, AShortWobbleLeavesFewerNotches) {
-  CoreOptions off;
+  CoreOptions on;  // (without the steps merged after it, which reach these shapes too)
+  on.models.merge_patience = 0;
+  CoreOptions off = on;
   off.models.coarse_scale = 0;
   std::size_t off_vertices = 0, coarse_vertices = 0;
   double off_iou = 0, coarse_iou = 0;
@@ -781,7 +784,7 @@ TEST(CoarseModel, AShortWobbleLeavesFewerNotches) {
     const double floor = pooled_noise_floor(samples, CoreOptions{});
     for (std::size_t b = 0; b < contours.size(); ++b) {
       const BuildingResult plain = regularize_building(contours[b], 0.1, off, floor);
-      const BuildingResult coarse = regularize_building(contours[b], 0.1, CoreOptions{}, floor);
+      const BuildingResult coarse = regularize_building(contours[b], 0.1, on, floor);
       ASSERT_TRUE(plain.ok && coarse.ok) << plain.reason << coarse.reason;
       off_vertices += plain.footprint.outer.size();
       coarse_vertices += coarse.footprint.outer.size();
@@ -816,6 +819,136 @@ TEST(CoarseModel, ARealRecessStays) {
       EXPECT_GE(test::iou(coarse.footprint, notched), test::iou(plain.footprint, notched) - 0.002) << wobble << " " << seed;
     }
   }
+}
+
+// A step (two parallel walls facing the same way, joined by a short one) merges into one wall at
+// the walls' length-weighted mean offset, which keeps the area: a 5 m wall at y = 0 and a 15 m
+// wall at y = 0.4 become one 20 m wall at y = 0.3.
+TEST(MergeSteps, AStepBecomesOneWallAtTheMeanOffset) {
+  const PolygonWithHoles stepped{{{0, 0}, {5, 0}, {5, 0.4}, {20, 0.4}, {20, 10}, {0, 10}}, {}};
+  const std::optional<PolygonWithHoles> merged = merge_cheapest_step(stepped, 2.0);
+  ASSERT_TRUE(merged);
+  ASSERT_EQ(merged->outer.size(), 4u);
+  EXPECT_TRUE(polygon_problem(*merged).empty());
+  EXPECT_NEAR(std::abs(signed_area(merged->outer)), std::abs(signed_area(stepped.outer)), 1e-9);
+  double low_x = 0, high_x = 0;  // the merged wall's ends
+  int low = 0;
+  for (const Vec2& p : merged->outer)
+    if (p.y() < 1) {
+      EXPECT_NEAR(p.y(), 0.3, 1e-9);
+      (low++ == 0 ? low_x : high_x) = p.x();
+    }
+  ASSERT_EQ(low, 2);
+  EXPECT_NEAR(std::min(low_x, high_x), 0, 1e-9);
+  EXPECT_NEAR(std::max(low_x, high_x), 20, 1e-9);
+  // A rectangle has no step (its walls facing the same way are not two apart).
+  EXPECT_FALSE(merge_cheapest_step(*merged, 2.0));
+  // Walls 3 degrees apart are no step at 2 degrees of tolerance: the next cheapest merges (the
+  // 0.4 m riser with the 9.6 m wall 15 m away), and the bottom left corner stays; at 5 degrees the
+  // bottom walls merge.
+  const double rise = 5 * std::tan(3 * M_PI / 180);
+  const PolygonWithHoles skewed{{{0, 0}, {5, rise}, {5, 0.4 + rise}, {20, 0.4 + rise}, {20, 10}, {0, 10}}, {}};
+  const auto keeps_origin = [](const PolygonWithHoles& p) {
+    return std::any_of(p.outer.begin(), p.outer.end(), [](const Vec2& v) { return v.norm() < 1e-9; });
+  };
+  const std::optional<PolygonWithHoles> strict = merge_cheapest_step(skewed, 2.0), loose = merge_cheapest_step(skewed, 5.0);
+  ASSERT_TRUE(strict && loose);
+  EXPECT_TRUE(keeps_origin(*strict));
+  EXPECT_FALSE(keeps_origin(*loose));
+}
+
+// Of two steps the one that moves the least area merges first: a 0.2 m step before a 1 m one.
+TEST(MergeSteps, TheCheapestStepMergesFirst) {
+  const PolygonWithHoles two{{{0, 0}, {10, 0}, {10, 0.2}, {20, 0.2}, {20, 10}, {12, 10}, {12, 11}, {0, 11}}, {}};
+  const std::optional<PolygonWithHoles> merged = merge_cheapest_step(two, 2.0);
+  ASSERT_TRUE(merged);
+  ASSERT_EQ(merged->outer.size(), 6u);
+  double least_y = 1e9;
+  for (const Vec2& p : merged->outer) least_y = std::min(least_y, p.y());
+  EXPECT_NEAR(least_y, 0.1, 1e-9);  // the lower step merged at its mean ...
+  double most_y = -1e9;
+  for (const Vec2& p : merged->outer) most_y = std::max(most_y, p.y());
+  EXPECT_NEAR(most_y, 11, 1e-9);  // ... the upper one kept
+  // A hole's step counts as the outer ring's do.
+  const PolygonWithHoles holed{{{-10, -10}, {30, -10}, {30, 30}, {-10, 30}}, {two.outer}};
+  const std::optional<PolygonWithHoles> in_hole = merge_cheapest_step(holed, 2.0);
+  ASSERT_TRUE(in_hole);
+  EXPECT_EQ(in_hole->outer.size(), 4u);
+  EXPECT_EQ(in_hole->holes.at(0).size(), 6u);
+}
+
+// The path's running fit is the contour's mean distance to its outline measured afresh, and its
+// outlines are merge_cheapest_step's, at every merge down to no step left.
+TEST(MergeSteps, ThePathKeepsItsFitAsMeasuredAfresh) {
+  const PolygonWithHoles stepped{{{0, 0}, {6, 0}, {6, 0.5}, {11, 0.5}, {11, 0}, {20, 0}, {20, 4}, {21, 4}, {21, 9}, {20, 9},
+                                  {20, 12}, {9, 12}, {9, 11.6}, {0, 11.6}},
+                                 {{{3, 3}, {3, 8}, {7, 8}, {7, 6}, {8, 6}, {8, 3}}}};
+  const test::RasterizedShape r = test::rasterize_shape_m(stepped, 0.1, 0.25, 3.0, 0.5, 1);
+  ASSERT_EQ(r.buildings.size(), 1u);
+  const std::vector<Ring>& contour = r.buildings[0].rings;
+  ASSERT_EQ(contour.size(), 2u);
+  const auto fresh = [&](const PolygonWithHoles& p) {
+    double sum = 0, total = 0;
+    for (const Ring& ring : contour) {
+      sum += perimeter(ring) * mean_distance_to_boundary(ring, p);
+      total += perimeter(ring);
+    }
+    return sum / total;
+  };
+  StepPath path(contour, stepped, 2.0);
+  EXPECT_NEAR(path.fit(), fresh(stepped), 1e-9);
+  PolygonWithHoles expected = stepped;
+  int merges = 0;
+  while (path.merge_next()) {
+    const std::optional<PolygonWithHoles> next = merge_cheapest_step(expected, 2.0);
+    ASSERT_TRUE(next);
+    expected = *next;
+    ASSERT_EQ(path.outline().outer, expected.outer);
+    ASSERT_EQ(path.outline().holes, expected.holes);
+    EXPECT_NEAR(path.fit(), fresh(expected), 1e-9) << "after merge " << merges + 1;
+    ++merges;
+  }
+  EXPECT_FALSE(merge_cheapest_step(expected, 2.0));
+  EXPECT_GE(merges, 5);
+  EXPECT_EQ(path.outline().outer.size(), 4u);
+}
+
+// A wobble of 1 m at a 3 m wavelength at 0.1 m pixels leaves notches a metre wide that neither
+// the chain nor the coarse lattice outline removes; the outline with its steps merged, chosen by
+// the same criterion, has fewer vertices and no less IoU.
+TEST(MergeSteps, AFastMetreWobbleLeavesFewerVertices) {
+  CoreOptions off;
+  off.models.merge_patience = 0;
+  std::size_t off_vertices = 0, merged_vertices = 0;
+  double off_iou = 0, merged_iou = 0;
+  int count = 0;
+  for (const std::uint64_t seed : {1, 2, 3}) {
+    std::vector<std::vector<Ring>> contours;
+    std::vector<PolygonWithHoles> truths;
+    std::vector<NoiseSample> samples;
+    for (const PolygonWithHoles& shape : {kHouse, kL}) {
+      const PolygonWithHoles truth = test::rotated(shape, 20.0);
+      const test::RasterizedShape r = test::rasterize_shape_m(truth, 0.1, 1.0, 3.0, 2.0, seed);
+      ASSERT_EQ(r.buildings.size(), 1u);
+      contours.push_back(r.buildings[0].rings);
+      truths.push_back(truth);
+      samples.push_back(start_building(contours.back(), 0.1, CoreOptions{}).sample);
+    }
+    const double floor = pooled_noise_floor(samples, CoreOptions{});
+    for (std::size_t b = 0; b < contours.size(); ++b) {
+      const BuildingResult plain = regularize_building(contours[b], 0.1, off, floor);
+      const BuildingResult merged = regularize_building(contours[b], 0.1, CoreOptions{}, floor);
+      ASSERT_TRUE(plain.ok && merged.ok) << plain.reason << merged.reason;
+      off_vertices += vertex_count(plain.footprint);
+      merged_vertices += vertex_count(merged.footprint);
+      off_iou += test::iou(plain.footprint, truths[b]);
+      merged_iou += test::iou(merged.footprint, truths[b]);
+      ++count;
+    }
+  }
+  std::cout << "vertices " << off_vertices << " -> " << merged_vertices << ", IoU " << off_iou / count << " -> " << merged_iou / count << '\n';
+  EXPECT_LE(double(merged_vertices), 0.8 * double(off_vertices));
+  EXPECT_GE(merged_iou / count, off_iou / count - 0.002);
 }
 }  // namespace
 }  // namespace lodforge

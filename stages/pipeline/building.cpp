@@ -16,6 +16,7 @@
 #include "models/noise.hpp"
 #include "models/rectangle.hpp"
 #include "models/statistics.hpp"
+#include "models/steps.hpp"
 #include "normals/smoothing.hpp"
 #include "peers/cgal_contours.hpp"
 #include "triangulation/triangulate.hpp"
@@ -674,27 +675,30 @@ void run_chain(const std::vector<Ring>& rings, double pixel_size, const CoreOpti
     }
   }
   // The lattice outline drawn as if the noise were coarse_scale and its square times as large
-  // (models.coarse_scale), against the chosen outline, by a Bayesian information criterion. A
-  // wobble whose wavelength is a few times its amplitude cuts the contour into a run at each
-  // flank, the noise measured about those runs is too low, and the outline keeps the wobble's
-  // crests as notches; the criterion weighs the fit against the vertices rather than against that
-  // noise (which only sets how long a sample of contour is), and finds that the coarser square
-  // outline explains the contour about as well. Only the lattice outline competes (the chain's,
-  // drawn coarser, also dropped real steps of a metre between row houses under a noise that
-  // large), and not against an arc. (Skipped past the time budget, as the stretches above.)
-  if (o.models.coarse_scale > 1 && lattice_ok && vertex_count(result.footprint) > 4 && !has_arc(result.footprint) &&
-      !over_budget()) {
+  // (models.coarse_scale), then the chosen outline's steps merged one at a time (models.merge_patience),
+  // against the chosen outline by a Bayesian information criterion. A wobble whose wavelength is a
+  // few times its amplitude cuts the contour into a run at each flank, the noise measured about
+  // those runs is too low, and the outline keeps the wobble's crests as notches; the criterion
+  // weighs the fit against the vertices rather than against that noise (which only sets how long a
+  // sample of contour is), and finds that the coarser square outline, or the outline with its
+  // smaller steps merged, explains the contour about as well. The chain's own outline drawn
+  // coarser does not compete (it also dropped real steps of a metre between row houses under a
+  // noise that large), nor does anything against an arc. (Skipped past the time budget, as the
+  // stretches above.)
+  if ((o.models.coarse_scale > 1 || o.models.merge_patience > 0) && lattice_ok && vertex_count(result.footprint) > 4 &&
+      !has_arc(result.footprint) && !over_budget()) {
     const double correlation = std::max(pixel_size, o.models.coarse_correlation_noise * noise);
     const double samples = std::max(2.0, total_perimeter(rings) / correlation);
     // n ln(d^2) + k ln(n): d the mean distance (at least a tenth of a pixel) for the standard
     // deviation, two parameters a vertex.
-    const auto criterion = [&](const PolygonWithHoles& p) {
-      const double fit = std::max(0.1 * pixel_size, contour_fit(rings, p));
-      return samples * std::log(fit * fit) + 2.0 * std::log(samples) * double(vertex_count(p));
+    const auto criterion_of = [&](double fit, std::size_t vertices) {
+      fit = std::max(0.1 * pixel_size, fit);
+      return samples * std::log(fit * fit) + 2.0 * std::log(samples) * double(vertices);
     };
+    const auto criterion = [&](const PolygonWithHoles& p) { return criterion_of(contour_fit(rings, p), vertex_count(p)); };
     double best = criterion(result.footprint);
     double scale = 1;
-    for (int k = 0; k < 2; ++k) {
+    for (int k = 0; k < 2 && o.models.coarse_scale > 1; ++k) {
       scale *= o.models.coarse_scale;
       CornerContext coarse = context;
       coarse.noise = scale * noise;
@@ -708,6 +712,23 @@ void run_chain(const std::vector<Ring>& rings, double pixel_size, const CoreOpti
         best = c;
         result.footprint = std::move(candidate);
         result.model = "coarse_lattice";
+      }
+    }
+    // The path of ever simpler outlines, the cheapest step merged at each: its criterion is not
+    // monotone (a merge moves a wall to the mean of two), so the walk goes on merge_patience merges
+    // past its least, which it keeps when a valid polygon.
+    if (o.models.merge_patience > 0) {
+      StepPath path(rings, result.footprint, o.models.merge_parallel_deg);
+      for (int since_best = 0; since_best < o.models.merge_patience && path.merge_next();) {
+        const double c = criterion_of(path.fit(), vertex_count(path.outline()));
+        if (c < best && polygon_problem(path.outline()).empty()) {
+          best = c;
+          result.footprint = path.outline();
+          result.model = "merged_steps";
+          since_best = 0;
+        } else {
+          ++since_best;
+        }
       }
     }
   }

@@ -26,7 +26,8 @@ struct BuildingResult {
   double arc_noise_m = -1;      // ... and measured about parabolas along the same runs, which an arc does not inflate (m); the same
   std::string model;            // the outline chosen: "regular" (walls held to the lattice; also after its oblique
                                 // walls are redrawn per stretch), "lines" (pixel thresholds), "lattice", "rectangle",
-                                // "coarse_lattice" (the lattice outline drawn for a larger noise, models.coarse_scale);
+                                // "coarse_lattice" (the lattice outline drawn for a larger noise, models.coarse_scale),
+                                // "merged_steps" (the chosen outline with steps merged, models.merge_patience);
                                 // empty for the fallback
   std::string route;            // the chain's corner route taken: "original" or "deformed"; empty otherwise
   std::string note;             // when ok: why the route taken is not the one asked for (a budget), else empty

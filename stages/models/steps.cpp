@@ -1,0 +1,200 @@
+#include "models/steps.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+#include "geometry/polygon.hpp"
+#include "models/rectangle.hpp"
+
+namespace lodforge {
+
+namespace {
+
+// Where the line through p along u meets the line through q along v; none when nearly parallel.
+std::optional<Vec2> meet(const Vec2& p, const Vec2& u, const Vec2& q, const Vec2& v, double min_sin) {
+  const double cross = u.x() * v.y() - u.y() * v.x();
+  if (std::abs(cross) < min_sin * u.norm() * v.norm()) return std::nullopt;
+  const Vec2 d = q - p;
+  const double t = (d.x() * v.y() - d.y() * v.x()) / cross;
+  return p + t * u;
+}
+
+// A ring's cheapest step: the vertex i whose walls (i-1, i) and (i+1, i+2) merge, and where the
+// merged wall meets the walls before and after.
+struct Step {
+  double cost = std::numeric_limits<double>::infinity();
+  std::size_t i = 0;
+  Vec2 from, to;
+};
+
+Step cheapest_step(const Ring& ring, double cos_parallel) {
+  Step best;
+  const std::size_t n = ring.size();
+  if (n < 6) return best;
+  const double min_sin = std::sin(10.0 * M_PI / 180.0);
+  const auto at = [&](std::size_t k) { return ring[k % n]; };
+  for (std::size_t i = 0; i < n; ++i) {
+    // Walls a = (i-1, i), b = (i, i+1) and c = (i+1, i+2), with (i-2, i-1) before and (i+2, i+3) after.
+    const Vec2 p0 = at(i + n - 2), p1 = at(i + n - 1), p2 = at(i), p3 = at(i + 1), p4 = at(i + 2), p5 = at(i + 3);
+    const Vec2 a = p2 - p1, c = p4 - p3;
+    const double la = a.norm(), lc = c.norm();
+    if (la <= 0 || lc <= 0 || a.dot(c) < cos_parallel * la * lc) continue;
+    const Vec2 u = (a + c).normalized();  // the length-weighted direction
+    const Vec2 normal(-u.y(), u.x());
+    const double offset = std::abs(normal.dot(0.5 * (p3 + p4) - 0.5 * (p1 + p2)));
+    const double cost = 2.0 * la * lc / (la + lc) * offset;
+    if (cost >= best.cost) continue;
+    const Vec2 through = (la * 0.5 * (p1 + p2) + lc * 0.5 * (p3 + p4)) / (la + lc);
+    const std::optional<Vec2> from = meet(p0, p1 - p0, through, u, min_sin), to = meet(through, u, p4, p5 - p4, min_sin);
+    if (!from || !to) continue;
+    best = {cost, i, *from, *to};
+  }
+  return best;
+}
+
+// A ring's values per vertex from vertex i+3 round to vertex i-2: with a step at i merged, the
+// meeting points follow them in place of vertices i-1 .. i+2.
+template <class T>
+std::vector<T> rotate_past(const std::vector<T>& values, std::size_t i) {
+  const std::size_t n = values.size();
+  std::vector<T> out;
+  out.reserve(n - 2);
+  for (std::size_t k = 0; k + 4 < n; ++k) out.push_back(values[(i + 3 + k) % n]);
+  return out;
+}
+
+// Of every ring, the cheapest step: the ring's index (-1: none) and the step.
+std::pair<int, Step> cheapest_of(const PolygonWithHoles& polygon, double cos_parallel) {
+  std::pair<int, Step> best{-1, Step{}};
+  const std::vector<const Ring*> rings = rings_of(polygon);
+  for (std::size_t r = 0; r < rings.size(); ++r) {
+    const Step s = cheapest_step(*rings[r], cos_parallel);
+    if (s.cost < best.second.cost) best = {int(r), s};
+  }
+  return best;
+}
+
+Ring& ring_at(PolygonWithHoles& polygon, int r) { return r == 0 ? polygon.outer : polygon.holes[std::size_t(r) - 1]; }
+
+}  // namespace
+
+std::optional<PolygonWithHoles> merge_cheapest_step(const PolygonWithHoles& polygon, double parallel_deg) {
+  const auto [r, step] = cheapest_of(polygon, std::cos(parallel_deg * M_PI / 180.0));
+  if (r < 0) return std::nullopt;
+  PolygonWithHoles out = polygon;
+  Ring& ring = ring_at(out, r);
+  Ring merged = rotate_past(ring, step.i);
+  merged.push_back(step.from);
+  merged.push_back(step.to);
+  ring = std::move(merged);
+  return out;
+}
+
+StepPath::StepPath(const std::vector<Ring>& contour, PolygonWithHoles outline, double parallel_deg)
+    : cos_parallel_(std::cos(parallel_deg * M_PI / 180.0)), outline_(std::move(outline)) {
+  for (const Ring* ring : rings_of(outline_)) {
+    wall_ids_.emplace_back();
+    for (std::size_t k = 0; k < ring->size(); ++k) {
+      wall_ids_.back().push_back(int(walls_.size()));
+      walls_.push_back({(*ring)[k], (*ring)[(k + 1) % ring->size()]});
+    }
+  }
+  alive_.assign(walls_.size(), 1);
+  // The first distances as contour_fit measures them (walls numbered as boundary_distances does).
+  for (const Ring& ring : contour) {
+    std::vector<std::size_t> nearest;
+    const auto distances = boundary_distances(ring, outline_, &nearest);
+    for (std::size_t i = 0; i < distances.size(); ++i) {
+      midpoints_.push_back(ring[i] + 0.5 * edge_vector(ring, i));
+      distances_.push_back(distances[i].first);
+      weights_.push_back(distances[i].second);
+      nearest_.push_back(int(nearest[i]));
+    }
+  }
+}
+
+namespace {
+
+// The squared distance from p to the box of wall (a, b): no point of the wall is nearer.
+double box_gap2(const Vec2& p, const std::pair<Vec2, Vec2>& wall) {
+  const Vec2 gap = (wall.first.cwiseMin(wall.second) - p).cwiseMax(p - wall.first.cwiseMax(wall.second)).cwiseMax(0.0);
+  return gap.squaredNorm();
+}
+
+}  // namespace
+
+void StepPath::measure(std::size_t p, const int (&first)[3]) {
+  double best = std::numeric_limits<double>::infinity();
+  int which = -1;
+  const auto consider = [&](std::size_t k) {
+    if (!alive_[k] || box_gap2(midpoints_[p], walls_[k]) >= best * best) return;
+    const double d = distance_to_segment(midpoints_[p], walls_[k].first, walls_[k].second);
+    if (d < best || (d == best && int(k) < which)) best = d, which = int(k);
+  };
+  for (const int k : first) consider(std::size_t(k));  // (a near bound first: the box test then passes over most walls)
+  for (std::size_t k = 0; k < walls_.size(); ++k) consider(k);
+  distances_[p] = best;
+  nearest_[p] = which;
+}
+
+bool StepPath::merge_next() {
+  const auto [r, step] = cheapest_of(outline_, cos_parallel_);
+  if (r < 0) return false;
+  Ring& ring = ring_at(outline_, r);
+  std::vector<int>& ids = wall_ids_[std::size_t(r)];
+  const std::size_t n = ring.size(), i = step.i;
+  // Walls (i-2) and (i+2) keep their ids with new ends; (i-1), i and (i+1) go; one is new.
+  const int before = ids[(i + n - 2) % n], after = ids[(i + 2) % n];
+  const int gone[3] = {ids[(i + n - 1) % n], ids[i], ids[(i + 1) % n]};
+  const int added = int(walls_.size());
+  Ring merged = rotate_past(ring, i);
+  std::vector<int> merged_ids = rotate_past(ids, i);  // (its last: the wall from vertex i-2, now to `from`)
+  merged_ids.push_back(added);
+  merged_ids.push_back(after);
+  merged.push_back(step.from);
+  merged.push_back(step.to);
+  walls_[std::size_t(before)].second = step.from;
+  walls_.push_back({step.from, step.to});
+  alive_.push_back(1);
+  walls_[std::size_t(after)].first = step.to;
+  for (const int g : gone) alive_[std::size_t(g)] = 0;
+  ring = std::move(merged);
+  ids = std::move(merged_ids);
+  // Every other wall lies at least a midpoint's distance from it: the midpoint is nearer one of
+  // the three new walls, or stays where it was. Unless its own wall changed: then the nearest new
+  // wall, when no farther than it was, else every wall is measured again.
+  const int changed[3] = {before, added, after};
+  for (std::size_t p = 0; p < midpoints_.size(); ++p) {
+    const int k = nearest_[p];
+    if (k == before || k == after || k == gone[0] || k == gone[1] || k == gone[2]) {
+      double best = std::numeric_limits<double>::infinity();
+      int which = -1;
+      for (const int c : changed) {
+        const double d = distance_to_segment(midpoints_[p], walls_[std::size_t(c)].first, walls_[std::size_t(c)].second);
+        if (d < best) best = d, which = c;
+      }
+      if (best <= distances_[p]) distances_[p] = best, nearest_[p] = which;
+      else measure(p, changed);
+      continue;
+    }
+    for (const int c : changed) {
+      const std::pair<Vec2, Vec2>& wall = walls_[std::size_t(c)];
+      if (box_gap2(midpoints_[p], wall) >= distances_[p] * distances_[p]) continue;
+      const double d = distance_to_segment(midpoints_[p], wall.first, wall.second);
+      if (d < distances_[p]) distances_[p] = d, nearest_[p] = c;
+    }
+  }
+  return true;
+}
+
+double StepPath::fit() const {
+  double sum = 0, total = 0;
+  for (std::size_t p = 0; p < distances_.size(); ++p) {
+    sum += weights_[p] * distances_[p];
+    total += weights_[p];
+  }
+  return total > 0 ? sum / total : 0.0;
+}
+
+}  // namespace lodforge

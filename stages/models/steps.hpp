@@ -1,0 +1,45 @@
+// Steps merged one at a time: the path of ever simpler outlines a model choice walks along.
+#pragma once
+#include <cstddef>
+#include <optional>
+#include <utility>
+#include <vector>
+
+#include "geometry/types.hpp"
+
+namespace lodforge {
+
+// The outline with its cheapest step merged: of every three consecutive walls whose first and
+// last are parallel (within parallel_deg) and face the same way (a step, or half of a notch), the
+// one whose merge moves the least area (2 a c / (a + c) times their offset, a and c their
+// lengths); the two walls become one at their length-weighted mean offset, met by the walls
+// before and after them, two vertices fewer. None when no ring has a step to merge (a ring keeps
+// at least four vertices) or the walls next to it are within 10 degrees of the merged one.
+std::optional<PolygonWithHoles> merge_cheapest_step(const PolygonWithHoles& polygon, double parallel_deg);
+
+// The same merges one after another, with the contour's mean distance to the outline (each
+// contour edge's midpoint to the nearest wall, weighted by the edge's length: contour_fit) kept
+// up to date: a merge changes five walls, so only the midpoints nearest them are measured again,
+// the others against the three new walls alone.
+class StepPath {
+ public:
+  StepPath(const std::vector<Ring>& contour, PolygonWithHoles outline, double parallel_deg);
+  // Merges the cheapest step; false (and the outline unchanged) when none is left.
+  bool merge_next();
+  const PolygonWithHoles& outline() const { return outline_; }
+  double fit() const;
+
+ private:
+  void measure(std::size_t point, const int (&first)[3]);  // against every wall, these first
+
+  double cos_parallel_;
+  PolygonWithHoles outline_;
+  std::vector<std::vector<int>> wall_ids_;      // per ring, per vertex: the wall from it to the next
+  std::vector<std::pair<Vec2, Vec2>> walls_;    // by id
+  std::vector<char> alive_;                     // by id
+  std::vector<Vec2> midpoints_;                 // of the contour's edges
+  std::vector<double> weights_, distances_;     // their lengths, their distances to the outline
+  std::vector<int> nearest_;                    // their nearest wall's id
+};
+
+}  // namespace lodforge
