@@ -91,6 +91,82 @@ std::optional<PolygonWithHoles> merge_cheapest_step(const PolygonWithHoles& poly
   return out;
 }
 
+namespace {
+
+// A ring's staircases as lines (the ring itself when it has none).
+Ring staircases_of(const Ring& ring, int min_corners, double square_deg) {
+  const std::size_t n = ring.size();
+  if (n < 6 || min_corners < 2) return ring;
+  std::vector<int> sign(n, 0);  // per vertex: +1 / -1 for a square left / right turn, 0 otherwise
+  for (std::size_t k = 0; k < n; ++k) {
+    const Vec2 before = ring[k] - ring[(k + n - 1) % n], after = ring[(k + 1) % n] - ring[k];
+    if (std::abs(turn_deg(before, after) - 90.0) <= square_deg) sign[k] = cross(before, after) > 0 ? 1 : -1;
+  }
+  // Vertex k continues a staircase begun before it when both turn square, the other way.
+  const auto continues = [&](std::size_t k) { return sign[k] != 0 && sign[(k + n - 1) % n] == -sign[k]; };
+  std::size_t start = 0;
+  while (start < n && continues(start)) ++start;
+  if (start == n) return ring;
+  Ring out;
+  out.reserve(n);
+  const double min_sin = std::sin(10.0 * M_PI / 180.0);
+  for (std::size_t k = 0; k < n;) {
+    const std::size_t first = (start + k) % n;
+    std::size_t count = 1;
+    while (sign[first] != 0 && k + count < n && continues((start + k + count) % n)) ++count;
+    if (int(count) >= min_corners) {
+      // The line through the middles of the steps' walls (weighted by their lengths: their mean,
+      // their principal direction), which cuts off as much as it leaves.
+      Vec2 mean = Vec2::Zero();
+      double total = 0;
+      for (std::size_t j = 0; j + 1 < count; ++j) {
+        const Vec2 a = ring[(first + j) % n], b = ring[(first + j + 1) % n];
+        mean += (b - a).norm() * 0.5 * (a + b);
+        total += (b - a).norm();
+      }
+      mean /= total;
+      double xx = 0, xy = 0, yy = 0;
+      for (std::size_t j = 0; j + 1 < count; ++j) {
+        const Vec2 a = ring[(first + j) % n], b = ring[(first + j + 1) % n];
+        const Vec2 d = 0.5 * (a + b) - mean;
+        const double w = (b - a).norm();
+        xx += w * d.x() * d.x(), xy += w * d.x() * d.y(), yy += w * d.y() * d.y();
+      }
+      const double angle = 0.5 * std::atan2(2 * xy, xx - yy);
+      const Vec2 u(std::cos(angle), std::sin(angle));
+      const std::size_t last = (first + count - 1) % n;
+      const Vec2 before = ring[(first + n - 1) % n], after = ring[(last + 1) % n];
+      const std::optional<Vec2> from = meet(before, ring[first] - before, mean, u, min_sin),
+                                to = meet(mean, u, ring[last], after - ring[last], min_sin);
+      const double reach = (ring[last] - ring[first]).norm();
+      if (from && to && (*from - ring[first]).norm() <= reach && (*to - ring[last]).norm() <= reach) {
+        out.push_back(*from);
+        out.push_back(*to);
+        k += count;
+        continue;
+      }
+    }
+    for (std::size_t j = 0; j < count; ++j) out.push_back(ring[(first + j) % n]);
+    k += count;
+  }
+  return out;
+}
+
+}  // namespace
+
+std::optional<PolygonWithHoles> staircases_as_lines(const PolygonWithHoles& polygon, int min_corners, double square_deg) {
+  PolygonWithHoles out;
+  bool changed = false;
+  for (std::size_t r = 0; r <= polygon.holes.size(); ++r) {
+    const Ring& ring = r == 0 ? polygon.outer : polygon.holes[r - 1];
+    Ring lines = staircases_of(ring, min_corners, square_deg);
+    changed = changed || lines.size() != ring.size();
+    (r == 0 ? out.outer : out.holes.emplace_back()) = std::move(lines);
+  }
+  if (!changed) return std::nullopt;
+  return out;
+}
+
 StepPath::StepPath(const std::vector<Ring>& contour, PolygonWithHoles outline, double parallel_deg)
     : cos_parallel_(std::cos(parallel_deg * M_PI / 180.0)), outline_(std::move(outline)) {
   for (const Ring* ring : rings_of(outline_)) {

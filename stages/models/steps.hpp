@@ -17,6 +17,14 @@ namespace lodforge {
 // at least four vertices) or the walls next to it are within 10 degrees of the merged one.
 std::optional<PolygonWithHoles> merge_cheapest_step(const PolygonWithHoles& polygon, double parallel_deg);
 
+// The outline with every staircase drawn as one oblique wall: a run of at least min_corners
+// vertices in a row that turn square (within square_deg of 90 degrees) and alternately left and
+// right (a wall at an angle to the lattice, drawn as steps along it) is replaced by the line
+// through the middles of its steps' walls (weighted by their lengths), from where it meets the
+// wall before the run to where it meets the wall after. None when the outline has no such run (or the line meets those walls nearly parallel or
+// farther from the run than its length).
+std::optional<PolygonWithHoles> staircases_as_lines(const PolygonWithHoles& polygon, int min_corners, double square_deg);
+
 // The same merges one after another, with the contour's mean distance to the outline (each
 // contour edge's midpoint to the nearest wall, weighted by the edge's length: contour_fit) kept
 // up to date: a merge changes five walls, so only the midpoints nearest them are measured again,

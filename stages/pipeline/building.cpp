@@ -685,7 +685,7 @@ void run_chain(const std::vector<Ring>& rings, double pixel_size, const CoreOpti
   // coarser does not compete (it also dropped real steps of a metre between row houses under a
   // noise that large), nor does anything against an arc. (Skipped past the time budget, as the
   // stretches above.)
-  if ((o.models.coarse_scale > 1 || o.models.merge_patience > 0) && lattice_ok && vertex_count(result.footprint) > 4 &&
+  if ((o.models.coarse_scale > 1 || o.models.merge_patience > 0 || o.models.staircase_corners > 0) && lattice_ok && vertex_count(result.footprint) > 4 &&
       !has_arc(result.footprint) && !over_budget()) {
     const double correlation = std::max(pixel_size, o.models.coarse_correlation_noise * noise);
     const double samples = std::max(2.0, total_perimeter(rings) / correlation);
@@ -717,6 +717,17 @@ void run_chain(const std::vector<Ring>& rings, double pixel_size, const CoreOpti
     // The path of ever simpler outlines, the cheapest step merged at each: its criterion is not
     // monotone (a merge moves a wall to the mean of two), so the walk goes on merge_patience merges
     // past its least, which it keeps when a valid polygon.
+    // A staircase drawn as the oblique wall it follows (a corner cut at an angle to the lattice).
+    if (o.models.staircase_corners > 0) {
+      if (std::optional<PolygonWithHoles> lines = staircases_as_lines(result.footprint, o.models.staircase_corners, o.models.staircase_square_deg)) {
+        const double c = criterion(*lines);
+        if (c < best && polygon_problem(*lines).empty()) {
+          best = c;
+          result.footprint = std::move(*lines);
+          result.model = "staircase_lines";
+        }
+      }
+    }
     if (o.models.merge_patience > 0) {
       StepPath path(rings, result.footprint, o.models.merge_parallel_deg);
       for (int since_best = 0; since_best < o.models.merge_patience && path.merge_next();) {
