@@ -14,8 +14,10 @@
 # speckle_size_m=0.5` (W = 0: the exact rasterization, no rounding, no speckles), L = 8 m unless
 # --wavelength says otherwise (its rows then go to their own section, sweep-results-lL, and their
 # files are named ROW.lL). The synthetic city is 500 m x 500 m (seed 11); the campus is its 1,529
-# BAG footprints (seed 1). Methods: lodforge (the default), paper (the deformed route), nocoarse
-# (the default without the coarse lattice outlines, models.coarse_scale = 0), cgal,
+# BAG footprints (seed 1). Methods: lodforge (the default), paper (the deformed route), nocriterion
+# (the default without the outlines an information criterion chooses: the coarse lattice outlines,
+# the staircases drawn as lines and the merged steps: models.coarse_scale = 0,
+# models.staircase_corners = 0, models.merge_patience = 0), cgal,
 # douglas_peucker, none (the raw contour).
 set -euo pipefail
 root="$(cd "$(dirname "$0")/.." && pwd)"
@@ -67,14 +69,14 @@ for s in "${set_list[@]}"; do
   esac
 done
 for m in "${method_list[@]}"; do
-  case "$m" in lodforge|paper|nocoarse|cgal|douglas_peucker|none) ;; *) echo "bench/sweep.sh: unknown method '$m'" >&2; exit 2 ;; esac
+  case "$m" in lodforge|paper|nocriterion|cgal|douglas_peucker|none) ;; *) echo "bench/sweep.sh: unknown method '$m'" >&2; exit 2 ;; esac
 done
 
 method_args() {
   case "$1" in
     lodforge) echo "" ;;
     paper) echo "--regularizer deformation --route deformed" ;;
-    nocoarse) echo "--set stages.models.coarse_scale=0" ;;
+    nocriterion) echo "--set stages.models.coarse_scale=0 --set stages.models.staircase_corners=0 --set stages.models.merge_patience=0" ;;
     *) echo "--regularizer $1" ;;
   esac
 }

@@ -7,7 +7,7 @@ import argparse, json, os
 from doc_section import write_section
 
 PEERS = ["cgal", "douglas_peucker"]
-SHORT = {"lodforge": "ours", "cgal": "CGAL", "douglas_peucker": "DP", "none": "raw", "paper": "paper", "nocoarse": "no coarse"}
+SHORT = {"lodforge": "ours", "cgal": "CGAL", "douglas_peucker": "DP", "none": "raw", "paper": "paper", "nocriterion": "no criterion"}
 TITLES = {"synth": "Synthetic city, 500 m x 500 m (seed 11)", "campus": "TU Delft campus, 1,529 BAG footprints (seed 1)"}
 
 ap = argparse.ArgumentParser()
@@ -53,7 +53,7 @@ for s in sets:
     head += ["right angles ours / truth"] + [f"right angles {SHORT[m]}" for m in methods if m != "lodforge"]
     head += [f"tangent ° {SHORT[m]}" for m in methods] + [f"PoLiS {SHORT[m]}" for m in methods]
     head += ["fallbacks ours", "ms ours (median)", "targets missed"]
-    if "nocoarse" in methods: head.append("targets missed (no coarse)")
+    if "nocriterion" in methods: head.append("targets missed (no criterion)")
     out.append("| " + " | ".join(head) + " |")
     out.append("|---" * len(head) + "|")
     for p in pixels:
@@ -78,7 +78,7 @@ for s in sets:
             rows_total += 1
             met += not missed
             cells.append(", ".join(missed) if missed else "none")
-            if "nocoarse" in methods: cells.append(", ".join(targets(r, "nocoarse")) or "none")
+            if "nocriterion" in methods: cells.append(", ".join(targets(r, "nocriterion")) or "none")
             out.append("| " + " | ".join(cells) + " |")
     out.append("")
 out.append(f"Rows meeting every target: {met} of {rows_total}.\n")
