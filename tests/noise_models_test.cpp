@@ -756,6 +756,45 @@ TEST(PooledNoise, AStartWithACourtyardGivesTheSameOutline) {
 }
 
 
+// A house and an L (rotated by 20 degrees) at 0.1 m under a wobble of the given amplitude at a
+// 3 m wavelength (corners rounded by twice it), seeds 1-3, each regularized with two sets of
+// options and the noise floor pooled over the seed's two masks: the vertices and mean IoU of each.
+struct FastWobbleRuns {
+  std::size_t vertices_a = 0, vertices_b = 0;
+  double iou_a = 0, iou_b = 0;
+};
+FastWobbleRuns run_fast_wobble(double wobble, const CoreOptions& a, const CoreOptions& b) {
+  FastWobbleRuns out;
+  int count = 0;
+  for (const std::uint64_t seed : {1, 2, 3}) {
+    std::vector<std::vector<Ring>> contours;
+    std::vector<PolygonWithHoles> truths;
+    std::vector<NoiseSample> samples;
+    for (const PolygonWithHoles& shape : {kHouse, kL}) {
+      const PolygonWithHoles truth = test::rotated(shape, 20.0);
+      const test::RasterizedShape r = test::rasterize_shape_m(truth, 0.1, wobble, 3.0, 2 * wobble, seed);
+      EXPECT_EQ(r.buildings.size(), 1u);
+      if (r.buildings.size() != 1) continue;
+      contours.push_back(r.buildings[0].rings);
+      truths.push_back(truth);
+      samples.push_back(start_building(contours.back(), 0.1, CoreOptions{}).sample);
+    }
+    const double floor = pooled_noise_floor(samples, CoreOptions{});
+    for (std::size_t k = 0; k < contours.size(); ++k) {
+      const BuildingResult ra = regularize_building(contours[k], 0.1, a, floor);
+      const BuildingResult rb = regularize_building(contours[k], 0.1, b, floor);
+      EXPECT_TRUE(ra.ok && rb.ok) << ra.reason << rb.reason;
+      out.vertices_a += vertex_count(ra.footprint);
+      out.vertices_b += vertex_count(rb.footprint);
+      out.iou_a += test::iou(ra.footprint, truths[k]);
+      out.iou_b += test::iou(rb.footprint, truths[k]);
+      ++count;
+    }
+  }
+  if (count > 0) out.iou_a /= count, out.iou_b /= count;
+  return out;
+}
+
 // A wobble of 0.5 m whose wavelength is 3 m, at 0.1 m a pixel: each flank cuts the contour into a
 // run of its own, the noise about those runs measures too little, and the outline keeps the
 // crests as notches. With models.coarse_scale (the default, 2) the lattice outline drawn as if
@@ -766,38 +805,11 @@ TEST(CoarseModel, AShortWobbleLeavesFewerNotches) {
   on.models.merge_patience = 0;
   CoreOptions off = on;
   off.models.coarse_scale = 0;
-  std::size_t off_vertices = 0, coarse_vertices = 0;
-  double off_iou = 0, coarse_iou = 0;
-  int count = 0;
-  for (const std::uint64_t seed : {1, 2, 3}) {
-    std::vector<std::vector<Ring>> contours;
-    std::vector<PolygonWithHoles> truths;
-    std::vector<NoiseSample> samples;
-    for (const PolygonWithHoles& shape : {kHouse, kL}) {
-      const PolygonWithHoles truth = test::rotated(shape, 20.0);
-      const test::RasterizedShape r = test::rasterize_shape_m(truth, 0.1, 0.5, 3.0, 1.0, seed);
-      ASSERT_EQ(r.buildings.size(), 1u);
-      contours.push_back(r.buildings[0].rings);
-      truths.push_back(truth);
-      samples.push_back(start_building(contours.back(), 0.1, CoreOptions{}).sample);
-    }
-    const double floor = pooled_noise_floor(samples, CoreOptions{});
-    for (std::size_t b = 0; b < contours.size(); ++b) {
-      const BuildingResult plain = regularize_building(contours[b], 0.1, off, floor);
-      const BuildingResult coarse = regularize_building(contours[b], 0.1, on, floor);
-      ASSERT_TRUE(plain.ok && coarse.ok) << plain.reason << coarse.reason;
-      off_vertices += plain.footprint.outer.size();
-      coarse_vertices += coarse.footprint.outer.size();
-      off_iou += test::iou(plain.footprint, truths[b]);
-      coarse_iou += test::iou(coarse.footprint, truths[b]);
-      ++count;
-    }
-  }
-  off_iou /= count;
-  coarse_iou /= count;
-  EXPECT_LE(double(coarse_vertices), 0.9 * double(off_vertices));
-  EXPECT_GE(coarse_iou, off_iou - 0.002);
-  EXPECT_GE(coarse_iou, 0.95);
+  const FastWobbleRuns r = run_fast_wobble(0.5, off, on);
+  std::cout << "vertices " << r.vertices_a << " -> " << r.vertices_b << ", IoU " << r.iou_a << " -> " << r.iou_b << '\n';
+  EXPECT_LE(double(r.vertices_b), 0.9 * double(r.vertices_a));
+  EXPECT_GE(r.iou_b, r.iou_a - 0.002);
+  EXPECT_GE(r.iou_b, 0.95);
 }
 
 // The criterion keeps a real recess: a 2 m x 1 m notch in a house's front, under the same fast
@@ -915,40 +927,15 @@ TEST(MergeSteps, ThePathKeepsItsFitAsMeasuredAfresh) {
 
 // A wobble of 1 m at a 3 m wavelength at 0.1 m pixels leaves notches a metre wide that neither
 // the chain nor the coarse lattice outline removes; the outline with its steps merged, chosen by
-// the same criterion, has fewer vertices and no less IoU.
+// the same criterion, has fewer vertices and no less IoU (three seeds of a house and an L: 462
+// vertices without, 302 with, the truth's 30; IoU 0.904 -> 0.910).
 TEST(MergeSteps, AFastMetreWobbleLeavesFewerVertices) {
   CoreOptions off;
   off.models.merge_patience = 0;
-  std::size_t off_vertices = 0, merged_vertices = 0;
-  double off_iou = 0, merged_iou = 0;
-  int count = 0;
-  for (const std::uint64_t seed : {1, 2, 3}) {
-    std::vector<std::vector<Ring>> contours;
-    std::vector<PolygonWithHoles> truths;
-    std::vector<NoiseSample> samples;
-    for (const PolygonWithHoles& shape : {kHouse, kL}) {
-      const PolygonWithHoles truth = test::rotated(shape, 20.0);
-      const test::RasterizedShape r = test::rasterize_shape_m(truth, 0.1, 1.0, 3.0, 2.0, seed);
-      ASSERT_EQ(r.buildings.size(), 1u);
-      contours.push_back(r.buildings[0].rings);
-      truths.push_back(truth);
-      samples.push_back(start_building(contours.back(), 0.1, CoreOptions{}).sample);
-    }
-    const double floor = pooled_noise_floor(samples, CoreOptions{});
-    for (std::size_t b = 0; b < contours.size(); ++b) {
-      const BuildingResult plain = regularize_building(contours[b], 0.1, off, floor);
-      const BuildingResult merged = regularize_building(contours[b], 0.1, CoreOptions{}, floor);
-      ASSERT_TRUE(plain.ok && merged.ok) << plain.reason << merged.reason;
-      off_vertices += vertex_count(plain.footprint);
-      merged_vertices += vertex_count(merged.footprint);
-      off_iou += test::iou(plain.footprint, truths[b]);
-      merged_iou += test::iou(merged.footprint, truths[b]);
-      ++count;
-    }
-  }
-  std::cout << "vertices " << off_vertices << " -> " << merged_vertices << ", IoU " << off_iou / count << " -> " << merged_iou / count << '\n';
-  EXPECT_LE(double(merged_vertices), 0.8 * double(off_vertices));
-  EXPECT_GE(merged_iou / count, off_iou / count - 0.002);
+  const FastWobbleRuns r = run_fast_wobble(1.0, off, CoreOptions{});
+  std::cout << "vertices " << r.vertices_a << " -> " << r.vertices_b << ", IoU " << r.iou_a << " -> " << r.iou_b << '\n';
+  EXPECT_LE(double(r.vertices_b), 0.8 * double(r.vertices_a));
+  EXPECT_GE(r.iou_b, r.iou_a - 0.002);
 }
 
 // A corner cut at 45 degrees drawn as three steps of 1 m becomes one oblique wall on the line
