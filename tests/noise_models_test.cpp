@@ -853,7 +853,7 @@ TEST(MergeSteps, AStepBecomesOneWallAtTheMeanOffset) {
   ASSERT_EQ(low, 2);
   EXPECT_NEAR(std::min(low_x, high_x), 0, 1e-9);
   EXPECT_NEAR(std::max(low_x, high_x), 20, 1e-9);
-  // A rectangle has no step (its walls facing the same way are not two apart).
+  // Four vertices are kept: no step to merge.
   EXPECT_FALSE(merge_cheapest_step(*merged, 2.0));
   // Walls 3 degrees apart are no step at 2 degrees of tolerance: the next cheapest merges (the
   // 0.4 m riser with the 9.6 m wall 15 m away), and the bottom left corner stays; at 5 degrees the
@@ -957,6 +957,20 @@ TEST(Staircases, AStaircaseBecomesItsLine) {
   EXPECT_NEAR(std::abs(signed_area(lines->outer)), 200 - 3.5 * 3.5 / 2, 1e-9);
   // Fewer corners than asked: none.
   EXPECT_FALSE(staircases_as_lines(stepped, 8, 10.0));
+  // The same with the ring starting inside the staircase (the run wraps past the first vertex),
+  // and drawn clockwise as a hole: the same two points.
+  Ring rotated(stepped.outer.begin() + 5, stepped.outer.end());
+  rotated.insert(rotated.end(), stepped.outer.begin(), stepped.outer.begin() + 5);
+  Ring hole(rotated.rbegin(), rotated.rend());
+  for (const PolygonWithHoles& p : {PolygonWithHoles{rotated, {}}, PolygonWithHoles{{{-10, -10}, {40, -10}, {40, 30}, {-10, 30}}, {hole}}}) {
+    const std::optional<PolygonWithHoles> again = staircases_as_lines(p, 4, 10.0);
+    ASSERT_TRUE(again);
+    const Ring& ring = p.holes.empty() ? again->outer : again->holes.at(0);
+    EXPECT_EQ(ring.size(), 5u);
+    int found = 0;
+    for (const Vec2& q : ring) found += (q - Vec2(20, 6.5)).norm() < 1e-9 || (q - Vec2(16.5, 10)).norm() < 1e-9;
+    EXPECT_EQ(found, 2);
+  }
   // A notch in the bottom wall turns left, right, right, left: no staircase.
   const PolygonWithHoles notched{{{0, 0}, {8, 0}, {8, 1}, {10, 1}, {10, 0}, {20, 0}, {20, 10}, {0, 10}}, {}};
   EXPECT_FALSE(staircases_as_lines(notched, 4, 10.0));

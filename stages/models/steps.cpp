@@ -11,10 +11,14 @@ namespace lodforge {
 
 namespace {
 
-// Where the line through p along u meets the line through q along v; none when nearly parallel.
-std::optional<Vec2> meet(const Vec2& p, const Vec2& u, const Vec2& q, const Vec2& v, double min_sin) {
+// Walls meeting within this (the sine of 10 degrees) of parallel do not meet.
+const double kMinMeetSin = std::sin(10.0 * M_PI / 180.0);
+
+// Where the line through p along u meets the line through q along v; none when nearly parallel
+// (or either direction vanishes, or is not finite).
+std::optional<Vec2> meet(const Vec2& p, const Vec2& u, const Vec2& q, const Vec2& v) {
   const double cross = u.x() * v.y() - u.y() * v.x();
-  if (std::abs(cross) < min_sin * u.norm() * v.norm()) return std::nullopt;
+  if (!(std::abs(cross) > kMinMeetSin * u.norm() * v.norm())) return std::nullopt;
   const Vec2 d = q - p;
   const double t = (d.x() * v.y() - d.y() * v.x()) / cross;
   return p + t * u;
@@ -25,14 +29,13 @@ std::optional<Vec2> meet(const Vec2& p, const Vec2& u, const Vec2& q, const Vec2
 struct Step {
   double cost = std::numeric_limits<double>::infinity();
   std::size_t i = 0;
-  Vec2 from, to;
+  Vec2 from = Vec2::Zero(), to = Vec2::Zero();
 };
 
 Step cheapest_step(const Ring& ring, double cos_parallel) {
   Step best;
   const std::size_t n = ring.size();
   if (n < 6) return best;
-  const double min_sin = std::sin(10.0 * M_PI / 180.0);
   const auto at = [&](std::size_t k) { return ring[k % n]; };
   for (std::size_t i = 0; i < n; ++i) {
     // Walls a = (i-1, i), b = (i, i+1) and c = (i+1, i+2), with (i-2, i-1) before and (i+2, i+3) after.
@@ -44,10 +47,10 @@ Step cheapest_step(const Ring& ring, double cos_parallel) {
     const Vec2 normal(-u.y(), u.x());
     const double offset = std::abs(normal.dot(0.5 * (p3 + p4) - 0.5 * (p1 + p2)));
     const double cost = 2.0 * la * lc / (la + lc) * offset;
-    if (cost >= best.cost) continue;
+    if (!(cost < best.cost)) continue;
     const Vec2 through = (la * 0.5 * (p1 + p2) + lc * 0.5 * (p3 + p4)) / (la + lc);
-    const std::optional<Vec2> from = meet(p0, p1 - p0, through, u, min_sin), to = meet(through, u, p4, p5 - p4, min_sin);
-    if (!from || !to) continue;
+    const std::optional<Vec2> from = meet(p0, p1 - p0, through, u), to = meet(through, u, p4, p5 - p4);
+    if (!from || !to || !from->allFinite() || !to->allFinite()) continue;
     best = {cost, i, *from, *to};
   }
   return best;
@@ -96,7 +99,7 @@ namespace {
 // A ring's staircases as lines (the ring itself when it has none).
 Ring staircases_of(const Ring& ring, int min_corners, double square_deg) {
   const std::size_t n = ring.size();
-  if (n < 6 || min_corners < 2) return ring;
+  if (n < 6) return ring;
   std::vector<int> sign(n, 0);  // per vertex: +1 / -1 for a square left / right turn, 0 otherwise
   for (std::size_t k = 0; k < n; ++k) {
     const Vec2 before = ring[k] - ring[(k + n - 1) % n], after = ring[(k + 1) % n] - ring[k];
@@ -109,7 +112,6 @@ Ring staircases_of(const Ring& ring, int min_corners, double square_deg) {
   if (start == n) return ring;
   Ring out;
   out.reserve(n);
-  const double min_sin = std::sin(10.0 * M_PI / 180.0);
   for (std::size_t k = 0; k < n;) {
     const std::size_t first = (start + k) % n;
     std::size_t count = 1;
@@ -136,10 +138,10 @@ Ring staircases_of(const Ring& ring, int min_corners, double square_deg) {
       const Vec2 u(std::cos(angle), std::sin(angle));
       const std::size_t last = (first + count - 1) % n;
       const Vec2 before = ring[(first + n - 1) % n], after = ring[(last + 1) % n];
-      const std::optional<Vec2> from = meet(before, ring[first] - before, mean, u, min_sin),
-                                to = meet(mean, u, ring[last], after - ring[last], min_sin);
+      const std::optional<Vec2> from = meet(before, ring[first] - before, mean, u), to = meet(mean, u, ring[last], after - ring[last]);
       const double reach = (ring[last] - ring[first]).norm();
-      if (from && to && (*from - ring[first]).norm() <= reach && (*to - ring[last]).norm() <= reach) {
+      if (from && to && (*from - ring[first]).norm() <= reach && (*to - ring[last]).norm() <= reach && from->allFinite() &&
+          to->allFinite()) {
         out.push_back(*from);
         out.push_back(*to);
         k += count;
@@ -155,6 +157,8 @@ Ring staircases_of(const Ring& ring, int min_corners, double square_deg) {
 }  // namespace
 
 std::optional<PolygonWithHoles> staircases_as_lines(const PolygonWithHoles& polygon, int min_corners, double square_deg) {
+  if (min_corners <= 0) return std::nullopt;
+  min_corners = std::max(3, min_corners);  // (two corners are one wall: no line through it)
   PolygonWithHoles out;
   bool changed = false;
   for (std::size_t r = 0; r <= polygon.holes.size(); ++r) {
@@ -179,6 +183,8 @@ StepPath::StepPath(const std::vector<Ring>& contour, PolygonWithHoles outline, d
   alive_.assign(walls_.size(), 1);
   // The first distances as contour_fit measures them (walls numbered as boundary_distances does).
   for (const Ring& ring : contour) {
+    ring_starts_.push_back(midpoints_.size());
+    perimeters_.push_back(perimeter(ring));
     std::vector<std::size_t> nearest;
     const auto distances = boundary_distances(ring, outline_, &nearest);
     for (std::size_t i = 0; i < distances.size(); ++i) {
@@ -188,6 +194,7 @@ StepPath::StepPath(const std::vector<Ring>& contour, PolygonWithHoles outline, d
       nearest_.push_back(int(nearest[i]));
     }
   }
+  ring_starts_.push_back(midpoints_.size());
 }
 
 namespace {
@@ -265,10 +272,16 @@ bool StepPath::merge_next() {
 }
 
 double StepPath::fit() const {
+  // As contour_fit sums it: each ring's mean distance, weighted by the ring's perimeter.
   double sum = 0, total = 0;
-  for (std::size_t p = 0; p < distances_.size(); ++p) {
-    sum += weights_[p] * distances_[p];
-    total += weights_[p];
+  for (std::size_t r = 0; r + 1 < ring_starts_.size(); ++r) {
+    double ring_sum = 0, ring_weight = 0;
+    for (std::size_t p = ring_starts_[r]; p < ring_starts_[r + 1]; ++p) {
+      ring_sum += weights_[p] * distances_[p];
+      ring_weight += weights_[p];
+    }
+    sum += perimeters_[r] * (ring_weight > 0 ? ring_sum / ring_weight : 0.0);
+    total += perimeters_[r];
   }
   return total > 0 ? sum / total : 0.0;
 }

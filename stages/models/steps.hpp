@@ -12,17 +12,19 @@ namespace lodforge {
 // The outline with its cheapest step merged: of every three consecutive walls whose first and
 // last are parallel (within parallel_deg) and face the same way (a step, or half of a notch), the
 // one whose merge moves the least area (2 a c / (a + c) times their offset, a and c their
-// lengths); the two walls become one at their length-weighted mean offset, met by the walls
-// before and after them, two vertices fewer. None when no ring has a step to merge (a ring keeps
-// at least four vertices) or the walls next to it are within 10 degrees of the merged one.
+// lengths); the two walls become one at their length-weighted mean offset (which keeps the area
+// where the walls before and after are square to it), met by those walls, two vertices fewer. A
+// step whose merged wall would meet them within 10 degrees of parallel is passed over. None when
+// no ring has a step to merge (a ring keeps at least four vertices: one of six vertices or more).
 std::optional<PolygonWithHoles> merge_cheapest_step(const PolygonWithHoles& polygon, double parallel_deg);
 
 // The outline with every staircase drawn as one oblique wall: a run of at least min_corners
-// vertices in a row that turn square (within square_deg of 90 degrees) and alternately left and
-// right (a wall at an angle to the lattice, drawn as steps along it) is replaced by the line
-// through the middles of its steps' walls (weighted by their lengths), from where it meets the
-// wall before the run to where it meets the wall after. None when the outline has no such run (or the line meets those walls nearly parallel or
-// farther from the run than its length).
+// (fewer than 3 count as 3) vertices in a row that turn square (within square_deg of 90 degrees)
+// and alternately left and right (a wall at an angle to the lattice, drawn as steps along it) is
+// replaced by the line through the middles of its steps' walls (weighted by their lengths), from
+// where it meets the wall before the run to where it meets the wall after; a run whose line meets
+// those walls within 10 degrees of parallel, or farther from the run than its length, stays.
+// None when no run is replaced.
 std::optional<PolygonWithHoles> staircases_as_lines(const PolygonWithHoles& polygon, int min_corners, double square_deg);
 
 // The same merges one after another, with the contour's mean distance to the outline (each
@@ -48,6 +50,8 @@ class StepPath {
   std::vector<Vec2> midpoints_;                 // of the contour's edges
   std::vector<double> weights_, distances_;     // their lengths, their distances to the outline
   std::vector<int> nearest_;                    // their nearest wall's id
+  std::vector<std::size_t> ring_starts_;        // the first midpoint of each contour ring, and their count last
+  std::vector<double> perimeters_;              // of each contour ring
 };
 
 }  // namespace lodforge

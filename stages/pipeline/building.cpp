@@ -674,19 +674,20 @@ void run_chain(const std::vector<Ring>& rings, double pixel_size, const CoreOpti
       }
     }
   }
-  // The lattice outline drawn as if the noise were coarse_scale and its square times as large
-  // (models.coarse_scale), then the chosen outline's steps merged one at a time (models.merge_patience),
-  // against the chosen outline by a Bayesian information criterion. A wobble whose wavelength is a
-  // few times its amplitude cuts the contour into a run at each flank, the noise measured about
-  // those runs is too low, and the outline keeps the wobble's crests as notches; the criterion
-  // weighs the fit against the vertices rather than against that noise (which only sets how long a
-  // sample of contour is), and finds that the coarser square outline, or the outline with its
-  // smaller steps merged, explains the contour about as well. The chain's own outline drawn
-  // coarser does not compete (it also dropped real steps of a metre between row houses under a
-  // noise that large), nor does anything against an arc. (Skipped past the time budget, as the
-  // stretches above.)
-  if ((o.models.coarse_scale > 1 || o.models.merge_patience > 0 || o.models.staircase_corners > 0) && lattice_ok && vertex_count(result.footprint) > 4 &&
-      !has_arc(result.footprint) && !over_budget()) {
+  // Simpler outlines against the chosen one, by a Bayesian information criterion: the lattice
+  // outline drawn as if the noise were coarse_scale and its square times as large
+  // (models.coarse_scale), the outline with its staircases drawn as oblique walls
+  // (models.staircase_corners), and the path of its steps merged one at a time
+  // (models.merge_patience). A wobble whose wavelength is a few times its amplitude cuts the
+  // contour into a run at each flank, the noise measured about those runs is too low, and the
+  // outline keeps the wobble's crests as notches; the criterion weighs the fit against the
+  // vertices rather than against that noise (which only sets how long a sample of contour is), and
+  // finds that the coarser square outline, or the outline with its smaller steps merged, explains
+  // the contour about as well. The chain's own outline drawn coarser does not compete (it also
+  // dropped real steps of a metre between row houses under a noise that large), nor does anything
+  // against an arc. (Skipped past the time budget, as the stretches above.)
+  if ((o.models.coarse_scale > 1 || o.models.merge_patience > 0 || o.models.staircase_corners > 0) && lattice_ok &&
+      vertex_count(result.footprint) > 4 && !has_arc(result.footprint) && !over_budget()) {
     const double correlation = std::max(pixel_size, o.models.coarse_correlation_noise * noise);
     const double samples = std::max(2.0, total_perimeter(rings) / correlation);
     // n ln(d^2) + k ln(n): d the mean distance (at least a tenth of a pixel) for the standard
@@ -714,12 +715,11 @@ void run_chain(const std::vector<Ring>& rings, double pixel_size, const CoreOpti
         result.model = "coarse_lattice";
       }
     }
-    // The path of ever simpler outlines, the cheapest step merged at each: its criterion is not
-    // monotone (a merge moves a wall to the mean of two), so the walk goes on merge_patience merges
-    // past its least, which it keeps when a valid polygon.
-    // A staircase drawn as the oblique wall it follows (a corner cut at an angle to the lattice).
+    // A staircase drawn as the oblique wall it follows (a corner cut at an angle to the lattice,
+    // which the lattice outlines draw in steps, and the merges below would make a square notch).
     if (o.models.staircase_corners > 0) {
-      if (std::optional<PolygonWithHoles> lines = staircases_as_lines(result.footprint, o.models.staircase_corners, o.models.staircase_square_deg)) {
+      if (std::optional<PolygonWithHoles> lines =
+              staircases_as_lines(result.footprint, o.models.staircase_corners, o.models.staircase_square_deg)) {
         const double c = criterion(*lines);
         if (c < best && polygon_problem(*lines).empty()) {
           best = c;
@@ -728,9 +728,12 @@ void run_chain(const std::vector<Ring>& rings, double pixel_size, const CoreOpti
         }
       }
     }
+    // The path of ever simpler outlines, the cheapest step merged at each: its criterion is not
+    // monotone (a merge moves a wall to the mean of two), so the walk goes on until merge_patience
+    // merges have passed without a new least, and keeps the least among its valid polygons.
     if (o.models.merge_patience > 0) {
       StepPath path(rings, result.footprint, o.models.merge_parallel_deg);
-      for (int since_best = 0; since_best < o.models.merge_patience && path.merge_next();) {
+      for (int since_best = 0; since_best < o.models.merge_patience && !over_budget() && path.merge_next();) {
         const double c = criterion_of(path.fit(), vertex_count(path.outline()));
         if (c < best && polygon_problem(path.outline()).empty()) {
           best = c;

@@ -27,6 +27,7 @@ struct BuildingResult {
   std::string model;            // the outline chosen: "regular" (walls held to the lattice; also after its oblique
                                 // walls are redrawn per stretch), "lines" (pixel thresholds), "lattice", "rectangle",
                                 // "coarse_lattice" (the lattice outline drawn for a larger noise, models.coarse_scale),
+                                // "staircase_lines" (its staircases drawn as oblique walls, models.staircase_corners),
                                 // "merged_steps" (the chosen outline with steps merged, models.merge_patience);
                                 // empty for the fallback
   std::string route;            // the chain's corner route taken: "original" or "deformed"; empty otherwise
