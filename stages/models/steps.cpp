@@ -17,11 +17,9 @@ const double kMinMeetSin = std::sin(10.0 * M_PI / 180.0);
 // Where the line through p along u meets the line through q along v; none when nearly parallel
 // (or either direction vanishes, or is not finite).
 std::optional<Vec2> meet(const Vec2& p, const Vec2& u, const Vec2& q, const Vec2& v) {
-  const double cross = u.x() * v.y() - u.y() * v.x();
-  if (!(std::abs(cross) > kMinMeetSin * u.norm() * v.norm())) return std::nullopt;
-  const Vec2 d = q - p;
-  const double t = (d.x() * v.y() - d.y() * v.x()) / cross;
-  return p + t * u;
+  const double det = cross(u, v);
+  if (!(std::abs(det) > kMinMeetSin * u.norm() * v.norm())) return std::nullopt;
+  return p + cross(q - p, v) / det * u;
 }
 
 // A ring's cheapest step: the vertex i whose walls (i-1, i) and (i+1, i+2) merge, and where the
@@ -67,6 +65,14 @@ std::vector<T> rotate_past(const std::vector<T>& values, std::size_t i) {
   return out;
 }
 
+// The ring with its step merged.
+Ring merged_ring(const Ring& ring, const Step& step) {
+  Ring merged = rotate_past(ring, step.i);
+  merged.push_back(step.from);
+  merged.push_back(step.to);
+  return merged;
+}
+
 // Of every ring, the cheapest step: the ring's index (-1: none) and the step.
 std::pair<int, Step> cheapest_of(const PolygonWithHoles& polygon, double cos_parallel) {
   std::pair<int, Step> best{-1, Step{}};
@@ -87,10 +93,7 @@ std::optional<PolygonWithHoles> merge_cheapest_step(const PolygonWithHoles& poly
   if (r < 0) return std::nullopt;
   PolygonWithHoles out = polygon;
   Ring& ring = ring_at(out, r);
-  Ring merged = rotate_past(ring, step.i);
-  merged.push_back(step.from);
-  merged.push_back(step.to);
-  ring = std::move(merged);
+  ring = merged_ring(ring, step);
   return out;
 }
 
@@ -161,10 +164,10 @@ std::optional<PolygonWithHoles> staircases_as_lines(const PolygonWithHoles& poly
   min_corners = std::max(3, min_corners);  // (two corners are one wall: no line through it)
   PolygonWithHoles out;
   bool changed = false;
-  for (std::size_t r = 0; r <= polygon.holes.size(); ++r) {
-    const Ring& ring = r == 0 ? polygon.outer : polygon.holes[r - 1];
-    Ring lines = staircases_of(ring, min_corners, square_deg);
-    changed = changed || lines.size() != ring.size();
+  const std::vector<const Ring*> rings = rings_of(polygon);
+  for (std::size_t r = 0; r < rings.size(); ++r) {
+    Ring lines = staircases_of(*rings[r], min_corners, square_deg);
+    changed = changed || lines.size() != rings[r]->size();
     (r == 0 ? out.outer : out.holes.emplace_back()) = std::move(lines);
   }
   if (!changed) return std::nullopt;
@@ -231,18 +234,15 @@ bool StepPath::merge_next() {
   const int before = ids[(i + n - 2) % n], after = ids[(i + 2) % n];
   const int gone[3] = {ids[(i + n - 1) % n], ids[i], ids[(i + 1) % n]};
   const int added = int(walls_.size());
-  Ring merged = rotate_past(ring, i);
   std::vector<int> merged_ids = rotate_past(ids, i);  // (its last: the wall from vertex i-2, now to `from`)
   merged_ids.push_back(added);
   merged_ids.push_back(after);
-  merged.push_back(step.from);
-  merged.push_back(step.to);
   walls_[std::size_t(before)].second = step.from;
   walls_.push_back({step.from, step.to});
   alive_.push_back(1);
   walls_[std::size_t(after)].first = step.to;
   for (const int g : gone) alive_[std::size_t(g)] = 0;
-  ring = std::move(merged);
+  ring = merged_ring(ring, step);
   ids = std::move(merged_ids);
   // Every other wall lies at least a midpoint's distance from it: the midpoint is nearer one of
   // the three new walls, or stays where it was. Unless its own wall changed: then the nearest new
@@ -250,23 +250,19 @@ bool StepPath::merge_next() {
   const int changed[3] = {before, added, after};
   for (std::size_t p = 0; p < midpoints_.size(); ++p) {
     const int k = nearest_[p];
-    if (k == before || k == after || k == gone[0] || k == gone[1] || k == gone[2]) {
-      double best = std::numeric_limits<double>::infinity();
-      int which = -1;
-      for (const int c : changed) {
-        const double d = distance_to_segment(midpoints_[p], walls_[std::size_t(c)].first, walls_[std::size_t(c)].second);
-        if (d < best) best = d, which = c;
-      }
-      if (best <= distances_[p]) distances_[p] = best, nearest_[p] = which;
-      else measure(p, changed);
-      continue;
-    }
+    const bool moved = k == before || k == after || k == gone[0] || k == gone[1] || k == gone[2];
+    // The nearest of the three new walls, those farther than `bound` passed over.
+    const double bound = moved ? std::numeric_limits<double>::infinity() : distances_[p];
+    double best = bound;
+    int which = -1;
     for (const int c : changed) {
       const std::pair<Vec2, Vec2>& wall = walls_[std::size_t(c)];
-      if (box_gap2(midpoints_[p], wall) >= distances_[p] * distances_[p]) continue;
+      if (!moved && box_gap2(midpoints_[p], wall) >= best * best) continue;
       const double d = distance_to_segment(midpoints_[p], wall.first, wall.second);
-      if (d < distances_[p]) distances_[p] = d, nearest_[p] = c;
+      if (d < best) best = d, which = c;
     }
+    if (which >= 0 && (!moved || best <= distances_[p])) distances_[p] = best, nearest_[p] = which;
+    else if (moved) measure(p, changed);
   }
   return true;
 }

@@ -697,7 +697,12 @@ void run_chain(const std::vector<Ring>& rings, double pixel_size, const CoreOpti
       return samples * std::log(fit * fit) + 2.0 * std::log(samples) * double(vertices);
     };
     const auto criterion = [&](const PolygonWithHoles& p) { return criterion_of(contour_fit(rings, p), vertex_count(p)); };
-    double best = criterion(result.footprint);
+    // (The merge path measures the chosen outline's fit, as contour_fit does, for the walk below:
+    // made first, it gives the criterion's start, and is made again only if another outline wins.)
+    std::optional<StepPath> path;
+    if (o.models.merge_patience > 0) path.emplace(rings, result.footprint, o.models.merge_parallel_deg);
+    double best = path ? criterion_of(path->fit(), vertex_count(result.footprint)) : criterion(result.footprint);
+    bool replaced = false;
     double scale = 1;
     for (int k = 0; k < 2 && o.models.coarse_scale > 1; ++k) {
       scale *= o.models.coarse_scale;
@@ -713,6 +718,7 @@ void run_chain(const std::vector<Ring>& rings, double pixel_size, const CoreOpti
         best = c;
         result.footprint = std::move(candidate);
         result.model = "coarse_lattice";
+        replaced = true;
       }
     }
     // A staircase drawn as the oblique wall it follows (a corner cut at an angle to the lattice,
@@ -725,19 +731,20 @@ void run_chain(const std::vector<Ring>& rings, double pixel_size, const CoreOpti
           best = c;
           result.footprint = std::move(*lines);
           result.model = "staircase_lines";
+          replaced = true;
         }
       }
     }
     // The path of ever simpler outlines, the cheapest step merged at each: its criterion is not
     // monotone (a merge moves a wall to the mean of two), so the walk goes on until merge_patience
     // merges have passed without a new least, and keeps the least among its valid polygons.
-    if (o.models.merge_patience > 0) {
-      StepPath path(rings, result.footprint, o.models.merge_parallel_deg);
-      for (int since_best = 0; since_best < o.models.merge_patience && !over_budget() && path.merge_next();) {
-        const double c = criterion_of(path.fit(), vertex_count(path.outline()));
-        if (c < best && polygon_problem(path.outline()).empty()) {
+    if (path) {
+      if (replaced) path.emplace(rings, result.footprint, o.models.merge_parallel_deg);
+      for (int since_best = 0; since_best < o.models.merge_patience && !over_budget() && path->merge_next();) {
+        const double c = criterion_of(path->fit(), vertex_count(path->outline()));
+        if (c < best && polygon_problem(path->outline()).empty()) {
           best = c;
-          result.footprint = path.outline();
+          result.footprint = path->outline();
           result.model = "merged_steps";
           since_best = 0;
         } else {
