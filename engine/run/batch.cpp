@@ -3,9 +3,11 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <iterator>
 
 #include <tbb/parallel_for.h>
 
+#include "normals/smoothing.hpp"
 #include "run/tiles.hpp"
 
 namespace lodforge {
@@ -14,19 +16,20 @@ namespace {
 
 using Clock = std::chrono::steady_clock;
 
-// Each building's start, in parallel; *seconds (when given): the time of each.
+// Each building's start, in parallel, its normals smoothed for smoothing_noise_m; *seconds (when
+// given): the time of each added.
 std::vector<BuildingStart> start_buildings(const std::vector<BuildingContour>& buildings, double pixel_size, const CoreOptions& options,
-                                           std::vector<double>* seconds) {
+                                           double smoothing_noise_m, std::vector<double>* seconds) {
   std::vector<BuildingStart> starts(buildings.size());
-  if (seconds) seconds->assign(buildings.size(), 0.0);
+  if (seconds) seconds->resize(buildings.size(), 0.0);
   tbb::parallel_for(std::size_t(0), buildings.size(), [&](std::size_t i) {
     const auto started = Clock::now();
     try {
-      starts[i] = start_building(buildings[i].rings, pixel_size, options);
+      starts[i] = start_building(buildings[i].rings, pixel_size, options, true, smoothing_noise_m);
     } catch (const std::exception&) {  // (the chain starts it again, and says what failed)
       starts[i] = {};
     }
-    if (seconds) (*seconds)[i] = std::chrono::duration<double>(Clock::now() - started).count();
+    if (seconds) (*seconds)[i] += std::chrono::duration<double>(Clock::now() - started).count();
   });
   return starts;
 }
@@ -39,6 +42,35 @@ std::vector<NoiseSample> samples_of(const std::vector<BuildingStart>& starts) {
 
 std::size_t measured(const std::vector<NoiseSample>& samples) {
   return std::size_t(std::count_if(samples.begin(), samples.end(), [](const NoiseSample& s) { return s.weight_m > 0; }));
+}
+
+// The buildings started, and their noise pooled, in rounds: the first with the normals smoothed
+// for no noise, each next one for the noise the round before pooled, until the smoothing
+// neighbourhood that noise asks for is less than 5 % wider than the one it was measured with
+// (smoothing.noise_rounds at most). A contour smoothed too little measures too little noise: a
+// fast wobble's flanks cut its runs short.
+struct PooledStarts {
+  std::vector<BuildingStart> starts;  // of the last round
+  std::size_t samples = 0;            // buildings measured in it
+  double floor_m = 0;                 // the noise it pooled
+};
+PooledStarts pool_starts(const std::vector<BuildingContour>& buildings, double pixel_size, const CoreOptions& options,
+                         std::vector<double>* seconds) {
+  PooledStarts pooled;
+  double smoothed_for = 0;
+  for (int round = 0; round < options.smoothing.noise_rounds; ++round) {
+    if (round > 0) {
+      if (smoothing_neighbourhood_m(pixel_size, options.smoothing, pooled.floor_m) <=
+          1.05 * smoothing_neighbourhood_m(pixel_size, options.smoothing, smoothed_for))
+        break;
+      smoothed_for = pooled.floor_m;
+    }
+    pooled.starts = start_buildings(buildings, pixel_size, options, smoothed_for, seconds);
+    const std::vector<NoiseSample> samples = samples_of(pooled.starts);
+    pooled.samples = measured(samples);
+    pooled.floor_m = pooled_noise_floor(samples, options);
+  }
+  return pooled;
 }
 
 }  // namespace
@@ -57,10 +89,10 @@ RegularizedBatch regularize_batch(const std::string& regularizer, const std::vec
   if (noise_floor_m) {
     batch.noise_floor_m = *noise_floor_m;
   } else if (pools_noise(regularizer, options)) {
-    starts = start_buildings(buildings, pixel_size, options, &start_seconds);
-    const std::vector<NoiseSample> samples = samples_of(starts);
-    batch.noise_samples = measured(samples);
-    batch.noise_floor_m = pooled_noise_floor(samples, options);
+    PooledStarts pooled = pool_starts(buildings, pixel_size, options, &start_seconds);
+    starts = std::move(pooled.starts);
+    batch.noise_samples = pooled.samples;
+    batch.noise_floor_m = pooled.floor_m;
   }
   tbb::parallel_for(std::size_t(0), buildings.size(), [&](std::size_t i) {
     batch.results[i] = regularize_with(regularizer, buildings[i].rings, pixel_size, options, batch.noise_floor_m,
@@ -96,7 +128,7 @@ NoiseSurvey survey_noise(const MaskWindowReader& mask, cv::Size raster, const Ge
   NoiseSurvey survey;
   if (options.noise.pooled_floor <= 0) return survey;
   const int margin = std::max(1, window_px / 4);
-  std::vector<NoiseSample> samples;
+  std::vector<BuildingContour> buildings;
   for (const cv::Rect& cell : survey_cells(raster, window_px, windows)) {
     const cv::Rect window = cv::Rect(cell.x - margin, cell.y - margin, cell.width + 2 * margin, cell.height + 2 * margin) &
                             cv::Rect(0, 0, raster.width, raster.height);
@@ -104,12 +136,12 @@ NoiseSurvey survey_noise(const MaskWindowReader& mask, cv::Size raster, const Ge
         extract_contours(mask.read(window), transform.window(window.x, window.y), contour, [&](const cv::Rect& box, const cv::Point& first) {
           return cell.contains(first + window.tl()) && !touches_inner_border(box, window, raster);
         });
-    const std::vector<NoiseSample> found = samples_of(start_buildings(traced.buildings, transform.pixel_size(), options, nullptr));
-    samples.insert(samples.end(), found.begin(), found.end());
+    buildings.insert(buildings.end(), std::make_move_iterator(traced.buildings.begin()), std::make_move_iterator(traced.buildings.end()));
     ++survey.windows;
   }
-  survey.buildings = measured(samples);
-  survey.floor_m = pooled_noise_floor(samples, options);
+  const PooledStarts pooled = pool_starts(buildings, transform.pixel_size(), options, nullptr);
+  survey.buildings = pooled.samples;
+  survey.floor_m = pooled.floor_m;
   return survey;
 }
 

@@ -26,7 +26,8 @@ struct RegularizedBatch {
 
 // The buildings through the regularizer. For the deformation chain, with the noise floor given
 // (a run's survey), or else pooled over these buildings: each one started (start_building), their
-// noise samples pooled (pooled_noise_floor), and each regularized from its start. The same results
+// noise samples pooled (pooled_noise_floor), in rounds, each smoothing the normals for the noise
+// the round before pooled (smoothing.noise_rounds), and each regularized from its start. The same results
 // whatever the thread count: samples are pooled in the buildings' order. A building's seconds
 // count its start's. on_done is called after each building (from any thread).
 RegularizedBatch regularize_batch(const std::string& regularizer, const std::vector<BuildingContour>& buildings,
@@ -39,8 +40,8 @@ RegularizedBatch regularize_batch(const std::string& regularizer, const std::vec
 // about the grid's rows / columns).
 std::vector<cv::Rect> survey_cells(cv::Size raster, int window_px, int windows);
 
-// The noise floor of a raster too large to read whole: pooled over the buildings whose first pixel
-// lies in one of the survey's cells, each read with a margin of a quarter of window_px so that a
+// The noise floor of a raster too large to read whole: pooled, in rounds as regularize_batch
+// pools it, over the buildings whose first pixel lies in one of the survey's cells, each read with a margin of a quarter of window_px so that a
 // building crossing the cell's edge is whole (larger ones are left out). The same for every
 // tiling and shard of the raster.
 struct NoiseSurvey {

@@ -56,9 +56,27 @@ const AngleWeight& angle_weight(double sigma_a2) {
   return *table;
 }
 
+// How many times neighbourhood_m and sigma_d_m are widened: to at least min_neighbourhood_px (a
+// staircase averages to its wall's direction), but at most max_neighbourhood_m (walls that short
+// keep their own normals), never below least_neighbourhood_px; and to at least noise_neighbourhood
+// noises, within the same bound.
+double neighbourhood_scale(double pixel_size, const SmoothingOptions& o, double noise_m) {
+  double floor_m = o.min_neighbourhood_px * pixel_size;
+  double noise_floor_m = o.noise_neighbourhood * std::max(0.0, noise_m);
+  if (o.max_neighbourhood_m > 0) {
+    floor_m = std::max(std::min(floor_m, o.max_neighbourhood_m), std::min(floor_m, o.least_neighbourhood_px * pixel_size));
+    noise_floor_m = std::min(noise_floor_m, o.max_neighbourhood_m);
+  }
+  return std::max(1.0, std::max(floor_m, noise_floor_m) / std::max(o.neighbourhood_m, 1e-12));
+}
+
 }  // namespace
 
-std::vector<Vec2> smooth_normals(const Ring& ring, double pixel_size, const SmoothingOptions& o) {
+double smoothing_neighbourhood_m(double pixel_size, const SmoothingOptions& o, double noise_m) {
+  return o.neighbourhood_m * neighbourhood_scale(pixel_size, o, noise_m);
+}
+
+std::vector<Vec2> smooth_normals(const Ring& ring, double pixel_size, const SmoothingOptions& o, double noise_m) {
   const std::size_t n = ring.size();
   std::vector<Vec2> normals = edge_normals(ring);
   if (n < 3) return normals;
@@ -71,12 +89,7 @@ std::vector<Vec2> smooth_normals(const Ring& ring, double pixel_size, const Smoo
     s += len;
   }
   const double total = s;
-  // At least min_neighbourhood_px (a staircase averages to its wall's direction), but at most
-  // max_neighbourhood_m (walls that short keep their own normals), never below least_neighbourhood_px.
-  double floor_m = o.min_neighbourhood_px * pixel_size;
-  if (o.max_neighbourhood_m > 0)
-    floor_m = std::max(std::min(floor_m, o.max_neighbourhood_m), std::min(floor_m, o.least_neighbourhood_px * pixel_size));
-  const double scale = std::max(1.0, floor_m / std::max(o.neighbourhood_m, 1e-12));
+  const double scale = neighbourhood_scale(pixel_size, o, noise_m);
   const double threshold = o.neighbourhood_m * scale;
   const double sigma_d2 = std::pow(o.sigma_d_m * scale, 2);
   const double sigma_a2 = o.sigma_a_deg * o.sigma_a_deg;

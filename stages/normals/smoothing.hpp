@@ -15,6 +15,8 @@ struct SmoothingOptions {
                                       // (the paper's 0.5 m at its 9 cm pixels is 5.5 px)
   double max_neighbourhood_m = 2.5;     // ... but at most this (m): walls this short keep their own normals
   double least_neighbourhood_px = 2.0;  // ... the bound never narrowing it below this many pixels
+  double noise_neighbourhood = 6.0;     // at least this many boundary noises (up to max_neighbourhood_m)
+  int noise_rounds = 3;                 // ... the noise pooled over a mask, smoothed for, in this many rounds at most
   int passes = 3;                // one pass leaves a wall as two clusters (NOTES.md)
 
   template <class V>
@@ -25,6 +27,8 @@ struct SmoothingOptions {
     v("min_neighbourhood_px", min_neighbourhood_px, "lower bound of thre_d and sigma_d in pixels, for coarse rasters", Check::at_least(0));
     v("max_neighbourhood_m", max_neighbourhood_m, "upper bound of that widening in metres: on coarse rasters (pixels over 0.5 m) min_neighbourhood_px pixels would average the normals of walls shorter than this, which then get no direction of their own (0 = no bound)", Check::at_least(0));
     v("least_neighbourhood_px", least_neighbourhood_px, "... the bound never narrowing the widening below this many pixels (a staircase needs two edges to show its wall's direction)", Check::at_least(0));
+    v("noise_neighbourhood", noise_neighbourhood, "thre_d and sigma_d widened to at least this many times the boundary noise pooled over the mask (noise.pooled_floor), up to max_neighbourhood_m: a wall's direction read over a shorter stretch of a contour that wobbles by that noise is the wobble's (a flank of a fast wobble, tens of degrees off the wall), and the labeling follows it (docs/quality.md, a shorter wobble; 0 = off)", Check::at_least(0));
+    v("noise_rounds", noise_rounds, "... the mask's noise measured on normals smoothed for the noise of the round before, from none, until the neighbourhood it asks for widens by less than 5 %, in this many rounds at most (a contour smoothed too little measures too little noise: the wobble's flanks cut its runs short)", Check::between(1, 10));
     v("passes", passes, "number of smoothing passes", Check::between(1, 100));
   }
 };
@@ -32,7 +36,12 @@ struct SmoothingOptions {
 // Outward unit normals of every edge of a ring.
 std::vector<Vec2> edge_normals(const Ring& ring);
 
-// Smoothed normals of every edge of one ring. pixel_size in metres.
-std::vector<Vec2> smooth_normals(const Ring& ring, double pixel_size, const SmoothingOptions& options);
+// The neighbourhood thre_d along the contour (m) that smooth_normals uses at this pixel size for
+// a boundary noise of noise_m (0: none known); sigma_d is widened in the same ratio.
+double smoothing_neighbourhood_m(double pixel_size, const SmoothingOptions& options, double noise_m = 0);
+
+// Smoothed normals of every edge of one ring. pixel_size in metres; noise_m: the boundary noise
+// pooled over the ring's mask, when known (noise_neighbourhood).
+std::vector<Vec2> smooth_normals(const Ring& ring, double pixel_size, const SmoothingOptions& options, double noise_m = 0);
 
 }  // namespace lodforge

@@ -454,7 +454,7 @@ void run_chain(const std::vector<Ring>& rings, double pixel_size, const CoreOpti
   for (const Ring& r : rings) edges += r.size();
   bool started = start.normals.size() == rings.size();
   for (std::size_t r = 0; started && r < rings.size(); ++r) started = start.normals[r].size() == rings[r].size();
-  if (!started) start = start_building(rings, pixel_size, o, false);
+  if (!started) start = start_building(rings, pixel_size, o, false, noise_floor_m);
   LabelingInput input;
   input.normals = std::move(start.normals);
   std::vector<Vec2> all_normals;
@@ -769,10 +769,11 @@ PolygonWithHoles fallback_footprint(const std::vector<Ring>& rings, double toler
   return raw;
 }
 
-BuildingStart start_building(const std::vector<Ring>& rings, double pixel_size, const CoreOptions& o, bool measure_noise) {
+BuildingStart start_building(const std::vector<Ring>& rings, double pixel_size, const CoreOptions& o, bool measure_noise,
+                             double smoothing_noise_m) {
   BuildingStart start;
   if (!contour_problem(rings, o).empty()) return start;  // (the chain says why)
-  for (const Ring& ring : rings) start.normals.push_back(smooth_normals(ring, pixel_size, o.smoothing));
+  for (const Ring& ring : rings) start.normals.push_back(smooth_normals(ring, pixel_size, o.smoothing, smoothing_noise_m));
   start.chord = chord_lattice(rings, o.lattice);
   if (!measure_noise) return start;
   double arc_noise = 0, measured = 0;

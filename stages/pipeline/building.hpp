@@ -55,14 +55,17 @@ struct BuildingStart {
   ChordLattice chord;                      // the lattice of the contour's chords
   NoiseSample sample;
 };
+// smoothing_noise_m: the boundary noise pooled over the mask that the normals are smoothed for
+// (smoothing.noise_neighbourhood; 0: none known).
 BuildingStart start_building(const std::vector<Ring>& rings, double pixel_size, const CoreOptions& options,
-                             bool measure_noise = true);
+                             bool measure_noise = true, double smoothing_noise_m = 0);
 
 // rings: [0] outer counter-clockwise, then clockwise holes, in map metres (from
 // extract_contours). pixel_size: the raster's ground sampling distance in metres.
 // noise_floor_m: the boundary noise the building is taken to have at least, pooled over its
 // mask's buildings (0: its own, as measured). start: from start_building on the same rings and
-// options, or empty (the chain starts itself); the result is the same.
+// options, or empty (the chain starts itself, its normals smoothed for noise_floor_m); the result
+// is the same when the start was smoothed for noise_floor_m.
 BuildingResult regularize_building(const std::vector<Ring>& rings, double pixel_size, const CoreOptions& options,
                                    double noise_floor_m = 0, BuildingStart start = {});
 
