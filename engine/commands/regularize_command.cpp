@@ -120,8 +120,8 @@ int run_regularize(int argc, char** argv) {
     if (count >= 20 && n % (count / 10) == 0) spdlog::info("{}/{} buildings", n, count);
   });
   if (batch.noise_samples > 0)
-    spdlog::info("boundary noise pooled over {} buildings: {:.3f} m (stages.noise.pooled_floor = {})", batch.noise_samples,
-                 batch.noise_floor_m, options.core.noise.pooled_floor);
+    spdlog::info("boundary noise pooled over {} buildings: {:.3f} m (stages.noise.pooled_floor = {}), normals smoothed for {:.3f} m",
+                 batch.noise_samples, batch.noise_floor_m, options.core.noise.pooled_floor, batch.noise_smoothing_m);
   const std::vector<BuildingResult>& results = batch.results;
 
   std::vector<FootprintRecord> records(count);
@@ -183,6 +183,7 @@ int run_regularize(int argc, char** argv) {
     out["fallback"] = failed;
     out["original_route"] = rerouted;
     out["noise_floor_m"] = batch.noise_floor_m;
+    out["noise_smoothing_m"] = batch.noise_smoothing_m;
     out["noise_samples"] = batch.noise_samples;
     out["seconds_total"] = total;
     times(all, out);

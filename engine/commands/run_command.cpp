@@ -236,8 +236,9 @@ int run_job(int argc, char** argv) {
                    "allows for its own boundary noise only (more or larger windows survey more)",
                    survey.windows, job.tiling.noise_survey_window_m);
     else
-      spdlog::info("boundary noise pooled over {} buildings in {} window(s) of {} m: {:.3f} m ({:.1f} s)", survey.buildings, survey.windows,
-                   job.tiling.noise_survey_window_m, survey.floor_m, seconds_since(surveying));
+      spdlog::info("boundary noise pooled over {} buildings in {} window(s) of {} m: {:.3f} m, normals smoothed for {:.3f} m ({:.1f} s)",
+                   survey.buildings, survey.windows, job.tiling.noise_survey_window_m, survey.noise.floor_m, survey.noise.smoothing_m,
+                   seconds_since(surveying));
   }
 
   // Keys: everything an output depends on.
@@ -253,8 +254,8 @@ int run_job(int argc, char** argv) {
   const std::string heights_options = options_text(key_job.stages.heights) + file_identity(job.inputs.dsm.path) + file_identity(job.inputs.dtm.path) +
                                       (cadastre ? options_text(key_job.stages.footprints) : "") + options_text(key_job.stages.parts);
   // Building ids are first-pixel indices, so the footprints also depend on the raster's width.
-  char floor_text[40];
-  std::snprintf(floor_text, sizeof floor_text, "\nnoise floor %.17g", survey.floor_m);
+  char floor_text[80];
+  std::snprintf(floor_text, sizeof floor_text, "\nnoise floor %.17g smoothed for %.17g", survey.noise.floor_m, survey.noise.smoothing_m);
   const std::string core_options = job.regularizer + "\n" + options_text(key_job.stages.core) + "\nwidth " + std::to_string(seg.size.width) + floor_text;
   const std::uint64_t job_key = fnv1a(gpkg_time + "\n" + file_identity(job.inputs.segmentation.path) + "\n" + file_identity(job.inputs.dsm.path) + "\n" +
                                       file_identity(job.inputs.dtm.path) + "\n" + file_identity(job.inputs.orthophoto.path) + "\n" + options_text(key_job) + cadastre_text + "\n" +
@@ -316,7 +317,7 @@ int run_job(int argc, char** argv) {
   });
   const RunPlan plan{job, seg.size, seg.transform, *input_crs, pixel, grid, halo_px, max_window_px, selector,
                      dsm_source, dtm_source, ortho_source, store, contour_options, core_options, heights_options,
-                     transform_text, job_key, out_dir, &readers, &indexed_outputs, cadastre.get(), survey.floor_m};
+                     transform_text, job_key, out_dir, &readers, &indexed_outputs, cadastre.get(), survey.noise};
 
   // At most `tokens` tiles in flight: one per thread and one more, so that a thread finds the next
   // tile while the oldest waits to be recorded in order (each in flight holds its windows: more

@@ -16,16 +16,16 @@ namespace {
 
 using Clock = std::chrono::steady_clock;
 
-// Each building's start, in parallel, its normals smoothed for smoothing_noise_m; *seconds (when
-// given): the time of each added.
+// Each building's start, in parallel, its normals smoothed for smoothing_noise_m, its noise
+// measured when measure_noise; *seconds (when given): the time of each added.
 std::vector<BuildingStart> start_buildings(const std::vector<BuildingContour>& buildings, double pixel_size, const CoreOptions& options,
-                                           double smoothing_noise_m, std::vector<double>* seconds) {
+                                           double smoothing_noise_m, bool measure_noise, std::vector<double>* seconds) {
   std::vector<BuildingStart> starts(buildings.size());
   if (seconds) seconds->resize(buildings.size(), 0.0);
   tbb::parallel_for(std::size_t(0), buildings.size(), [&](std::size_t i) {
     const auto started = Clock::now();
     try {
-      starts[i] = start_building(buildings[i].rings, pixel_size, options, true, smoothing_noise_m);
+      starts[i] = start_building(buildings[i].rings, pixel_size, options, measure_noise, smoothing_noise_m);
     } catch (const std::exception&) {  // (the chain starts it again, and says what failed)
       starts[i] = {};
     }
@@ -45,30 +45,35 @@ std::size_t measured(const std::vector<NoiseSample>& samples) {
 }
 
 // The buildings started, and their noise pooled, in rounds: the first with the normals smoothed
-// for no noise, each next one for the noise the round before pooled, until the smoothing
-// neighbourhood that noise asks for is less than 5 % wider than the one it was measured with
-// (smoothing.noise_rounds at most). A contour smoothed too little measures too little noise: a
-// fast wobble's flanks cut its runs short.
+// for no noise, each next one for the noise the round before pooled (smoothing.noise_neighbourhood),
+// while the neighbourhood that asks for is more than 5 % wider than the last one's, in
+// smoothing.noise_rounds at most. A wider round is kept only where it pools more noise, by more
+// than smoothing.noise_gain: a contour smoothed too little measures too little noise where a fast
+// wobble's flanks cut its runs short, but where the narrower smoothing measured the noise whole
+// the wider one only averages short walls away.
 struct PooledStarts {
-  std::vector<BuildingStart> starts;  // of the last round
+  std::vector<BuildingStart> starts;  // of the round kept
   std::size_t samples = 0;            // buildings measured in it
-  double floor_m = 0;                 // the noise it pooled
+  MaskNoise noise;                    // the noise it pooled, and the noise it smoothed for
 };
+PooledStarts pool_round(const std::vector<BuildingContour>& buildings, double pixel_size, const CoreOptions& options,
+                        double smoothing_m, std::vector<double>* seconds) {
+  PooledStarts round;
+  round.starts = start_buildings(buildings, pixel_size, options, smoothing_m, true, seconds);
+  const std::vector<NoiseSample> samples = samples_of(round.starts);
+  round.samples = measured(samples);
+  round.noise = {pooled_noise_floor(samples, options), smoothing_m};
+  return round;
+}
 PooledStarts pool_starts(const std::vector<BuildingContour>& buildings, double pixel_size, const CoreOptions& options,
                          std::vector<double>* seconds) {
-  PooledStarts pooled;
-  double smoothed_for = 0;
-  for (int round = 0; round < options.smoothing.noise_rounds; ++round) {
-    if (round > 0) {
-      if (smoothing_neighbourhood_m(pixel_size, options.smoothing, pooled.floor_m) <=
-          1.05 * smoothing_neighbourhood_m(pixel_size, options.smoothing, smoothed_for))
-        break;
-      smoothed_for = pooled.floor_m;
-    }
-    pooled.starts = start_buildings(buildings, pixel_size, options, smoothed_for, seconds);
-    const std::vector<NoiseSample> samples = samples_of(pooled.starts);
-    pooled.samples = measured(samples);
-    pooled.floor_m = pooled_noise_floor(samples, options);
+  PooledStarts pooled = pool_round(buildings, pixel_size, options, 0.0, seconds);
+  const auto neighbourhood = [&](double noise_m) { return smoothing_neighbourhood_m(pixel_size, options.smoothing, noise_m); };
+  for (int round = 1; round < options.smoothing.noise_rounds; ++round) {
+    if (neighbourhood(pooled.noise.floor_m) <= 1.05 * neighbourhood(pooled.noise.smoothing_m)) break;
+    PooledStarts wider = pool_round(buildings, pixel_size, options, pooled.noise.floor_m, seconds);
+    if (wider.noise.floor_m <= (1.0 + options.smoothing.noise_gain) * pooled.noise.floor_m) break;
+    pooled = std::move(wider);
   }
   return pooled;
 }
@@ -80,19 +85,24 @@ bool pools_noise(const std::string& regularizer, const CoreOptions& options) {
 }
 
 RegularizedBatch regularize_batch(const std::string& regularizer, const std::vector<BuildingContour>& buildings,
-                                  double pixel_size, const CoreOptions& options, std::optional<double> noise_floor_m,
+                                  double pixel_size, const CoreOptions& options, std::optional<MaskNoise> noise,
                                   const std::function<void()>& on_done) {
   RegularizedBatch batch;
   batch.results.resize(buildings.size());
   std::vector<BuildingStart> starts;
   std::vector<double> start_seconds;  // each building's time counts its start's
-  if (noise_floor_m) {
-    batch.noise_floor_m = *noise_floor_m;
+  if (noise) {
+    batch.noise_floor_m = noise->floor_m;
+    batch.noise_smoothing_m = noise->smoothing_m;
+    // (Without a start the chain smooths for no noise.)
+    if (regularizer == "deformation" && noise->smoothing_m > 0)
+      starts = start_buildings(buildings, pixel_size, options, noise->smoothing_m, false, &start_seconds);
   } else if (pools_noise(regularizer, options)) {
     PooledStarts pooled = pool_starts(buildings, pixel_size, options, &start_seconds);
     starts = std::move(pooled.starts);
     batch.noise_samples = pooled.samples;
-    batch.noise_floor_m = pooled.floor_m;
+    batch.noise_floor_m = pooled.noise.floor_m;
+    batch.noise_smoothing_m = pooled.noise.smoothing_m;
   }
   tbb::parallel_for(std::size_t(0), buildings.size(), [&](std::size_t i) {
     batch.results[i] = regularize_with(regularizer, buildings[i].rings, pixel_size, options, batch.noise_floor_m,
@@ -141,7 +151,7 @@ NoiseSurvey survey_noise(const MaskWindowReader& mask, cv::Size raster, const Ge
   }
   const PooledStarts pooled = pool_starts(buildings, transform.pixel_size(), options, nullptr);
   survey.buildings = pooled.samples;
-  survey.floor_m = pooled.floor_m;
+  survey.noise = pooled.noise;
   return survey;
 }
 

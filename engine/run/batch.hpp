@@ -18,20 +18,29 @@ class MaskWindowReader;
 // noise.pooled_floor above 0 (the peers use no noise).
 bool pools_noise(const std::string& regularizer, const CoreOptions& options);
 
+// The boundary noise pooled over a mask's buildings: the floor every building allows for, and the
+// noise their normals are smoothed for (smoothing.noise_neighbourhood; 0: the narrowest smoothing).
+struct MaskNoise {
+  double floor_m = 0;
+  double smoothing_m = 0;
+};
+
 struct RegularizedBatch {
   std::vector<BuildingResult> results;  // in the buildings' order
   double noise_floor_m = 0;             // the noise floor they were regularized with
+  double noise_smoothing_m = 0;         // ... and the noise their normals were smoothed for
   std::size_t noise_samples = 0;        // how many of them it was pooled over (0: given, or none)
 };
 
-// The buildings through the regularizer. For the deformation chain, with the noise floor given
+// The buildings through the regularizer. For the deformation chain, with the mask's noise given
 // (a run's survey), or else pooled over these buildings: each one started (start_building), their
 // noise samples pooled (pooled_noise_floor), in rounds, each smoothing the normals for the noise
-// the round before pooled (smoothing.noise_rounds), and each regularized from its start. The same results
+// the round before pooled and kept only where that measures more noise (smoothing.noise_rounds,
+// noise_gain), and each regularized from its start. The same results
 // whatever the thread count: samples are pooled in the buildings' order. A building's seconds
 // count its start's. on_done is called after each building (from any thread).
 RegularizedBatch regularize_batch(const std::string& regularizer, const std::vector<BuildingContour>& buildings,
-                                  double pixel_size, const CoreOptions& options, std::optional<double> noise_floor_m = std::nullopt,
+                                  double pixel_size, const CoreOptions& options, std::optional<MaskNoise> noise = std::nullopt,
                                   const std::function<void()>& on_done = {});
 
 // The cells a survey reads: squares of window_px pixels of a grid laid over the raster from its
@@ -45,7 +54,7 @@ std::vector<cv::Rect> survey_cells(cv::Size raster, int window_px, int windows);
 // building crossing the cell's edge is whole (larger ones are left out). The same for every
 // tiling and shard of the raster.
 struct NoiseSurvey {
-  double floor_m = 0;
+  MaskNoise noise;
   std::size_t buildings = 0;  // sampled
   int windows = 0;            // read
 };

@@ -55,10 +55,10 @@ void within_tile(F&& f) {
 
 
 std::vector<BuildingOutput> regularize_tile(const TileBuildings& tile, const Job& job, long raster_width, double pixel_size,
-                                            double noise_floor_m) {
+                                            const MaskNoise& noise) {
   std::vector<BuildingOutput> out(tile.buildings.size());
   RegularizedBatch batch;
-  within_tile([&] { batch = regularize_batch(job.regularizer, tile.buildings, pixel_size, job.stages.core, noise_floor_m); });
+  within_tile([&] { batch = regularize_batch(job.regularizer, tile.buildings, pixel_size, job.stages.core, noise); });
   for (std::size_t i = 0; i < tile.buildings.size(); ++i) {
     const BuildingContour& b = tile.buildings[i];
     BuildingResult& r = batch.results[i];
@@ -474,7 +474,7 @@ std::shared_ptr<TileResult> process_tile(const RunPlan& plan, int tile) {
   std::optional<std::vector<BuildingOutput>> buildings = store.load_buildings(r->name, buildings_key);
   r->buildings_reused = buildings.has_value();
   if (!buildings) {
-    buildings = regularize_tile(*contours, job, width, pixel, plan.noise_floor_m);
+    buildings = regularize_tile(*contours, job, width, pixel, plan.noise);
     store.save_buildings(r->name, buildings_key, *buildings);
   }
   r->buildings = std::move(*buildings);

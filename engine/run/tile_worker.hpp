@@ -13,6 +13,7 @@
 #include "io/input_crs.hpp"
 #include "io/raster.hpp"
 #include "job/job.hpp"
+#include "run/batch.hpp"
 #include "run/checkpoint.hpp"
 #include "run/tiles.hpp"
 
@@ -66,7 +67,7 @@ struct RunPlan {
   // Files under out_dir that an earlier tile index lists: lodforge's own, which it may replace.
   const std::set<std::string>* indexed_outputs = nullptr;
   const Cadastre* cadastre = nullptr;  // inputs.footprints, when given
-  double noise_floor_m = 0;            // the boundary noise every building allows for (survey_noise)
+  MaskNoise noise;                     // the boundary noise every building allows for, and its normals are smoothed for (survey_noise)
 };
 
 // A building's LoD1.3 part: where its roof steps (stages.parts), with its own heights.

@@ -17,6 +17,7 @@ struct SmoothingOptions {
   double least_neighbourhood_px = 2.0;  // ... the bound never narrowing it below this many pixels
   double noise_neighbourhood = 6.0;     // at least this many boundary noises (up to max_neighbourhood_m)
   int noise_rounds = 3;                 // ... the noise pooled over a mask, smoothed for, in this many rounds at most
+  double noise_gain = 0.1;              // ... a wider round kept where it pools this much more noise
   int passes = 3;                // one pass leaves a wall as two clusters (NOTES.md)
 
   template <class V>
@@ -28,7 +29,8 @@ struct SmoothingOptions {
     v("max_neighbourhood_m", max_neighbourhood_m, "upper bound of that widening in metres: on coarse rasters (pixels over 0.5 m) min_neighbourhood_px pixels would average the normals of walls shorter than this, which then get no direction of their own (0 = no bound)", Check::at_least(0));
     v("least_neighbourhood_px", least_neighbourhood_px, "... the bound never narrowing the widening below this many pixels (a staircase needs two edges to show its wall's direction)", Check::at_least(0));
     v("noise_neighbourhood", noise_neighbourhood, "thre_d and sigma_d widened to at least this many times the boundary noise pooled over the mask (noise.pooled_floor), up to max_neighbourhood_m: a wall's direction read over a shorter stretch of a contour that wobbles by that noise is the wobble's (a flank of a fast wobble, tens of degrees off the wall), and the labeling follows it (docs/quality.md, a shorter wobble; 0 = off)", Check::at_least(0));
-    v("noise_rounds", noise_rounds, "... the mask's noise measured on normals smoothed for the noise of the round before, from none, until the neighbourhood it asks for widens by less than 5 %, in this many rounds at most (a contour smoothed too little measures too little noise: the wobble's flanks cut its runs short)", Check::between(1, 10));
+    v("noise_rounds", noise_rounds, "... the mask's noise measured on normals smoothed for the noise of the round before, from none, until the neighbourhood it asks for widens by less than 5 %, in this many rounds at most (a contour smoothed too little measures too little noise: a fast wobble's flanks cut its runs short; 1 = the first round alone, smoothed for no noise)", Check::between(1, 10));
+    v("noise_gain", noise_gain, "... and a wider round kept only where the noise it pools is more than the narrower round's by this fraction: where the narrower smoothing measured the noise whole (a wobble long against its amplitude), the wider one only averages short walls away", Check::at_least(0));
     v("passes", passes, "number of smoothing passes", Check::between(1, 100));
   }
 };

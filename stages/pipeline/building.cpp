@@ -454,7 +454,7 @@ void run_chain(const std::vector<Ring>& rings, double pixel_size, const CoreOpti
   for (const Ring& r : rings) edges += r.size();
   bool started = start.normals.size() == rings.size();
   for (std::size_t r = 0; started && r < rings.size(); ++r) started = start.normals[r].size() == rings[r].size();
-  if (!started) start = start_building(rings, pixel_size, o, false, noise_floor_m);
+  if (!started) start = start_building(rings, pixel_size, o, false);
   LabelingInput input;
   input.normals = std::move(start.normals);
   std::vector<Vec2> all_normals;

@@ -64,8 +64,8 @@ BuildingStart start_building(const std::vector<Ring>& rings, double pixel_size, 
 // extract_contours). pixel_size: the raster's ground sampling distance in metres.
 // noise_floor_m: the boundary noise the building is taken to have at least, pooled over its
 // mask's buildings (0: its own, as measured). start: from start_building on the same rings and
-// options, or empty (the chain starts itself, its normals smoothed for noise_floor_m); the result
-// is the same when the start was smoothed for noise_floor_m.
+// options, or empty (the chain starts itself, its normals smoothed for no noise); the result is
+// the same for a start smoothed for no noise.
 BuildingResult regularize_building(const std::vector<Ring>& rings, double pixel_size, const CoreOptions& options,
                                    double noise_floor_m = 0, BuildingStart start = {});
 
