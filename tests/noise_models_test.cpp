@@ -843,6 +843,32 @@ TEST(NoiseSmoothing, AFastMetreWobbleIsSmoothedForItsNoise) {
   EXPECT_GT(b.noise_floor_m, 1.3 * a.noise_floor_m);
   EXPECT_LE(double(vertices_b), 0.6 * double(vertices_a));
   EXPECT_GE(iou_b, iou_a + 0.01);
+  // The gain judged on two of the six buildings: the same rounds kept, the others smoothed after.
+  CoreOptions sampled;
+  sampled.smoothing.noise_gain_buildings = 2;
+  const RegularizedBatch c = regularize_batch("deformation", mask.buildings, 0.1, sampled);
+  EXPECT_EQ(c.noise_floor_m, b.noise_floor_m);
+  EXPECT_EQ(c.noise_smoothing_m, b.noise_smoothing_m);
+  for (std::size_t k = 0; k < mask.buildings.size(); ++k) EXPECT_EQ(c.results[k].footprint.outer, b.results[k].footprint.outer) << k;
+}
+
+// A start smoothed again for another noise is the start made for that noise: the same normals,
+// the chords' lattice kept, the sample measured again; an empty start stays empty.
+TEST(NoiseSmoothing, ARestartIsTheStartForItsNoise) {
+  const test::RasterizedShape r = test::rasterize_shape_m(test::rotated(kL, 20.0), 0.1, 1.0, 3.0, 2.0, 1);
+  ASSERT_EQ(r.buildings.size(), 1u);
+  const std::vector<Ring>& rings = r.buildings[0].rings;
+  const BuildingStart narrow = start_building(rings, 0.1, CoreOptions{});
+  const BuildingStart wide = start_building(rings, 0.1, CoreOptions{}, true, 0.5);
+  const BuildingStart again = restart_building(rings, 0.1, CoreOptions{}, narrow, 0.5);
+  ASSERT_EQ(again.normals.size(), wide.normals.size());
+  EXPECT_EQ(again.normals[0], wide.normals[0]);
+  EXPECT_NE(narrow.normals[0], wide.normals[0]);
+  EXPECT_EQ(again.chord.direction, wide.chord.direction);
+  EXPECT_DOUBLE_EQ(again.sample.noise_m, wide.sample.noise_m);
+  EXPECT_DOUBLE_EQ(again.sample.weight_m, wide.sample.weight_m);
+  EXPECT_GT(wide.sample.noise_m, narrow.sample.noise_m);
+  EXPECT_TRUE(restart_building(rings, 0.1, CoreOptions{}, BuildingStart{}, 0.5).normals.empty());
 }
 
 // A wobble of 0.5 m whose wavelength is 8 m, its flanks about 20 degrees off the walls: the

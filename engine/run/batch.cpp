@@ -4,6 +4,7 @@
 #include <chrono>
 #include <cmath>
 #include <iterator>
+#include <numeric>
 
 #include <tbb/parallel_for.h>
 
@@ -44,37 +45,70 @@ std::size_t measured(const std::vector<NoiseSample>& samples) {
   return std::size_t(std::count_if(samples.begin(), samples.end(), [](const NoiseSample& s) { return s.weight_m > 0; }));
 }
 
+// The starts at `indices` smoothed again for smoothing_noise_m (restart_building), in parallel;
+// *seconds (when given): the time of each added.
+void restart_buildings(const std::vector<BuildingContour>& buildings, const std::vector<std::size_t>& indices, double pixel_size,
+                       const CoreOptions& options, double smoothing_noise_m, std::vector<BuildingStart>& starts,
+                       std::vector<double>* seconds) {
+  tbb::parallel_for(std::size_t(0), indices.size(), [&](std::size_t k) {
+    const std::size_t i = indices[k];
+    const auto started = Clock::now();
+    try {
+      starts[i] = restart_building(buildings[i].rings, pixel_size, options, std::move(starts[i]), smoothing_noise_m);
+    } catch (const std::exception&) {  // (the chain starts it again, and says what failed)
+      starts[i] = {};
+    }
+    if (seconds) (*seconds)[i] += std::chrono::duration<double>(Clock::now() - started).count();
+  });
+}
+
+// The noise pooled over the starts at `indices`.
+double pooled_at(const std::vector<BuildingStart>& starts, const std::vector<std::size_t>& indices, const CoreOptions& options) {
+  std::vector<NoiseSample> samples;
+  for (std::size_t i : indices) samples.push_back(starts[i].sample);
+  return pooled_noise_floor(samples, options);
+}
+
 // The buildings started, and their noise pooled, in rounds: the first with the normals smoothed
 // for no noise, each next one for the noise the round before pooled (smoothing.noise_neighbourhood),
 // while the neighbourhood that asks for is more than 5 % wider than the last one's, in
 // smoothing.noise_rounds at most. A wider round is kept only where it pools more noise, by more
 // than smoothing.noise_gain: a contour smoothed too little measures too little noise where a fast
 // wobble's flanks cut its runs short, but where the narrower smoothing measured the noise whole
-// the wider one only averages short walls away.
+// the wider one only averages short walls away. That gain is judged on
+// smoothing.noise_gain_buildings of the buildings, spread over their order (all of fewer), each
+// pooled both ways; only a round kept smooths the others.
 struct PooledStarts {
   std::vector<BuildingStart> starts;  // of the round kept
   std::size_t samples = 0;            // buildings measured in it
   MaskNoise noise;                    // the noise it pooled, and the noise it smoothed for
 };
-PooledStarts pool_round(const std::vector<BuildingContour>& buildings, double pixel_size, const CoreOptions& options,
-                        double smoothing_m, std::vector<double>* seconds) {
-  PooledStarts round;
-  round.starts = start_buildings(buildings, pixel_size, options, smoothing_m, true, seconds);
-  const std::vector<NoiseSample> samples = samples_of(round.starts);
-  round.samples = measured(samples);
-  round.noise = {pooled_noise_floor(samples, options), smoothing_m};
-  return round;
-}
 PooledStarts pool_starts(const std::vector<BuildingContour>& buildings, double pixel_size, const CoreOptions& options,
                          std::vector<double>* seconds) {
-  PooledStarts pooled = pool_round(buildings, pixel_size, options, 0.0, seconds);
+  PooledStarts pooled;
+  pooled.starts = start_buildings(buildings, pixel_size, options, 0.0, true, seconds);
+  std::vector<std::size_t> all(buildings.size());
+  std::iota(all.begin(), all.end(), std::size_t(0));
+  pooled.noise.floor_m = pooled_at(pooled.starts, all, options);
+  const std::size_t sampled = std::min(buildings.size(), std::size_t(std::max(1, options.smoothing.noise_gain_buildings)));
+  std::vector<std::size_t> sample, rest;
+  for (std::size_t k = 0, next = 0; k < buildings.size(); ++k) {
+    const bool in = next < sampled && k == next * buildings.size() / sampled;
+    (in ? sample : rest).push_back(k);
+    next += in;
+  }
   const auto neighbourhood = [&](double noise_m) { return smoothing_neighbourhood_m(pixel_size, options.smoothing, noise_m); };
   for (int round = 1; round < options.smoothing.noise_rounds; ++round) {
-    if (neighbourhood(pooled.noise.floor_m) <= 1.05 * neighbourhood(pooled.noise.smoothing_m)) break;
-    PooledStarts wider = pool_round(buildings, pixel_size, options, pooled.noise.floor_m, seconds);
-    if (wider.noise.floor_m <= (1.0 + options.smoothing.noise_gain) * pooled.noise.floor_m) break;
-    pooled = std::move(wider);
+    const double wider_m = pooled.noise.floor_m;
+    if (neighbourhood(wider_m) <= 1.05 * neighbourhood(pooled.noise.smoothing_m)) break;
+    std::vector<BuildingStart> wider = pooled.starts;
+    restart_buildings(buildings, sample, pixel_size, options, wider_m, wider, seconds);
+    if (pooled_at(wider, sample, options) <= (1.0 + options.smoothing.noise_gain) * pooled_at(pooled.starts, sample, options)) break;
+    restart_buildings(buildings, rest, pixel_size, options, wider_m, wider, seconds);
+    pooled.starts = std::move(wider);
+    pooled.noise = {pooled_at(pooled.starts, all, options), wider_m};
   }
+  pooled.samples = measured(samples_of(pooled.starts));
   return pooled;
 }
 

@@ -18,6 +18,7 @@ struct SmoothingOptions {
   double noise_neighbourhood = 6.0;     // at least this many boundary noises (up to max_neighbourhood_m)
   int noise_rounds = 3;                 // ... the noise pooled over a mask, smoothed for, in this many rounds at most
   double noise_gain = 0.1;              // ... a wider round kept where it pools this much more noise
+  int noise_gain_buildings = 128;       // ... judged on this many of the mask's buildings
   int passes = 3;                // one pass leaves a wall as two clusters (NOTES.md)
 
   template <class V>
@@ -31,6 +32,7 @@ struct SmoothingOptions {
     v("noise_neighbourhood", noise_neighbourhood, "thre_d and sigma_d widened to at least this many times the boundary noise pooled over the mask (noise.pooled_floor), up to max_neighbourhood_m: a wall's direction read over a shorter stretch of a contour that wobbles by that noise is the wobble's (a flank of a fast wobble, tens of degrees off the wall), and the labeling follows it (docs/quality.md, a shorter wobble; 0 = off)", Check::at_least(0));
     v("noise_rounds", noise_rounds, "... the mask's noise measured on normals smoothed for the noise of the round before, from none, until the neighbourhood it asks for widens by less than 5 %, in this many rounds at most (a contour smoothed too little measures too little noise: a fast wobble's flanks cut its runs short; 1 = the first round alone, smoothed for no noise)", Check::between(1, 10));
     v("noise_gain", noise_gain, "... and a wider round kept only where the noise it pools is more than the narrower round's by this fraction: where the narrower smoothing measured the noise whole (a wobble long against its amplitude), the wider one only averages short walls away", Check::at_least(0));
+    v("noise_gain_buildings", noise_gain_buildings, "... that gain judged on this many of the buildings, spread evenly over the mask's (all of a mask of fewer), their noise pooled both ways: only a round kept smooths the others (a round judged and dropped then costs a mask of thousands little)", Check::at_least(1));
     v("passes", passes, "number of smoothing passes", Check::between(1, 100));
   }
 };

@@ -755,6 +755,14 @@ void run_chain(const std::vector<Ring>& rings, double pixel_size, const CoreOpti
   }
 }
 
+// The start's noise sample, from its normals and chords.
+void measure_sample(const std::vector<Ring>& rings, double pixel_size, const CoreOptions& o, BuildingStart& start) {
+  double arc_noise = 0, measured = 0;
+  double noise = lattice_noise(rings, start.normals, start.chord.direction, pixel_size, o.noise, &arc_noise, &measured);
+  if (o.models.arc_noise_ratio > 0) noise = std::min(noise, o.models.arc_noise_ratio * arc_noise);
+  start.sample = measured > 0 ? NoiseSample{noise, perimeter(rings[0])} : NoiseSample{};  // (a clean contour may measure 0, and says so)
+}
+
 }  // namespace
 
 PolygonWithHoles fallback_footprint(const std::vector<Ring>& rings, double tolerance) {
@@ -775,11 +783,15 @@ BuildingStart start_building(const std::vector<Ring>& rings, double pixel_size, 
   if (!contour_problem(rings, o).empty()) return start;  // (the chain says why)
   for (const Ring& ring : rings) start.normals.push_back(smooth_normals(ring, pixel_size, o.smoothing, smoothing_noise_m));
   start.chord = chord_lattice(rings, o.lattice);
-  if (!measure_noise) return start;
-  double arc_noise = 0, measured = 0;
-  double noise = lattice_noise(rings, start.normals, start.chord.direction, pixel_size, o.noise, &arc_noise, &measured);
-  if (o.models.arc_noise_ratio > 0) noise = std::min(noise, o.models.arc_noise_ratio * arc_noise);
-  if (measured > 0) start.sample = {noise, perimeter(rings[0])};  // (a clean contour may measure 0, and says so)
+  if (measure_noise) measure_sample(rings, pixel_size, o, start);
+  return start;
+}
+
+BuildingStart restart_building(const std::vector<Ring>& rings, double pixel_size, const CoreOptions& o, BuildingStart start,
+                               double smoothing_noise_m) {
+  if (start.normals.size() != rings.size()) return start;
+  for (std::size_t r = 0; r < rings.size(); ++r) start.normals[r] = smooth_normals(rings[r], pixel_size, o.smoothing, smoothing_noise_m);
+  measure_sample(rings, pixel_size, o, start);
   return start;
 }
 

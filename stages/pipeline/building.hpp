@@ -59,6 +59,10 @@ struct BuildingStart {
 // (smoothing.noise_neighbourhood; 0: none known).
 BuildingStart start_building(const std::vector<Ring>& rings, double pixel_size, const CoreOptions& options,
                              bool measure_noise = true, double smoothing_noise_m = 0);
+// The same start with its normals smoothed again, for smoothing_noise_m, and its sample measured
+// again (the chords' lattice does not depend on the normals). An empty start stays empty.
+BuildingStart restart_building(const std::vector<Ring>& rings, double pixel_size, const CoreOptions& options, BuildingStart start,
+                               double smoothing_noise_m);
 
 // rings: [0] outer counter-clockwise, then clockwise holes, in map metres (from
 // extract_contours). pixel_size: the raster's ground sampling distance in metres.
