@@ -318,6 +318,37 @@ TEST_F(SynthRun, TheNoiseFloorIsTheRastersWhateverTheTiling) {
   EXPECT_FALSE(on == off);
 }
 
+// A mask whose boundary wobbles by a metre every 3 m (0.25 m pixels): the survey pools its noise
+// in the rounds `regularize` pools it in, keeps the wider smoothing, and the run's buildings are
+// smoothed for the same noise: its footprints are regularize's, outline for outline.
+TEST_F(Run, AFastWobbleIsSmoothedAlikeInARunAndInRegularize) {
+  const Result made = lodforge("synth --out " + (dir / "wobbly").string() +
+                               " --size-m 200 --pixel-size 0.25 --seed 7 --set boundary_noise_m=1 --set noise_wavelength_m=3 --set corner_radius_m=2");
+  ASSERT_EQ(made.code, 0) << made.output;
+  const std::string seg = (dir / "wobbly" / "seg_class.tif").string();
+  ASSERT_EQ(lodforge("run " + job("wobbly", seg, 100, "").string() + " --set tiling.noise_survey_window_m=400").code, 0);
+  const Result r = lodforge("regularize --mask " + seg + " --out " + (dir / "w.gpkg").string() + " --stats " + (dir / "w.json").string());
+  ASSERT_EQ(r.code, 0) << r.output;
+  const nlohmann::json stats = report_of(dir / "w.json"), report = report_of(dir / "wobbly_out" / "report.json");
+  EXPECT_GT(stats.at("noise_smoothing_m").get<double>(), 0.0) << stats;
+  EXPECT_GT(stats.at("noise_floor_m").get<double>(), stats.at("noise_smoothing_m").get<double>()) << stats;
+  EXPECT_DOUBLE_EQ(report.at("noise_smoothing_m").get<double>(), stats.at("noise_smoothing_m").get<double>());
+  EXPECT_DOUBLE_EQ(report.at("noise_floor_m").get<double>(), stats.at("noise_floor_m").get<double>());
+  std::multiset<std::string> run_outlines, regularized;
+  for (const auto& [id, text] : footprints(dir / "wobbly_out")) run_outlines.insert(text.substr(0, text.rfind(' ')));
+  GDALDataset* d = static_cast<GDALDataset*>(GDALOpenEx((dir / "w.gpkg").c_str(), GDAL_OF_VECTOR, nullptr, nullptr, nullptr));
+  ASSERT_NE(d, nullptr);
+  for (auto& f : *d->GetLayer(0)) {
+    char* wkt = nullptr;
+    f->GetGeometryRef()->exportToWkt(&wkt);
+    regularized.insert(wkt);
+    CPLFree(wkt);
+  }
+  GDALClose(d);
+  EXPECT_GT(run_outlines.size(), 5u);
+  EXPECT_TRUE(run_outlines == regularized) << run_outlines.size() << " against " << regularized.size();
+}
+
 // The survey's cells spread over both axes of the raster, not along one column; a raster of
 // fewer cells than windows is surveyed whole.
 TEST(NoiseSurvey, CellsSpreadOverBothAxes) {
