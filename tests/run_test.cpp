@@ -3,6 +3,7 @@
 #include <random>
 #include <regex>
 
+#include <algorithm>
 #include <array>
 #include <chrono>
 #include <csignal>
@@ -72,6 +73,28 @@ std::map<long, std::string> footprints(const fs::path& out) {
     GDALClose(d);
   }
   return result;
+}
+
+// The outlines (WKT) of a run's tile files, and of one GeoPackage's first layer: a run and
+// `regularize` on the same mask give the same multiset.
+std::multiset<std::string> run_outlines(const fs::path& out) {
+  std::multiset<std::string> outlines;
+  for (const auto& [id, text] : footprints(out)) outlines.insert(text.substr(0, text.rfind(' ')));
+  return outlines;
+}
+std::multiset<std::string> gpkg_outlines(const fs::path& path) {
+  std::multiset<std::string> outlines;
+  GDALDataset* d = static_cast<GDALDataset*>(GDALOpenEx(path.c_str(), GDAL_OF_VECTOR, nullptr, nullptr, nullptr));
+  EXPECT_NE(d, nullptr) << path;
+  if (!d) return outlines;
+  for (auto& f : *d->GetLayer(0)) {
+    char* wkt = nullptr;
+    f->GetGeometryRef()->exportToWkt(&wkt);
+    outlines.insert(wkt);
+    CPLFree(wkt);
+  }
+  GDALClose(d);
+  return outlines;
 }
 
 class Run : public ::testing::Test {
@@ -293,19 +316,9 @@ TEST_F(SynthRun, TheNoiseFloorIsTheRastersWhateverTheTiling) {
   EXPECT_GT(stats.at("noise_samples").get<int>(), 20) << stats;
   EXPECT_DOUBLE_EQ(report_of(dir / "whole_out" / "report.json").at("noise_floor_m").get<double>(), stats.at("noise_floor_m").get<double>());
   // ... and the run's footprints are regularize's, outline for outline.
-  std::multiset<std::string> run_outlines, regularized;
-  for (const auto& [id, text] : footprints(dir / "whole_out")) run_outlines.insert(text.substr(0, text.rfind(' ')));
-  GDALDataset* d = static_cast<GDALDataset*>(GDALOpenEx((dir / "r.gpkg").c_str(), GDAL_OF_VECTOR, nullptr, nullptr, nullptr));
-  ASSERT_NE(d, nullptr);
-  for (auto& f : *d->GetLayer(0)) {
-    char* wkt = nullptr;
-    f->GetGeometryRef()->exportToWkt(&wkt);
-    regularized.insert(wkt);
-    CPLFree(wkt);
-  }
-  GDALClose(d);
-  EXPECT_GT(run_outlines.size(), 20u);
-  EXPECT_TRUE(run_outlines == regularized) << run_outlines.size() << " against " << regularized.size();
+  const std::multiset<std::string> run = run_outlines(dir / "whole_out"), regularized = gpkg_outlines(dir / "r.gpkg");
+  EXPECT_GT(run.size(), 20u);
+  EXPECT_TRUE(run == regularized) << run.size() << " against " << regularized.size();
   // Off: each building its own noise, and some footprints change.
   ASSERT_EQ(lodforge("run " + job("off", seg, 100).string() + " --set tiling.noise_survey_windows=0").code, 0);
   EXPECT_EQ(report_of(dir / "off_out" / "report.json").at("noise_floor_m").get<double>(), 0.0);
@@ -331,22 +344,30 @@ TEST_F(Run, AFastWobbleIsSmoothedAlikeInARunAndInRegularize) {
   ASSERT_EQ(r.code, 0) << r.output;
   const nlohmann::json stats = report_of(dir / "w.json"), report = report_of(dir / "wobbly_out" / "report.json");
   EXPECT_GT(stats.at("noise_smoothing_m").get<double>(), 0.0) << stats;
-  EXPECT_GT(stats.at("noise_floor_m").get<double>(), stats.at("noise_smoothing_m").get<double>()) << stats;
+  // One round alone (the narrow smoothing) pools less of that noise, and smooths for none.
+  const Result narrow = lodforge("regularize --mask " + seg + " --out " + (dir / "n.gpkg").string() + " --stats " +
+                                 (dir / "n.json").string() + " --set stages.smoothing.noise_rounds=1");
+  ASSERT_EQ(narrow.code, 0) << narrow.output;
+  const nlohmann::json narrow_stats = report_of(dir / "n.json");
+  EXPECT_EQ(narrow_stats.at("noise_smoothing_m").get<double>(), 0.0) << narrow_stats;
+  EXPECT_GT(stats.at("noise_floor_m").get<double>(), 1.1 * narrow_stats.at("noise_floor_m").get<double>()) << stats << narrow_stats;
   EXPECT_DOUBLE_EQ(report.at("noise_smoothing_m").get<double>(), stats.at("noise_smoothing_m").get<double>());
   EXPECT_DOUBLE_EQ(report.at("noise_floor_m").get<double>(), stats.at("noise_floor_m").get<double>());
-  std::multiset<std::string> run_outlines, regularized;
-  for (const auto& [id, text] : footprints(dir / "wobbly_out")) run_outlines.insert(text.substr(0, text.rfind(' ')));
-  GDALDataset* d = static_cast<GDALDataset*>(GDALOpenEx((dir / "w.gpkg").c_str(), GDAL_OF_VECTOR, nullptr, nullptr, nullptr));
-  ASSERT_NE(d, nullptr);
-  for (auto& f : *d->GetLayer(0)) {
-    char* wkt = nullptr;
-    f->GetGeometryRef()->exportToWkt(&wkt);
-    regularized.insert(wkt);
-    CPLFree(wkt);
-  }
-  GDALClose(d);
-  EXPECT_GT(run_outlines.size(), 5u);
-  EXPECT_TRUE(run_outlines == regularized) << run_outlines.size() << " against " << regularized.size();
+  const std::multiset<std::string> run = run_outlines(dir / "wobbly_out"), regularized = gpkg_outlines(dir / "w.gpkg");
+  EXPECT_GT(run.size(), 5u);
+  EXPECT_TRUE(run == regularized) << run.size() << " against " << regularized.size();
+}
+
+// The buildings a smoothing round is judged on spread over all of them, in order, each once.
+TEST(NoiseSurvey, TheJudgedBuildingsSpreadOverTheMask) {
+  EXPECT_EQ(spread_indices(10, 4), (std::vector<std::size_t>{0, 2, 5, 7}));
+  EXPECT_EQ(spread_indices(3, 128), (std::vector<std::size_t>{0, 1, 2}));
+  EXPECT_EQ(spread_indices(1000, 1), (std::vector<std::size_t>{0}));
+  EXPECT_TRUE(spread_indices(0, 128).empty());
+  const std::vector<std::size_t> s = spread_indices(10000, 128);
+  ASSERT_EQ(s.size(), 128u);
+  EXPECT_TRUE(std::adjacent_find(s.begin(), s.end(), [](std::size_t a, std::size_t b) { return b - a < 78 || b - a > 79; }) == s.end());
+  EXPECT_GE(s.back(), 9921u);
 }
 
 // The survey's cells spread over both axes of the raster, not along one column; a raster of

@@ -114,6 +114,16 @@ TEST(Smoothing, TheNeighbourhoodWidensWithTheNoise) {
   SmoothingOptions off = o;
   off.noise_neighbourhood = 0;
   EXPECT_DOUBLE_EQ(smoothing_neighbourhood_m(0.1, off, 1.0), 0.5);
+  // No bound in metres: six noises, however many; no smoothing at all: none, whatever the noise.
+  SmoothingOptions unbounded = o;
+  unbounded.max_neighbourhood_m = 0;
+  EXPECT_DOUBLE_EQ(smoothing_neighbourhood_m(0.1, unbounded, 0.0), 0.5);
+  EXPECT_NEAR(smoothing_neighbourhood_m(0.1, unbounded, 1.0), 6.0, 1e-12);
+  EXPECT_DOUBLE_EQ(smoothing_neighbourhood_m(2.0, unbounded, 0.0), 10.0);
+  SmoothingOptions none = o;
+  none.neighbourhood_m = 0;
+  EXPECT_DOUBLE_EQ(smoothing_neighbourhood_m(0.1, none, 0.0), 0.0);
+  EXPECT_DOUBLE_EQ(smoothing_neighbourhood_m(0.1, none, 1.0), 0.0);
 }
 
 // A wobble of 1 m whose wavelength is 3 m, at 0.1 m a pixel: its flanks stand about 60 degrees

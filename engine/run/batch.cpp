@@ -17,22 +17,24 @@ namespace {
 
 using Clock = std::chrono::steady_clock;
 
-// Each building's start, in parallel, its normals smoothed for smoothing_noise_m, its noise
-// measured when measure_noise; *seconds (when given): the time of each added.
-std::vector<BuildingStart> start_buildings(const std::vector<BuildingContour>& buildings, double pixel_size, const CoreOptions& options,
-                                           double smoothing_noise_m, bool measure_noise, std::vector<double>* seconds) {
-  std::vector<BuildingStart> starts(buildings.size());
-  if (seconds) seconds->resize(buildings.size(), 0.0);
-  tbb::parallel_for(std::size_t(0), buildings.size(), [&](std::size_t i) {
+// Into starts[i], for each i of `indices` in parallel, start(i); a start that throws is left
+// empty, for the chain to start again (its normals smoothed for smoothing_noise_m) and say what
+// failed. *seconds (when given): the time of each added.
+template <class Start>
+void start_each(const std::vector<std::size_t>& indices, double smoothing_noise_m, const Start& start,
+                std::vector<BuildingStart>& starts, std::vector<double>* seconds) {
+  if (seconds) seconds->resize(starts.size(), 0.0);
+  tbb::parallel_for(std::size_t(0), indices.size(), [&](std::size_t k) {
+    const std::size_t i = indices[k];
     const auto started = Clock::now();
     try {
-      starts[i] = start_building(buildings[i].rings, pixel_size, options, measure_noise, smoothing_noise_m);
-    } catch (const std::exception&) {  // (the chain starts it again, and says what failed)
+      starts[i] = start(i);
+    } catch (const std::exception&) {
       starts[i] = {};
+      starts[i].smoothing_noise_m = smoothing_noise_m;
     }
     if (seconds) (*seconds)[i] += std::chrono::duration<double>(Clock::now() - started).count();
   });
-  return starts;
 }
 
 std::vector<NoiseSample> samples_of(const std::vector<BuildingStart>& starts) {
@@ -43,23 +45,6 @@ std::vector<NoiseSample> samples_of(const std::vector<BuildingStart>& starts) {
 
 std::size_t measured(const std::vector<NoiseSample>& samples) {
   return std::size_t(std::count_if(samples.begin(), samples.end(), [](const NoiseSample& s) { return s.weight_m > 0; }));
-}
-
-// The starts at `indices` smoothed again for smoothing_noise_m (restart_building), in parallel;
-// *seconds (when given): the time of each added.
-void restart_buildings(const std::vector<BuildingContour>& buildings, const std::vector<std::size_t>& indices, double pixel_size,
-                       const CoreOptions& options, double smoothing_noise_m, std::vector<BuildingStart>& starts,
-                       std::vector<double>* seconds) {
-  tbb::parallel_for(std::size_t(0), indices.size(), [&](std::size_t k) {
-    const std::size_t i = indices[k];
-    const auto started = Clock::now();
-    try {
-      starts[i] = restart_building(buildings[i].rings, pixel_size, options, std::move(starts[i]), smoothing_noise_m);
-    } catch (const std::exception&) {  // (the chain starts it again, and says what failed)
-      starts[i] = {};
-    }
-    if (seconds) (*seconds)[i] += std::chrono::duration<double>(Clock::now() - started).count();
-  });
 }
 
 // The noise pooled over the starts at `indices`.
@@ -86,26 +71,32 @@ struct PooledStarts {
 PooledStarts pool_starts(const std::vector<BuildingContour>& buildings, double pixel_size, const CoreOptions& options,
                          std::vector<double>* seconds) {
   PooledStarts pooled;
-  pooled.starts = start_buildings(buildings, pixel_size, options, 0.0, true, seconds);
+  pooled.starts.resize(buildings.size());
   std::vector<std::size_t> all(buildings.size());
   std::iota(all.begin(), all.end(), std::size_t(0));
+  start_each(all, 0.0, [&](std::size_t i) { return start_building(buildings[i].rings, pixel_size, options, true, 0.0); }, pooled.starts,
+             seconds);
   pooled.noise.floor_m = pooled_at(pooled.starts, all, options);
-  const std::size_t sampled = std::min(buildings.size(), std::size_t(std::max(1, options.smoothing.noise_gain_buildings)));
-  std::vector<std::size_t> sample, rest;
-  for (std::size_t k = 0, next = 0; k < buildings.size(); ++k) {
-    const bool in = next < sampled && k == next * buildings.size() / sampled;
-    (in ? sample : rest).push_back(k);
-    next += in;
-  }
+  const std::vector<std::size_t> sample = spread_indices(buildings.size(), std::size_t(std::max(1, options.smoothing.noise_gain_buildings)));
+  std::vector<std::size_t> rest;
+  std::set_difference(all.begin(), all.end(), sample.begin(), sample.end(), std::back_inserter(rest));
   const auto neighbourhood = [&](double noise_m) { return smoothing_neighbourhood_m(pixel_size, options.smoothing, noise_m); };
   for (int round = 1; round < options.smoothing.noise_rounds; ++round) {
     const double wider_m = pooled.noise.floor_m;
     if (neighbourhood(wider_m) <= 1.05 * neighbourhood(pooled.noise.smoothing_m)) break;
-    std::vector<BuildingStart> wider = pooled.starts;
-    restart_buildings(buildings, sample, pixel_size, options, wider_m, wider, seconds);
-    if (pooled_at(wider, sample, options) <= (1.0 + options.smoothing.noise_gain) * pooled_at(pooled.starts, sample, options)) break;
-    restart_buildings(buildings, rest, pixel_size, options, wider_m, wider, seconds);
-    pooled.starts = std::move(wider);
+    // The sample's starts smoothed wider beside the kept ones (their time counts only if kept).
+    std::vector<BuildingStart> trial(buildings.size());
+    std::vector<double> trial_seconds;
+    start_each(sample, wider_m, [&](std::size_t i) { return restart_building(buildings[i].rings, pixel_size, options, pooled.starts[i], wider_m); },
+               trial, seconds ? &trial_seconds : nullptr);
+    if (pooled_at(trial, sample, options) <= (1.0 + options.smoothing.noise_gain) * pooled_at(pooled.starts, sample, options)) break;
+    for (std::size_t i : sample) {
+      pooled.starts[i] = std::move(trial[i]);
+      if (seconds) (*seconds)[i] += trial_seconds[i];
+    }
+    start_each(rest, wider_m,
+               [&](std::size_t i) { return restart_building(buildings[i].rings, pixel_size, options, std::move(pooled.starts[i]), wider_m); },
+               pooled.starts, seconds);
     pooled.noise = {pooled_at(pooled.starts, all, options), wider_m};
   }
   pooled.samples = measured(samples_of(pooled.starts));
@@ -128,9 +119,11 @@ RegularizedBatch regularize_batch(const std::string& regularizer, const std::vec
   if (noise) {
     batch.noise_floor_m = noise->floor_m;
     batch.noise_smoothing_m = noise->smoothing_m;
-    // (Without a start the chain smooths for no noise.)
-    if (regularizer == "deformation" && noise->smoothing_m > 0)
-      starts = start_buildings(buildings, pixel_size, options, noise->smoothing_m, false, &start_seconds);
+    // (Each building's chain starts itself, smoothed for that noise.)
+    if (regularizer == "deformation") {
+      starts.resize(buildings.size());
+      for (BuildingStart& s : starts) s.smoothing_noise_m = noise->smoothing_m;
+    }
   } else if (pools_noise(regularizer, options)) {
     PooledStarts pooled = pool_starts(buildings, pixel_size, options, &start_seconds);
     starts = std::move(pooled.starts);
@@ -145,6 +138,13 @@ RegularizedBatch regularize_batch(const std::string& regularizer, const std::vec
     if (on_done) on_done();
   });
   return batch;
+}
+
+std::vector<std::size_t> spread_indices(std::size_t n, std::size_t k) {
+  k = std::min(k, n);
+  std::vector<std::size_t> indices(k);
+  for (std::size_t j = 0; j < k; ++j) indices[j] = j * n / k;
+  return indices;
 }
 
 std::vector<cv::Rect> survey_cells(cv::Size raster, int window_px, int windows) {

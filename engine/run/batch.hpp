@@ -43,6 +43,10 @@ RegularizedBatch regularize_batch(const std::string& regularizer, const std::vec
                                   double pixel_size, const CoreOptions& options, std::optional<MaskNoise> noise = std::nullopt,
                                   const std::function<void()>& on_done = {});
 
+// k of the indices 0..n-1 spread evenly over them (j n / k for j < k; all of them when k >= n):
+// the buildings a wider smoothing round is judged on (smoothing.noise_gain_buildings).
+std::vector<std::size_t> spread_indices(std::size_t n, std::size_t k);
+
 // The cells a survey reads: squares of window_px pixels of a grid laid over the raster from its
 // corner (the last row and column cut by the raster's edges), all of them when there are at most
 // `windows`, else rows and columns of them spread evenly over both axes (a x b <= windows, a / b

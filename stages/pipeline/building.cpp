@@ -454,7 +454,7 @@ void run_chain(const std::vector<Ring>& rings, double pixel_size, const CoreOpti
   for (const Ring& r : rings) edges += r.size();
   bool started = start.normals.size() == rings.size();
   for (std::size_t r = 0; started && r < rings.size(); ++r) started = start.normals[r].size() == rings[r].size();
-  if (!started) start = start_building(rings, pixel_size, o, false);
+  if (!started) start = start_building(rings, pixel_size, o, false, start.smoothing_noise_m);
   LabelingInput input;
   input.normals = std::move(start.normals);
   std::vector<Vec2> all_normals;
@@ -780,6 +780,7 @@ PolygonWithHoles fallback_footprint(const std::vector<Ring>& rings, double toler
 BuildingStart start_building(const std::vector<Ring>& rings, double pixel_size, const CoreOptions& o, bool measure_noise,
                              double smoothing_noise_m) {
   BuildingStart start;
+  start.smoothing_noise_m = smoothing_noise_m;
   if (!contour_problem(rings, o).empty()) return start;  // (the chain says why)
   for (const Ring& ring : rings) start.normals.push_back(smooth_normals(ring, pixel_size, o.smoothing, smoothing_noise_m));
   start.chord = chord_lattice(rings, o.lattice);
@@ -789,6 +790,7 @@ BuildingStart start_building(const std::vector<Ring>& rings, double pixel_size, 
 
 BuildingStart restart_building(const std::vector<Ring>& rings, double pixel_size, const CoreOptions& o, BuildingStart start,
                                double smoothing_noise_m) {
+  start.smoothing_noise_m = smoothing_noise_m;
   if (start.normals.size() != rings.size()) return start;
   for (std::size_t r = 0; r < rings.size(); ++r) start.normals[r] = smooth_normals(rings[r], pixel_size, o.smoothing, smoothing_noise_m);
   measure_sample(rings, pixel_size, o, start);

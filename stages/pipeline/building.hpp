@@ -54,6 +54,7 @@ struct BuildingStart {
   std::vector<std::vector<Vec2>> normals;  // per ring, per edge: the smoothed outward normals (empty: not started)
   ChordLattice chord;                      // the lattice of the contour's chords
   NoiseSample sample;
+  double smoothing_noise_m = 0;  // the noise its normals are smoothed for; of an empty start, the noise the chain smooths for
 };
 // smoothing_noise_m: the boundary noise pooled over the mask that the normals are smoothed for
 // (smoothing.noise_neighbourhood; 0: none known).
@@ -68,8 +69,8 @@ BuildingStart restart_building(const std::vector<Ring>& rings, double pixel_size
 // extract_contours). pixel_size: the raster's ground sampling distance in metres.
 // noise_floor_m: the boundary noise the building is taken to have at least, pooled over its
 // mask's buildings (0: its own, as measured). start: from start_building on the same rings and
-// options, or empty (the chain starts itself, its normals smoothed for no noise); the result is
-// the same for a start smoothed for no noise.
+// options, or empty (the chain starts itself, its normals smoothed for the start's
+// smoothing_noise_m); the result is the same either way.
 BuildingResult regularize_building(const std::vector<Ring>& rings, double pixel_size, const CoreOptions& options,
                                    double noise_floor_m = 0, BuildingStart start = {});
 

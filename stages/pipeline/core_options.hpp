@@ -41,7 +41,7 @@ struct BudgetOptions {
     v("max_deformation_edges", max_deformation_edges, "contours with more edges are not deformed (they take the 'original' route)", Check::at_least(3));
     v("max_mesh_vertices", max_mesh_vertices, "the deformation mesh is kept to about this many vertices: each labeled run is simplified further and the mesh edges grow beyond triangulation.size_bound_px until it fits (0 = no bound, the paper's full mesh)", Check::at_least(0));
     v("max_deformation_work", max_deformation_work, "the deformation stops after this many mesh vertices x Newton iterations, and the building takes the 'original' route, the reason recorded (0 = no bound)", Check::at_least(0));
-    v("max_seconds", max_seconds, "time limit per building (s); a building over it gets the fallback", Check::above(0));
+    v("max_seconds", max_seconds, "time limit per building (s), from the start of its chain (in `regularize`, the normals smoothed first to pool the mask's noise are counted in its time but not here); a building over it gets the fallback", Check::above(0));
   }
 };
 
