@@ -5,7 +5,9 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <map>
 #include <regex>
+#include <set>
 #include <gdal_priv.h>
 #include <ogrsf_frmts.h>
 
@@ -255,6 +257,25 @@ TEST_F(Cli, SynthFromFootprintsRegularizeWithEachMethodAndEvaluate) {
     int in_classes = 0;
     for (const auto& [size, entry] : stats.at("by_size").items()) in_classes += entry.at("buildings").get<int>();
     EXPECT_EQ(in_classes, 2) << stats.dump();
+    // Each footprint names the outline the chain kept (NULL for a peer); --stats counts them.
+    std::map<std::string, int> models;
+    GDALDataset* out = static_cast<GDALDataset*>(GDALOpenEx(path(name + ".gpkg").c_str(), GDAL_OF_VECTOR, nullptr, nullptr, nullptr));
+    ASSERT_NE(out, nullptr);
+    for (auto& f : *out->GetLayer(0)) {
+      const int field = f->GetFieldIndex("model");
+      ASSERT_GE(field, 0) << name;
+      if (f->IsFieldNull(field)) ++models["NULL"];
+      else ++models[f->GetFieldAsString(field)];
+    }
+    GDALClose(out);
+    if (name == "deformation") {
+      const std::set<std::string> known = {"regular", "lines", "lattice", "rectangle", "coarse_lattice", "staircase_lines", "merged_steps"};
+      for (const auto& [model, n] : models) EXPECT_TRUE(known.count(model)) << model;
+      EXPECT_EQ((stats.at("models").get<std::map<std::string, int>>()), models) << stats.dump();
+    } else {
+      EXPECT_EQ(models, (std::map<std::string, int>{{"NULL", 2}})) << name;
+      EXPECT_FALSE(stats.contains("models")) << stats.dump();
+    }
     r = lodforge("eval --pred " + path(name + ".gpkg") + " --gt " + path("truth.geojson") + " --json " + path(name + ".eval.json"));
     ASSERT_EQ(r.code, 0) << r.output;
     const nlohmann::json metrics = nlohmann::json::parse(test::slurp(dir / (name + ".eval.json")));

@@ -70,10 +70,10 @@ int run_regularize(int argc, char** argv) {
   args.value("mask", "RASTER", "segmentation raster (any GDAL format), georeferenced")
       .value("building-value", "V[,V...]", "class value(s) of buildings in a one-band raster (default 6)")
       .value("building-rgb", "R,G,B", "building colour in an RGB raster, e.g. 0,0,255 (ISPRS)")
-      .value("out", "FILE", "output footprints (.gpkg or .geojson)")
+      .value("out", "FILE", "output footprints (.gpkg or .geojson): id, status, stage, reason, regularizer, model (the outline the paper's chain chose: docs/models.md), vertex_count, area_m2")
       .value("route", "NAME", "corner route: 'original' (lines fitted to the raw contour) or 'deformed' (the paper)")
       .value("regularizer", "NAME", "one of " + regularizer_list() + " (default: deformation, the paper's chain; see lodforge options)")
-      .value("stats", "FILE", "also write a JSON summary: counts by status and the regularization time per building (mean, median, p99; also by contour size)")
+      .value("stats", "FILE", "also write a JSON summary: counts by status (for the paper's chain, also by the outline model chosen) and the regularization time per building (mean, median, p99; also by contour size)")
       .value("threads", "N", "worker threads (default: all cores)", false, "j")
       .value("set", "KEY=VALUE", "set any stage option as in a job, e.g. stages.labeling.kappa2=5 (see lodforge options)", true);
   args.parse(argc, argv, 2);
@@ -125,7 +125,7 @@ int run_regularize(int argc, char** argv) {
   const std::vector<BuildingResult>& results = batch.results;
 
   std::vector<FootprintRecord> records(count);
-  std::map<std::string, int> failures;
+  std::map<std::string, int> failures, models;
   int failed = 0, rerouted = 0;
   for (std::size_t i = 0; i < count; ++i) {
     const BuildingResult& r = results[i];
@@ -136,6 +136,8 @@ int run_regularize(int argc, char** argv) {
     rec.failed_stage = r.failed_stage;
     rec.reason = r.ok ? r.note : r.reason;
     rec.regularizer = !r.ok ? "douglas_peucker" : regularizer == "deformation" ? "deformation_" + r.route : regularizer;
+    rec.model = r.model;
+    ++models[r.ok ? r.model : "fallback"];
     if (r.ok && !r.note.empty()) ++rerouted;
     if (!r.ok) {
       ++failed;
@@ -146,6 +148,7 @@ int run_regularize(int argc, char** argv) {
   }
   FootprintLayer layer;
   layer.crs_wkt = raster.crs_wkt;
+  layer.write_model = true;
   write_footprints(out_path, layer, records);
   std::string by_stage;
   for (const auto& [stage, n] : failures) by_stage += (by_stage.empty() ? " (" : ", ") + stage + ": " + std::to_string(n);
@@ -185,6 +188,7 @@ int run_regularize(int argc, char** argv) {
     out["noise_floor_m"] = batch.noise_floor_m;
     out["noise_smoothing_m"] = batch.noise_smoothing_m;
     out["noise_samples"] = batch.noise_samples;
+    if (regularizer == "deformation") out["models"] = models;
     out["seconds_total"] = total;
     times(all, out);
     for (const SizeClass& c : classes) {

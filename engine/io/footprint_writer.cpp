@@ -146,6 +146,7 @@ FootprintFileWriter::FootprintFileWriter(const std::string& path, const Footprin
       field("stage", OFTString);
       field("reason", OFTString);
       field("regularizer", OFTString);
+      if (layer.write_model) field("model", OFTString);
     }
     if (!layer.kind_field.empty()) field(layer.kind_field.c_str(), OFTString);
     if (layer.write_heights) {
@@ -206,6 +207,10 @@ void FootprintFileWriter::add(const FootprintRecord& r) {
       else feature.SetField(field, text->c_str());
     }
     feature.SetField("regularizer", r.regularizer.c_str());
+    if (layer.write_model) {
+      if (r.model.empty()) feature.SetFieldNull(feature.GetFieldIndex("model"));
+      else feature.SetField("model", r.model.c_str());
+    }
   }
   if (!layer.kind_field.empty()) feature.SetField(layer.kind_field.c_str(), r.kind.c_str());
   if (layer.write_heights && r.has_heights) {

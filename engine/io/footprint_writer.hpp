@@ -25,6 +25,7 @@ struct FootprintRecord {
   PolygonWithHoles polygon;
   std::string status, failed_stage, reason;
   std::string regularizer;
+  std::string model;             // the outline the chain chose (BuildingResult::model), when write_model; empty: NULL
   std::string kind;              // synthetic truth: the shape; run outputs: the tile
   bool has_heights = true;       // false: the heights are written as null
   double roof_height = 0, ground_height = 0;  // written when write_heights
@@ -44,6 +45,7 @@ struct FootprintLayer {
   std::string name = "footprints";
   std::string crs_wkt;
   bool write_status = true;   // status, stage, reason, regularizer
+  bool write_model = false;   // model, after them (lodforge regularize)
   bool write_heights = false; // roof_height, ground_height
   std::string kind_field;     // name of the field holding `kind` ("kind", "tile"); empty: none
   bool write_lod1 = false;    // a GeoPackage also gets a layer "lod1": each block's faces as a MultiPolygon Z, and "parts": the LoD1.3 parts
