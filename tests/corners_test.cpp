@@ -6,6 +6,7 @@
 #include "corners/corners.hpp"
 #include "geometry/polygon.hpp"
 #include "labeling/mrf.hpp"
+#include "support/shapes.hpp"
 
 namespace lodforge {
 namespace {
@@ -234,6 +235,57 @@ TEST(Corners, AWobblingWallIsNotSplit) {
   CornerOptions o = split_options();
   std::string problem;
   EXPECT_EQ(extract_corners(ring, labels, axis_normals, 1.0, o, &problem).size(), 4u) << problem;
+}
+
+// A bow on a long straight wall, all of it one run (its ends 35 degrees off the wall, which no
+// direction of its own took): a wall of 60 m at 0.25 m a pixel, a bow of 16 m chord and 2.5 m
+// sagitta from 4 m to 20 m along it. A parabola over the whole run does not explain it (the wall is
+// straight), but no window departs to the other side of the wall's line: the bow is drawn as its
+// own curve, through its apex, and the wall's two parts stay on one straight line through the
+// box's corners. Without that (curve_other_side = 0) one line cuts the bow off. (The building's
+// noise 0.4 m, as a segmentation's: the bow is no step between parallel walls, split_noise.)
+TEST(Corners, ABowOnAStraightWallIsItsOwnCurve) {
+  const double px = 0.25, radius = (8.0 * 8.0 + 2.5 * 2.5) / 5.0;
+  const auto bow = [&](double x) { return std::abs(x - 12) < 8 ? -(std::sqrt(radius * radius - (x - 12) * (x - 12)) - (radius - 2.5)) : 0.0; };
+  Ring ring;
+  std::vector<int> labels;
+  int y = 0;  // pixels
+  for (int x = 0; x < 240; ++x) {
+    const int target = int(std::lround(bow((x + 0.5) * px) / px));
+    while (y != target) { ring.emplace_back(x * px, y * px); labels.push_back(0); y += target > y ? 1 : -1; }
+    ring.emplace_back(x * px, y * px); labels.push_back(0);
+  }
+  Ring box;
+  std::vector<int> box_labels;
+  close_box(240, 80, box, box_labels);
+  for (const Vec2& p : box) ring.push_back(p * px);
+  labels.insert(labels.end(), box_labels.begin(), box_labels.end());
+  const auto has_vertex_near = [](const Ring& r, const Vec2& p, double within) {
+    for (const Vec2& v : r) if ((v - p).norm() < within) return true;
+    return false;
+  };
+  std::string problem;
+  CornerContext context;
+  context.noise = 0.4;
+  const Ring with = extract_corners(ring, labels, axis_normals, px, CornerOptions{}, &problem, context);
+  ASSERT_FALSE(with.empty()) << problem;
+  EXPECT_TRUE(has_vertex_near(with, {12, -2.5}, 0.5));
+  EXPECT_TRUE(has_vertex_near(with, {0, 0}, 0.3));
+  EXPECT_TRUE(has_vertex_near(with, {60, 0}, 0.3));
+  EXPECT_LE(with.size(), 16u);  // the corners, the bow's ends and a few vertices along it
+  for (const Vec2& v : with) EXPECT_GE(v.y(), bow(v.x()) - 0.3) << v.transpose();  // none beyond the bow
+  // Without: one line through the whole run, off the wall by a fifth of the bow's depth.
+  CornerOptions off;
+  off.curve_other_side = 0;
+  const Ring without = extract_corners(ring, labels, axis_normals, px, off, &problem, context);
+  ASSERT_FALSE(without.empty()) << problem;
+  EXPECT_FALSE(has_vertex_near(without, {12, -2.5}, 1.0));
+  PolygonWithHoles truth{{{0, 0}}, {}};
+  for (int k = 0; k <= 32; ++k) truth.outer.push_back({4 + 0.5 * k, bow(4 + 0.5 * k)});
+  for (const Vec2 p : {Vec2(60, 0), Vec2(60, 20), Vec2(0, 20)}) truth.outer.push_back(p);
+  const double iou_with = test::iou({with, {}}, truth), iou_without = test::iou({without, {}}, truth);
+  EXPECT_GT(iou_with, 0.99);
+  EXPECT_GT(iou_with, iou_without + 0.02) << iou_without;
 }
 
 TEST(Corners, TooFewRunsIsAProblem) {

@@ -10,6 +10,7 @@
 
 #include "geometry/polygon.hpp"
 #include "labeling/mrf.hpp"
+#include "models/statistics.hpp"
 
 namespace lodforge {
 
@@ -128,18 +129,12 @@ std::vector<Vec2> smoothed_open(const std::vector<Vec2>& points, double sigma) {
   return out;
 }
 
-// True when the run's contour departs from its line by more than curve_px, and curve_noise_factor
-// times the building's boundary noise, on average over two consecutive windows of curve_window_px
-// and curve_window_m, both to the same side: a boundary wobble averages out over a window or
-// turns to the other side in the next, a curved wall does neither.
-bool is_curved(const Ring& ring, int first, int count, const Line& line, const CornerOptions& o, double pixel_size,
-               double noise) {
-  if (o.curve_px <= 0) return false;
-  const double window = std::max(o.curve_window_px * pixel_size, o.curve_window_m), total = run_length(ring, first, count);
-  const double threshold = std::max(o.curve_px * pixel_size, o.curve_noise_factor * noise);
-  // The run's ends (a window each) are left out: corners are rounded there, by the raster.
+// The mean departures of the run's contour from `line` over consecutive windows of `window`
+// length (the run's ends, a window each, left out: corners are rounded there, by the raster).
+std::vector<double> window_departures(const Ring& ring, int first, int count, const Line& line, double window) {
+  std::vector<double> means;
+  const double total = run_length(ring, first, count);
   double position = 0, window_length = 0, window_sum = 0;
-  int side = 0;  // the side the previous window departed to beyond the threshold (0: none)
   for (int k = 0; k < count; ++k) {
     const std::size_t i = (first + k) % ring.size();
     const Vec2 e = edge_vector(ring, i);
@@ -149,12 +144,66 @@ bool is_curved(const Ring& ring, int first, int count, const Line& line, const C
     window_sum += len * (line.normal.dot(ring[i] + 0.5 * e) - line.offset);
     window_length += len;
     if (window_length >= window) {
-      const double mean = window_sum / window_length;
-      const int now = std::abs(mean) > threshold ? (mean > 0 ? 1 : -1) : 0;
-      if (now != 0 && now == side) return bends_consistently(ring, first, count, line, window, o.curve_min_explained);
-      side = now;
+      means.push_back(window_sum / window_length);
       window_length = window_sum = 0;
     }
+  }
+  return means;
+}
+
+// A bay or a bow on a straight wall: the run's edges [first, first + count) (relative to the
+// run) that depart from the wall's line, and that line.
+struct Bay {
+  int first = 0, count = 0;
+  Line wall;
+};
+
+// True when the run's contour departs from its line by more than curve_px, and curve_noise_factor
+// times the building's boundary noise, on average over two consecutive windows of curve_window_px
+// and curve_window_m, both to the same side: a boundary wobble averages out over a window or
+// turns to the other side in the next, a curved wall does neither. And then when it bends one way
+// over the whole run (bends_consistently). Or else, when about the line of its straight part (the
+// median offset of its contour) no window departs to the other side by more than
+// curve_other_side of the threshold (a wobble that departs that far one way departs the other way
+// too, half a wave on), a bay or a bow on a straight wall, which a parabola over the whole run
+// does not explain: *bay is then the stretch of the run that departs to its side by more than
+// the noise, around the window that departs farthest, and the rest of the run is that wall.
+bool is_curved(const Ring& ring, int first, int count, const Line& line, const CornerOptions& o, double pixel_size,
+               double noise, Bay* bay) {
+  if (o.curve_px <= 0) return false;
+  const double window = std::max(o.curve_window_px * pixel_size, o.curve_window_m);
+  const double threshold = std::max(o.curve_px * pixel_size, o.curve_noise_factor * noise);
+  int side = 0;  // the side the previous window departed to beyond the threshold (0: none)
+  for (const double mean : window_departures(ring, first, count, line, window)) {
+    const int now = std::abs(mean) > threshold ? (mean > 0 ? 1 : -1) : 0;
+    if (now != 0 && now == side) {
+      if (bends_consistently(ring, first, count, line, window, o.curve_min_explained)) return true;
+      if (o.curve_other_side <= 0) return false;
+      std::vector<std::pair<double, double>> offsets;  // (offset, length) of each edge's midpoint
+      std::vector<double> away(count);                  // each edge's departure to the bay's side
+      for (int k = 0; k < count; ++k) {
+        const std::size_t i = (first + k) % ring.size();
+        const Vec2 e = edge_vector(ring, i);
+        offsets.emplace_back(line.normal.dot(ring[i] + 0.5 * e), e.norm());
+        away[k] = now * offsets.back().first;
+      }
+      const Line wall{line.normal, weighted_quantile(std::move(offsets), 0.5)};
+      for (double& a : away) a -= now * wall.offset;
+      const std::vector<double> means = window_departures(ring, first, count, wall, window);
+      if (means.empty() || *std::max_element(means.begin(), means.end(), [&](double a, double b) { return now * a < now * b; }) * now <= threshold)
+        return false;
+      for (const double m : means)
+        if (now * m < -o.curve_other_side * threshold) return false;
+      // The bay: the edges departing by more than the noise (at least a pixel) around the farthest one.
+      const int peak = int(std::max_element(away.begin(), away.end()) - away.begin());
+      const double edge_of_bay = std::max(pixel_size, noise);
+      int lo = peak, hi = peak + 1;
+      while (lo > 0 && away[lo - 1] > edge_of_bay) --lo;
+      while (hi < count && away[hi] > edge_of_bay) ++hi;
+      *bay = {lo, hi - lo, wall};
+      return true;
+    }
+    side = now;
   }
   return false;
 }
@@ -461,10 +510,41 @@ Ring extract_corners(const Ring& ring, const std::vector<int>& labels, const std
     merge_parallel(ring, runs, lines, std::max(o.merge_offset_m, o.merge_noise * noise), pixel_size);
     drop_corner_cuts(ring, runs, lines, context.lattice, o.max_cut_m);
   }
-  const int n = int(runs.size());
-  std::vector<bool> curved(n);
+  std::vector<bool> curved;
   bool any_curved = false;
-  for (int r = 0; r < n; ++r) any_curved |= curved[r] = is_curved(ring, runs[r].first, runs[r].second, lines[r], o, pixel_size, noise);
+  {
+    // Each curved run, or its bay alone between the two parts of its wall (each a window long at
+    // least; a shorter one joins the bay).
+    const double window = std::max(o.curve_window_px * pixel_size, o.curve_window_m);
+    std::vector<std::pair<int, int>> split_runs;
+    std::vector<Line> split_lines;
+    const auto add = [&](int first, int count, const Line& line, bool curve) {
+      if (count <= 0) return;
+      split_runs.push_back({first % int(ring.size()), count});
+      split_lines.push_back(line);
+      curved.push_back(curve);
+    };
+    for (std::size_t r = 0; r < runs.size(); ++r) {
+      const auto [first, count] = runs[r];
+      Bay bay;
+      bay.count = -1;
+      const bool curve = is_curved(ring, first, count, lines[r], o, pixel_size, noise, &bay);
+      any_curved |= curve;
+      if (!curve || bay.count < 0) {
+        add(first, count, lines[r], curve);
+        continue;
+      }
+      int before = bay.first, after = count - bay.first - bay.count;
+      if (run_length(ring, first, before) < window) before = 0;
+      if (run_length(ring, first + bay.first + bay.count, after) < window) after = 0;
+      add(first, before, bay.wall, false);
+      add(first + before, count - before - after, lines[r], true);
+      add(first + count - after, after, bay.wall, false);
+    }
+    runs = std::move(split_runs);
+    lines = std::move(split_lines);
+  }
+  const int n = int(runs.size());
   const double parallel_sin = std::sin(o.parallel_angle_deg * M_PI / 180.0);
   // Two runs make a polygon when one is a curve, or when they are a thin building's two long
   // walls, whose ends (each run's end, on a short wall no direction was found for) become steps

@@ -27,6 +27,7 @@ struct CornerOptions {
   double curve_window_px = 16.0;     // ... measured as the mean offset over windows of this length
   double curve_window_m = 4.0;       // ... and at least this (m)
   double curve_min_explained = 0.3;  // ... and a parabola explains this share of its spread about a line
+  double curve_other_side = 1.0;     // ... or no window departs to the other side by more than this share of the threshold
   double curve_tolerance_noise = 0.5;  // a curve's contour is simplified to a pixel and this many times the noise
   double zigzag_max_deg = 40;   // runs zigzagging about a lattice line within this angle (a window of them may end half a wave up a wobble: 1 m over 4 m) ...
   double zigzag_rms_noise = 2;  // ... and this many times the noise (RMS) ...
@@ -60,6 +61,7 @@ struct CornerOptions {
     v("curve_noise_factor", curve_noise_factor, "... and by more than this many times the building's boundary noise (a wobble's window means stay below, an arc's do not)", Check::at_least(0));
     v("curve_window_px", curve_window_px, "length of the windows over which a run's departure from its line is averaged (pixels)", Check::above(0));
     v("curve_window_m", curve_window_m, "... and their least length (m)", Check::at_least(0));
+    v("curve_other_side", curve_other_side, "... or, where it does not (a bay or a bow on a long straight wall, which a parabola over the whole run does not explain), no window of the run departs to the other side of its straight part's line (the median offset of its contour) by more than this share of that threshold: a wobble that departs that far one way does so the other way too, half a wave on. The bay, the stretch departing by more than the noise, is then drawn as a curve and the rest of the run as the wall (0 = off)", Check::at_least(0));
     v("curve_min_explained", curve_min_explained, "... and a parabola along the run explains at least this share of its contour's spread about a straight line: an arc bends one way all along, a wobble of several half-waves along a long wall does not (0 = off)", Check::between(0, 1));
     v("curve_tolerance_noise", curve_tolerance_noise, "a curved wall's contour is simplified by Douglas-Peucker to a pixel or this many times the boundary noise, the larger", Check::at_least(0));
     v("zigzag_max_deg", zigzag_max_deg, "consecutive runs, one off the building's lattice at least, whose contour zigzags about one line of the lattice become one wall on it (a wobbling wall, its flanks labeled with their slopes): the line from their start to their end within this angle of the lattice (degrees, 0 = off) ...", Check::between(0, 45));
