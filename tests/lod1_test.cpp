@@ -414,22 +414,6 @@ TEST_F(ModelFiles, DsmOnAnotherGridIsResampledOrRefusedAsConfigured) {
 namespace lodforge {
 namespace {
 
-std::map<long, std::string> gpkg_footprints(const fs::path& file) {
-  GDALAllRegister();
-  std::map<long, std::string> out;
-  GDALDataset* d = static_cast<GDALDataset*>(GDALOpenEx(file.c_str(), GDAL_OF_VECTOR, nullptr, nullptr, nullptr));
-  EXPECT_NE(d, nullptr) << file;
-  if (!d) return out;
-  for (auto& f : *d->GetLayer(0)) {
-    char* wkt = nullptr;
-    f->GetGeometryRef()->exportToWkt(&wkt);
-    out[long(f->GetFieldAsInteger64("id"))] = wkt;
-    CPLFree(wkt);
-  }
-  GDALClose(d);
-  return out;
-}
-
 // Absolute OBJ vertices (mm) as a sorted list.
 std::vector<std::array<long long, 3>> obj_vertices(const fs::path& file) {
   std::ifstream in(file);
@@ -649,7 +633,7 @@ TEST_F(ModelFiles, MergedTilesEqualOneTileAndValidate) {
   const Output merge = shell(std::string(LODFORGE_BINARY) + " merge " + (dir / "tiled_out").string());
   ASSERT_EQ(merge.code, 0) << merge.output;
   const fs::path merged = dir / "tiled_out" / "merged";
-  EXPECT_EQ(gpkg_footprints(merged / "lodforge.gpkg"), gpkg_footprints(dir / "whole_out" / "tiles" / "r0000_c0000.gpkg"));
+  EXPECT_EQ(test::gpkg_footprints(merged / "lodforge.gpkg"), test::gpkg_footprints(dir / "whole_out" / "tiles" / "r0000_c0000.gpkg"));
   // The same points to the millimetre (each file rounds relative to its own origin).
   const auto merged_points = obj_vertices(merged / "lodforge.obj"), whole_points = obj_vertices(dir / "whole_out" / "tiles" / "r0000_c0000.obj");
   ASSERT_EQ(merged_points.size(), whole_points.size());

@@ -84,16 +84,7 @@ std::multiset<std::string> run_outlines(const fs::path& out) {
 }
 std::multiset<std::string> gpkg_outlines(const fs::path& path) {
   std::multiset<std::string> outlines;
-  GDALDataset* d = static_cast<GDALDataset*>(GDALOpenEx(path.c_str(), GDAL_OF_VECTOR, nullptr, nullptr, nullptr));
-  EXPECT_NE(d, nullptr) << path;
-  if (!d) return outlines;
-  for (auto& f : *d->GetLayer(0)) {
-    char* wkt = nullptr;
-    f->GetGeometryRef()->exportToWkt(&wkt);
-    outlines.insert(wkt);
-    CPLFree(wkt);
-  }
-  GDALClose(d);
+  for (const auto& [id, wkt] : test::gpkg_footprints(path)) outlines.insert(wkt);
   return outlines;
 }
 

@@ -3,7 +3,9 @@
 #include <array>
 #include <cstdio>
 #include <fstream>
+#include <gdal_priv.h>
 #include <gtest/gtest.h>
+#include <ogrsf_frmts.h>
 #include <sstream>
 #include <sys/wait.h>
 #include <unistd.h>
@@ -28,6 +30,22 @@ std::string slurp(const std::filesystem::path& path) {
   std::ostringstream s;
   s << in.rdbuf();
   return s.str();
+}
+
+std::map<long, std::string> gpkg_footprints(const std::filesystem::path& file) {
+  GDALAllRegister();
+  std::map<long, std::string> out;
+  GDALDataset* d = static_cast<GDALDataset*>(GDALOpenEx(file.c_str(), GDAL_OF_VECTOR, nullptr, nullptr, nullptr));
+  EXPECT_NE(d, nullptr) << file;
+  if (!d) return out;
+  for (auto& f : *d->GetLayer(0)) {
+    char* wkt = nullptr;
+    f->GetGeometryRef()->exportToWkt(&wkt);
+    out[long(f->GetFieldAsInteger64("id"))] = wkt;
+    CPLFree(wkt);
+  }
+  GDALClose(d);
+  return out;
 }
 
 std::filesystem::path fresh_test_directory(const std::string& prefix) {
