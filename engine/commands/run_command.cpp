@@ -221,6 +221,12 @@ int run_job(int argc, char** argv) {
 
   std::unique_ptr<tbb::global_control> limit;
   if (job.threads > 0) limit = std::make_unique<tbb::global_control>(tbb::global_control::max_allowed_parallelism, job.threads);
+  // The block budget: three quarters for the decoded blocks the threads share, a quarter for
+  // GDAL's own cache (strips read in parts, blocks over 4 MB read in squares; the blocks of a tiled
+  // raster are read whole, past GDAL's cache, and never take room there). Set before the survey,
+  // whose windows GDAL reads through its own cache.
+  const std::size_t cache_bytes = std::size_t(job.tiling.gdal_cache_mb) * 1024 * 1024, shared_bytes = cache_bytes - cache_bytes / 4;
+  GDALSetCacheMax64(std::int64_t(cache_bytes - shared_bytes));
   // The boundary noise every building allows for, pooled over a survey of the raster (not per
   // tile: the same for every tiling and shard).
   NoiseSurvey survey;
@@ -299,11 +305,6 @@ int run_job(int argc, char** argv) {
     }
   }
 
-  // The block budget: three quarters for the decoded blocks the threads share, a quarter for
-  // GDAL's own cache (strips read in parts, blocks over 4 MB read in squares; the blocks of a tiled
-  // raster are read whole, past GDAL's cache, and never take room there).
-  const std::size_t cache_bytes = std::size_t(job.tiling.gdal_cache_mb) * 1024 * 1024, shared_bytes = cache_bytes - cache_bytes / 4;
-  GDALSetCacheMax64(std::int64_t(cache_bytes - shared_bytes));
   ReaderPool readers(shared_bytes);  // declared before the plan that points to it; closed after the pipeline
   // Tiles are processed in bands of columns, row by row within a band, so that a tile finds the
   // blocks it shares with its upper neighbour still in the block cache (in raster order they

@@ -172,20 +172,73 @@ NoiseSurvey survey_noise(const MaskWindowReader& mask, cv::Size raster, const Ge
   NoiseSurvey survey;
   if (options.noise.pooled_floor <= 0) return survey;
   const int margin = std::max(1, window_px / 4);
-  std::vector<BuildingContour> buildings;
-  for (const cv::Rect& cell : survey_cells(raster, window_px, windows)) {
-    const cv::Rect window = cv::Rect(cell.x - margin, cell.y - margin, cell.width + 2 * margin, cell.height + 2 * margin) &
-                            cv::Rect(0, 0, raster.width, raster.height);
-    const ContourResult traced =
-        extract_contours(mask.read(window), transform.window(window.x, window.y), contour, [&](const cv::Rect& box, const cv::Point& first) {
-          return cell.contains(first + window.tl()) && !touches_inner_border(box, window, raster);
-        });
-    buildings.insert(buildings.end(), std::make_move_iterator(traced.buildings.begin()), std::make_move_iterator(traced.buildings.end()));
-    ++survey.windows;
+  const std::vector<cv::Rect> cells = survey_cells(raster, window_px, windows);
+  survey.windows = int(cells.size());
+  const double pixel_size = transform.pixel_size();
+  // The rounds of pool_starts, with the same samples, over the windows read again for each pass:
+  // a survey holds one window's contours at a time (and the rings of the buildings a round is
+  // judged on), not every surveyed building's. visit(index, rings) for each building, in order.
+  const auto each_window = [&](const std::function<void(std::size_t first, std::vector<BuildingContour>& buildings)>& visit) {
+    std::size_t first = 0;
+    for (const cv::Rect& cell : cells) {
+      const cv::Rect window = cv::Rect(cell.x - margin, cell.y - margin, cell.width + 2 * margin, cell.height + 2 * margin) &
+                              cv::Rect(0, 0, raster.width, raster.height);
+      ContourResult traced =
+          extract_contours(mask.read(window), transform.window(window.x, window.y), contour, [&](const cv::Rect& box, const cv::Point& at) {
+            return cell.contains(at + window.tl()) && !touches_inner_border(box, window, raster);
+          });
+      visit(first, traced.buildings);
+      first += traced.buildings.size();
+    }
+    return first;
+  };
+  // Every building's sample, its normals smoothed for smoothing_noise_m.
+  const auto measure_all = [&](double smoothing_noise_m) {
+    std::vector<NoiseSample> samples;
+    each_window([&](std::size_t, std::vector<BuildingContour>& buildings) {
+      std::vector<BuildingStart> starts(buildings.size());
+      std::vector<std::size_t> all(buildings.size());
+      std::iota(all.begin(), all.end(), std::size_t(0));
+      start_each(all, smoothing_noise_m,
+                 [&](std::size_t i) { return start_building(buildings[i].rings, pixel_size, options, true, smoothing_noise_m); }, starts,
+                 nullptr);
+      for (const BuildingStart& start : starts) samples.push_back(start.sample);
+    });
+    return samples;
+  };
+  std::vector<NoiseSample> samples = measure_all(0.0);
+  const auto pooled_of = [&](const std::vector<NoiseSample>& of, const std::vector<std::size_t>& indices) {
+    std::vector<NoiseSample> some;
+    for (std::size_t i : indices) some.push_back(of[i]);
+    return pooled_noise_floor(some, options);
+  };
+  survey.noise.floor_m = pooled_noise_floor(samples, options);
+  const std::vector<std::size_t> judged = spread_indices(samples.size(), std::size_t(std::max(1, options.smoothing.noise_gain_buildings)));
+  std::vector<std::vector<Ring>> judged_rings;  // read when a round is first judged
+  const auto neighbourhood = [&](double noise_m) { return smoothing_neighbourhood_m(pixel_size, options.smoothing, noise_m); };
+  for (int round = 1; round < options.smoothing.noise_rounds; ++round) {
+    const double wider_m = survey.noise.floor_m;
+    if (neighbourhood(wider_m) <= 1.05 * neighbourhood(survey.noise.smoothing_m)) break;
+    if (judged_rings.empty() && !judged.empty()) {
+      judged_rings.resize(judged.size());
+      each_window([&](std::size_t first, std::vector<BuildingContour>& buildings) {
+        for (std::size_t k = std::lower_bound(judged.begin(), judged.end(), first) - judged.begin();
+             k < judged.size() && judged[k] < first + buildings.size(); ++k)
+          judged_rings[k] = std::move(buildings[judged[k] - first].rings);
+      });
+    }
+    std::vector<BuildingStart> trial(judged.size());
+    std::vector<std::size_t> order(judged.size());
+    std::iota(order.begin(), order.end(), std::size_t(0));
+    start_each(order, wider_m, [&](std::size_t k) { return start_building(judged_rings[k], pixel_size, options, true, wider_m); }, trial,
+               nullptr);
+    std::vector<NoiseSample> trial_samples = samples;
+    for (std::size_t k = 0; k < judged.size(); ++k) trial_samples[judged[k]] = trial[k].sample;
+    if (pooled_of(trial_samples, judged) <= (1.0 + options.smoothing.noise_gain) * pooled_of(samples, judged)) break;
+    samples = measure_all(wider_m);
+    survey.noise = {pooled_noise_floor(samples, options), wider_m};
   }
-  const PooledStarts pooled = pool_starts(buildings, transform.pixel_size(), options, nullptr);
-  survey.buildings = pooled.samples;
-  survey.noise = pooled.noise;
+  survey.buildings = measured(samples);
   return survey;
 }
 
