@@ -47,22 +47,42 @@ std::size_t measured(const std::vector<NoiseSample>& samples) {
   return std::size_t(std::count_if(samples.begin(), samples.end(), [](const NoiseSample& s) { return s.weight_m > 0; }));
 }
 
-// The noise pooled over the starts at `indices`.
-double pooled_at(const std::vector<BuildingStart>& starts, const std::vector<std::size_t>& indices, const CoreOptions& options) {
-  std::vector<NoiseSample> samples;
-  for (std::size_t i : indices) samples.push_back(starts[i].sample);
-  return pooled_noise_floor(samples, options);
+// The noise pooled over the samples at `indices`.
+double pooled_at(const std::vector<NoiseSample>& samples, const std::vector<std::size_t>& indices, const CoreOptions& options) {
+  std::vector<NoiseSample> some;
+  for (std::size_t i : indices) some.push_back(samples[i]);
+  return pooled_noise_floor(some, options);
 }
 
-// The buildings started, and their noise pooled, in rounds: the first with the normals smoothed
-// for no noise, each next one for the noise the round before pooled (smoothing.noise_neighbourhood),
-// while the neighbourhood that asks for is more than 5 % wider than the last one's, in
-// smoothing.noise_rounds at most. A wider round is kept only where it pools more noise, by more
-// than smoothing.noise_gain: a contour smoothed too little measures too little noise where a fast
-// wobble's flanks cut its runs short, but where the narrower smoothing measured the noise whole
-// the wider one only averages short walls away. That gain is judged on
-// smoothing.noise_gain_buildings of the buildings, spread over their order (all of fewer), each
-// pooled both ways; only a round kept smooths the others.
+// The mask's noise pooled in rounds, from `samples` (every building's, its normals smoothed for no
+// noise): each next round smooths for the noise the round before pooled
+// (smoothing.noise_neighbourhood), while the neighbourhood that asks for is more than 5 % wider
+// than the last one's, in smoothing.noise_rounds at most. A wider round is kept only where it
+// pools more noise, by more than smoothing.noise_gain: a contour smoothed too little measures too
+// little noise where a fast wobble's flanks cut its runs short, but where the narrower smoothing
+// measured the noise whole the wider one only averages short walls away. That gain is judged on
+// the buildings at `judged` (spread_indices, smoothing.noise_gain_buildings), each pooled both
+// ways; only a round kept smooths the others. judge(noise_m): the judged buildings' samples, in
+// their order, smoothed for noise_m; keep(noise_m), called right after judge with the same noise
+// when its round is kept: every building's. `samples` ends as the kept round's.
+template <class Judge, class Keep>
+MaskNoise pool_in_rounds(std::vector<NoiseSample>& samples, const std::vector<std::size_t>& judged, double pixel_size,
+                         const CoreOptions& options, const Judge& judge, const Keep& keep) {
+  MaskNoise noise{pooled_noise_floor(samples, options), 0.0};
+  const auto neighbourhood = [&](double noise_m) { return smoothing_neighbourhood_m(pixel_size, options.smoothing, noise_m); };
+  std::vector<std::size_t> order(judged.size());
+  std::iota(order.begin(), order.end(), std::size_t(0));
+  for (int round = 1; round < options.smoothing.noise_rounds; ++round) {
+    const double wider_m = noise.floor_m;
+    if (neighbourhood(wider_m) <= 1.05 * neighbourhood(noise.smoothing_m)) break;
+    if (pooled_at(judge(wider_m), order, options) <= (1.0 + options.smoothing.noise_gain) * pooled_at(samples, judged, options)) break;
+    samples = keep(wider_m);
+    noise = {pooled_noise_floor(samples, options), wider_m};
+  }
+  return noise;
+}
+
+// The buildings started, and their noise pooled in rounds (pool_in_rounds).
 struct PooledStarts {
   std::vector<BuildingStart> starts;  // of the round kept
   std::size_t samples = 0;            // buildings measured in it
@@ -76,30 +96,34 @@ PooledStarts pool_starts(const std::vector<BuildingContour>& buildings, double p
   std::iota(all.begin(), all.end(), std::size_t(0));
   start_each(all, 0.0, [&](std::size_t i) { return start_building(buildings[i].rings, pixel_size, options, true, 0.0); }, pooled.starts,
              seconds);
-  pooled.noise.floor_m = pooled_at(pooled.starts, all, options);
-  const std::vector<std::size_t> sample = spread_indices(buildings.size(), std::size_t(std::max(1, options.smoothing.noise_gain_buildings)));
+  std::vector<NoiseSample> samples = samples_of(pooled.starts);
+  const std::vector<std::size_t> judged = spread_indices(buildings.size(), std::size_t(std::max(1, options.smoothing.noise_gain_buildings)));
   std::vector<std::size_t> rest;
-  std::set_difference(all.begin(), all.end(), sample.begin(), sample.end(), std::back_inserter(rest));
-  const auto neighbourhood = [&](double noise_m) { return smoothing_neighbourhood_m(pixel_size, options.smoothing, noise_m); };
-  for (int round = 1; round < options.smoothing.noise_rounds; ++round) {
-    const double wider_m = pooled.noise.floor_m;
-    if (neighbourhood(wider_m) <= 1.05 * neighbourhood(pooled.noise.smoothing_m)) break;
-    // The sample's starts smoothed wider beside the kept ones (their time counts only if kept).
-    std::vector<BuildingStart> trial(buildings.size());
-    std::vector<double> trial_seconds;
-    start_each(sample, wider_m, [&](std::size_t i) { return restart_building(buildings[i].rings, pixel_size, options, pooled.starts[i], wider_m); },
+  std::set_difference(all.begin(), all.end(), judged.begin(), judged.end(), std::back_inserter(rest));
+  // The judged buildings' starts smoothed wider beside the kept ones (their time counts only if kept).
+  std::vector<BuildingStart> trial;
+  std::vector<double> trial_seconds;
+  const auto judge = [&](double wider_m) {
+    trial.assign(buildings.size(), BuildingStart{});
+    trial_seconds.clear();
+    start_each(judged, wider_m, [&](std::size_t i) { return restart_building(buildings[i].rings, pixel_size, options, pooled.starts[i], wider_m); },
                trial, seconds ? &trial_seconds : nullptr);
-    if (pooled_at(trial, sample, options) <= (1.0 + options.smoothing.noise_gain) * pooled_at(pooled.starts, sample, options)) break;
-    for (std::size_t i : sample) {
+    std::vector<NoiseSample> judged_samples;
+    for (std::size_t i : judged) judged_samples.push_back(trial[i].sample);
+    return judged_samples;
+  };
+  const auto keep = [&](double wider_m) {
+    for (std::size_t i : judged) {
       pooled.starts[i] = std::move(trial[i]);
       if (seconds) (*seconds)[i] += trial_seconds[i];
     }
     start_each(rest, wider_m,
                [&](std::size_t i) { return restart_building(buildings[i].rings, pixel_size, options, std::move(pooled.starts[i]), wider_m); },
                pooled.starts, seconds);
-    pooled.noise = {pooled_at(pooled.starts, all, options), wider_m};
-  }
-  pooled.samples = measured(samples_of(pooled.starts));
+    return samples_of(pooled.starts);
+  };
+  pooled.noise = pool_in_rounds(samples, judged, pixel_size, options, judge, keep);
+  pooled.samples = measured(samples);
   return pooled;
 }
 
@@ -207,18 +231,9 @@ NoiseSurvey survey_noise(const MaskWindowReader& mask, cv::Size raster, const Ge
     return samples;
   };
   std::vector<NoiseSample> samples = measure_all(0.0);
-  const auto pooled_of = [&](const std::vector<NoiseSample>& of, const std::vector<std::size_t>& indices) {
-    std::vector<NoiseSample> some;
-    for (std::size_t i : indices) some.push_back(of[i]);
-    return pooled_noise_floor(some, options);
-  };
-  survey.noise.floor_m = pooled_noise_floor(samples, options);
   const std::vector<std::size_t> judged = spread_indices(samples.size(), std::size_t(std::max(1, options.smoothing.noise_gain_buildings)));
   std::vector<std::vector<Ring>> judged_rings;  // read when a round is first judged
-  const auto neighbourhood = [&](double noise_m) { return smoothing_neighbourhood_m(pixel_size, options.smoothing, noise_m); };
-  for (int round = 1; round < options.smoothing.noise_rounds; ++round) {
-    const double wider_m = survey.noise.floor_m;
-    if (neighbourhood(wider_m) <= 1.05 * neighbourhood(survey.noise.smoothing_m)) break;
+  const auto judge = [&](double wider_m) {
     if (judged_rings.empty() && !judged.empty()) {
       judged_rings.resize(judged.size());
       each_window([&](std::size_t first, std::vector<BuildingContour>& buildings) {
@@ -232,12 +247,9 @@ NoiseSurvey survey_noise(const MaskWindowReader& mask, cv::Size raster, const Ge
     std::iota(order.begin(), order.end(), std::size_t(0));
     start_each(order, wider_m, [&](std::size_t k) { return start_building(judged_rings[k], pixel_size, options, true, wider_m); }, trial,
                nullptr);
-    std::vector<NoiseSample> trial_samples = samples;
-    for (std::size_t k = 0; k < judged.size(); ++k) trial_samples[judged[k]] = trial[k].sample;
-    if (pooled_of(trial_samples, judged) <= (1.0 + options.smoothing.noise_gain) * pooled_of(samples, judged)) break;
-    samples = measure_all(wider_m);
-    survey.noise = {pooled_noise_floor(samples, options), wider_m};
-  }
+    return samples_of(trial);
+  };
+  survey.noise = pool_in_rounds(samples, judged, pixel_size, options, judge, measure_all);
   survey.buildings = measured(samples);
   return survey;
 }

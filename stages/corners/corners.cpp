@@ -154,7 +154,7 @@ std::vector<double> window_departures(const Ring& ring, int first, int count, co
 // A bay or a bow on a straight wall: the run's edges [first, first + count) (relative to the
 // run) that depart from the wall's line, and that line.
 struct Bay {
-  int first = 0, count = 0;
+  int first = 0, count = -1;  // (count -1: no bay, the whole run curves)
   Line wall;
 };
 
@@ -189,11 +189,12 @@ bool is_curved(const Ring& ring, int first, int count, const Line& line, const C
       }
       const Line wall{line.normal, weighted_quantile(std::move(offsets), 0.5)};
       for (double& a : away) a -= now * wall.offset;
-      const std::vector<double> means = window_departures(ring, first, count, wall, window);
-      if (means.empty() || *std::max_element(means.begin(), means.end(), [&](double a, double b) { return now * a < now * b; }) * now <= threshold)
-        return false;
-      for (const double m : means)
-        if (now * m < -o.curve_other_side * threshold) return false;
+      double beyond = 0, other = 0;  // the windows' farthest departures to the bay's side and the other
+      for (const double m : window_departures(ring, first, count, wall, window)) {
+        beyond = std::max(beyond, now * m);
+        other = std::max(other, -now * m);
+      }
+      if (beyond <= threshold || other > o.curve_other_side * threshold) return false;
       // The bay: the edges departing by more than the noise (at least a pixel) around the farthest one.
       const int peak = int(std::max_element(away.begin(), away.end()) - away.begin());
       const double edge_of_bay = std::max(pixel_size, noise);
@@ -527,7 +528,6 @@ Ring extract_corners(const Ring& ring, const std::vector<int>& labels, const std
     for (std::size_t r = 0; r < runs.size(); ++r) {
       const auto [first, count] = runs[r];
       Bay bay;
-      bay.count = -1;
       const bool curve = is_curved(ring, first, count, lines[r], o, pixel_size, noise, &bay);
       any_curved |= curve;
       if (!curve || bay.count < 0) {
