@@ -217,10 +217,11 @@ bool is_curved(const Ring& ring, int first, int count, const Line& line, const C
 // least 4 * split long, up to 8 pieces), and the fewest pieces that explain the contour are
 // kept: what is left of the spread about the run's own line at most split_max_residual of it, or
 // no more than the noise leaves (split_max_rms_noise), and at most split_max_rms_px, with
-// neighbouring pieces at least `split` apart. A wobble or an arc is not explained that well by a
-// few offsets that far apart.
+// neighbouring pieces at least `split` apart (on a clean wall, split_noise times the noise the
+// pieces leave, or the mask's, below). A wobble or an arc is not explained that well by a few
+// offsets that far apart.
 void split_parallel(const Ring& ring, int first, int count, const Vec2& normal, const CornerOptions& o,
-                    double pixel_size, double noise, std::vector<std::pair<int, int>>& out) {
+                    double pixel_size, double noise, double mask_noise, std::vector<std::pair<int, int>>& out) {
   constexpr int max_pieces = 8;
   const double split = std::max({o.split_px * pixel_size, o.split_m, o.split_noise * noise});
   if (o.split_px <= 0 || count < 4) { out.push_back({first, count}); return; }
@@ -280,12 +281,20 @@ void split_parallel(const Ring& ring, int first, int count, const Vec2& normal, 
     const bool explained = total <= o.split_max_residual * whole || total <= noise_rms * noise_rms * w_total;
     if (!explained || total > max_rms * max_rms * w_total) continue;
     // Neighbouring pieces' lines (the shared slope, each its own offset) at least `split` apart.
+    // Where the pieces leave no more than split_max_rms_px (a clean wall, its pixels'
+    // quantization), the noise in that is what they leave, where less, but at least the mask's
+    // (mask_noise, when known): a building's noise measured about one line along each wall is
+    // its steps' own on a clean row of houses, and then lies above its mask's.
+    const double left_rms = std::sqrt(std::max(0.0, total) / w_total);
+    const double step_noise =
+        mask_noise > 0 && left_rms <= o.split_max_rms_px * pixel_size ? std::min(noise, std::max(mask_noise, left_rms)) : noise;
+    const double apart_by = std::max({o.split_px * pixel_size, o.split_m, o.split_noise * step_noise});
     const double slope = stt > 1e-12 ? sty / stt : 0.0;
     auto offset = [&](int a, int b) { const Sums q = piece(a, b); return (q.y - slope * q.t) / q.w; };
     bool apart = true;
     for (std::size_t p = 1; p + 1 < cuts.size(); ++p)
-      apart &= std::abs(offset(cuts[p - 1], cuts[p]) - offset(cuts[p], cuts[p + 1])) >= split;
-    if (!apart) break;
+      apart &= std::abs(offset(cuts[p - 1], cuts[p]) - offset(cuts[p], cuts[p + 1])) >= apart_by;
+    if (!apart) continue;
     for (std::size_t p = 0; p + 1 < cuts.size(); ++p)
       out.push_back({int((first + cuts[p]) % ring.size()), cuts[p + 1] - cuts[p]});
     return;
@@ -501,7 +510,7 @@ Ring extract_corners(const Ring& ring, const std::vector<int>& labels, const std
   absorb_short_runs(ring, own, o.min_run_px * pixel_size);
   std::vector<std::pair<int, int>> runs;
   for (auto [first, count] : label_runs(own))
-    split_parallel(ring, first, count, directions[own[first]], o, pixel_size, noise, runs);
+    split_parallel(ring, first, count, directions[own[first]], o, pixel_size, noise, context.mask_noise, runs);
   std::vector<Line> lines;
   for (auto [first, count] : runs) lines.push_back(fit_line(ring, first, count, directions[own[first]]));
   if (context.lattice.squaredNorm() > 0) {

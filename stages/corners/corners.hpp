@@ -77,7 +77,7 @@ struct CornerOptions {
     v("max_cut_m", max_cut_m, "an oblique wall shorter than this (m) between two square walls of the lattice is a corner the segmentation rounded: the two walls meet at their intersection (0 = off)", Check::at_least(0));
     v("split_px", split_px, "a straight run whose contour is explained by parallel lines this far apart or more (pixels, and split_m; each part at least 4 times as long) becomes those lines joined by steps (0 = off)", Check::at_least(0));
     v("split_m", split_m, "the least offset between parallel parts of a run that splits it, in metres (the largest of this, split_px and split_noise applies; 0 = none: a step of a few decimetres is real where the pixels and the noise resolve it, and split_noise keeps a wobble from splitting a wall)", Check::at_least(0));
-    v("split_noise", split_noise, "... and at least this many times the building's boundary noise (a step smaller than that is the noise's)", Check::at_least(0));
+    v("split_noise", split_noise, "... and at least this many times the building's boundary noise (a step smaller than that is the noise's); where the parts leave no more than split_max_rms_px, the noise they leave where less, but at least the noise pooled over the mask: a clean row of houses stepping by half a metre measures its steps as its noise about one line along each wall", Check::at_least(0));
     v("split_max_residual", split_max_residual, "parts split a run only when they leave at most this share of its contour's spread about one line", Check::between(0, 1));
     v("split_max_rms_px", split_max_rms_px, "... and at most this RMS distance of the contour to the parts' lines (pixels)", Check::above(0));
     v("split_max_rms_noise", split_max_rms_noise, "... or at most this many times the building's boundary noise, which also stands for split_max_residual (a wobbling wall lies about its line by the noise)", Check::at_least(0));
@@ -99,6 +99,7 @@ void absorb_short_runs(const Ring& ring, std::vector<int>& labels, double min_le
 // What the corner extraction knows of the whole building.
 struct CornerContext {
   double noise = 0;                // its boundary noise (see boundary_noise)
+  double mask_noise = 0;           // the noise pooled over its mask's buildings (0: unknown)
   Vec2 lattice = Vec2::Zero();     // its main wall direction (unit normal); zero: no lattice snap
 };
 

@@ -571,6 +571,7 @@ void run_chain(const std::vector<Ring>& rings, double pixel_size, const CoreOpti
       angle_between_lattices_deg(*fitted_lattice, context.lattice) * M_PI / 180.0 > o.lattice.fit_keep_uncertainty * fit_uncertainty)
     context.lattice = *fitted_lattice;
   context.noise = noise;
+  context.mask_noise = noise_floor_m;
   const double allowed = o.models.outline_tolerance * model_noise(result, pixel_size, o.models);
   PolygonWithHoles regular, plain;
   const double min_run_px = regular_min_run_px(o.corners, noise, pixel_size);
@@ -708,6 +709,7 @@ void run_chain(const std::vector<Ring>& rings, double pixel_size, const CoreOpti
       scale *= o.models.coarse_scale;
       CornerContext coarse = context;
       coarse.noise = scale * noise;
+      coarse.mask_noise = scale * context.mask_noise;
       PolygonWithHoles candidate;
       if (!lattice_outline_of(fit_rings, axis_labels, input.directions, o.corners, origin, pixel_size, coarse, candidate)
                .second.empty() ||
