@@ -718,7 +718,7 @@ TEST(PooledNoise, ACurvedHallAmongHousesKeepsItsArc) {
     const BuildingResult held = regularize_building(rings, pixel, CoreOptions{}, floor);
     const BuildingResult free = regularize_building(rings, pixel, no_ceiling, floor);
     ASSERT_TRUE(held.ok && free.ok) << held.reason << free.reason;
-    EXPECT_DOUBLE_EQ(held.noise_m, 3 * floor) << pixel;
+    EXPECT_DOUBLE_EQ(held.noise_m, CoreOptions{}.noise.pooled_ceiling * floor) << pixel;
     EXPECT_GT(free.noise_m, 30 * floor) << pixel;
     const double iou_held = test::iou(held.footprint, truth), iou_free = test::iou(free.footprint, truth);
     EXPECT_GE(held.footprint.outer.size(), 25u) << pixel;  // an arc, not a few chords

@@ -21,7 +21,7 @@ struct NoiseOptions {
   double quantile = 0.3;   // the distances' quantile (by length) read as that of a Gaussian's
   double max_tilt_deg = 5; // a run's line turns at most this far from its lattice direction
   double pooled_floor = 1; // a building's noise is at least this many times that pooled over its mask
-  double pooled_ceiling = 3;  // ... and at most this many times (0 = no ceiling)
+  double pooled_ceiling = 2;  // ... and at most this many times (0 = no ceiling)
 
   template <class V>
   void visit(V& v) {
@@ -29,7 +29,7 @@ struct NoiseOptions {
     v("trim_m", trim_m, "... and edges this close to a run's end are left out, where corners are rounded (m)", Check::at_least(0));
     v("max_tilt_deg", max_tilt_deg, "... each run fitted by a line of its own direction, turned at most this far from its lattice direction (degrees)", Check::between(0, 45));
     v("pooled_floor", pooled_floor, "every building's boundary noise is taken as at least this many times the noise pooled over its mask's buildings (all of them in regularize; in run, those of the survey, tiling.noise_survey_*): the median, weighted by outline length, of each one's noise about the lattice of its contour's chords. A segmentation's noise is its mask's, not a building's: a small building's walls, shorter than a wobble's wavelength, and runs cut short at fine pixels measure too little of it (0 = off)", Check::at_least(0));
-    v("pooled_ceiling", pooled_ceiling, "... and at most this many times the noise pooled over its mask's buildings (and never below the floor): a contour that lies farther off its lattice's lines is not noisier than the mask's other buildings, it has arcs or walls off the lattice (a round building measures metres about lattice lines), which a noise that large would take for noise and straighten. 3 is about the 95th percentile of the buildings' own noise over the pooled one on masks of one wobble (bench/sweep.sh's synthetic city, 1.5-3.4). Only where the floor applies (pooled_floor above 0 and a pooled noise measured; 0 = no ceiling)", Check::at_least(0));
+    v("pooled_ceiling", pooled_ceiling, "... and at most this many times the noise pooled over its mask's buildings (and never below the floor): a contour that lies farther off its lattice's lines is not noisier than the mask's other buildings, it has arcs or walls off the lattice (a round building measures metres about lattice lines), which a noise that large would take for noise and straighten. 2 is about the 95th percentile of the buildings' own noise over the pooled one on masks of one wobble (bench/sweep.sh's synthetic city with a wobble, 1.4-2.3), beyond which a building's own measure is its structure's (steps of a row of houses, a sawtooth of bays, arcs), not the noise's: on clean masks it reaches 3.5-4.3. Only where the floor applies (pooled_floor above 0 and a pooled noise measured; 0 = no ceiling)", Check::at_least(0));
     v("quantile", quantile, "the noise is the distances' quantile of this share (by length), read as that of a Gaussian noise: low, so that oblique walls and arcs, off the lattice lines, do not count", Check::between(0.05, 0.95));
   }
 };
