@@ -117,9 +117,11 @@ void add_pairwise(Graph& g, int p, int q, double e00, double e01, double e10, do
   // the constant e00 does not change the minimizer
 }
 
-EdgeLabels expand(const Terms& t, const EdgeLabels& labels, int alpha) {
+// (g: emptied and built again, its memory kept from one expansion to the next; members: the
+// same, per label its nodes.)
+EdgeLabels expand(const Terms& t, const EdgeLabels& labels, int alpha, Graph& g, std::vector<std::vector<int>>& members) {
   const int n = t.offset.back();
-  Graph g(n + t.labels + 1, 3 * n);
+  g.reset();
   g.add_node(n);
   for (std::size_t r = 0; r < labels.size(); ++r) {
     const std::size_t m = labels[r].size();
@@ -135,7 +137,8 @@ EdgeLabels expand(const Terms& t, const EdgeLabels& labels, int alpha) {
     }
   }
   // Label costs (Delong et al. 2012, §3): one auxiliary node per label that may vanish or appear.
-  std::vector<std::vector<int>> members(t.labels);
+  members.resize(std::size_t(t.labels));
+  for (std::vector<int>& m : members) m.clear();
   for (std::size_t r = 0; r < labels.size(); ++r)
     for (std::size_t i = 0; i < labels[r].size(); ++i) members[labels[r][i]].push_back(t.offset[r] + int(i));
   for (int l = 0; l < t.labels; ++l) {
@@ -192,11 +195,16 @@ EdgeLabels label_edges(const LabelingInput& in, const MrfOptions& o) {
   // An expansion is a function of the labeling: one already tried and refused on the current
   // labeling would be refused again, so it is skipped until the labeling changes.
   std::vector<char> refused(std::size_t(terms.labels), 0);
+  // (At most a node per group, one per label and one more; an edge per group to its successor,
+  // one per group to its label's node, one per group from alpha's: no reallocation.)
+  const int groups = terms.offset.back();
+  Graph graph(groups + terms.labels + 1, 3 * groups);
+  std::vector<std::vector<int>> members;
   for (int cycle = 0; cycle < o.max_cycles; ++cycle) {
     bool improved = false;
     for (int alpha = 0; alpha < terms.labels; ++alpha) {
       if (refused[alpha]) continue;
-      EdgeLabels candidate = expand(terms, labels, alpha);
+      EdgeLabels candidate = expand(terms, labels, alpha, graph, members);
       const double e = energy(terms, candidate);
       if (e < e0 - 1e-9 * std::max(1.0, std::abs(e0))) {
         e0 = e;
