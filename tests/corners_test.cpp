@@ -29,6 +29,27 @@ void close_box(int w, int h, Ring& ring, std::vector<int>& labels) {
   for (int y = h; y > 0; --y) { ring.emplace_back(0, y); labels.push_back(3); }
 }
 
+// A 240 x 80 px box, px metres a pixel, whose bottom wall lies offset_px(x) pixels across at
+// column x (traced as a mask's pixels are, each step a vertical edge), all of that wall labeled
+// 0 as one run, the other walls 1-3; the ring in metres.
+void profile_box(double px, const std::function<int(int)>& offset_px, Ring& ring, std::vector<int>& labels) {
+  int y = 0;  // pixels
+  const auto step_to = [&](int x, int target) {
+    while (y != target) { ring.emplace_back(x * px, y * px); labels.push_back(0); y += target > y ? 1 : -1; }
+  };
+  for (int x = 0; x < 240; ++x) {
+    step_to(x, offset_px(x));
+    ring.emplace_back(x * px, y * px);
+    labels.push_back(0);
+  }
+  step_to(240, 0);
+  Ring box;
+  std::vector<int> box_labels;
+  close_box(240, 80, box, box_labels);
+  for (const Vec2& p : box) ring.push_back(p * px);
+  labels.insert(labels.end(), box_labels.begin(), box_labels.end());
+}
+
 // Options for the split tests: no curve test (a step of a few pixels is also a departure it
 // would keep as a contour), and corners of a one-line fit (which lie a pixel or two from the
 // contour's) not turned into steps.
@@ -229,25 +250,9 @@ TEST(Corners, RowOfHousesSteppingBackAndForthGetsOneLinePerHouse) {
 // 1 m over 8 m under its noise (0.7 m, its mask's) is not cut into steps.
 TEST(Corners, AStepIsJudgedByTheNoiseThePiecesLeave) {
   const double px = 0.25;
-  const auto contour = [&](const std::function<int(int)>& offset_px, Ring& ring, std::vector<int>& labels) {
-    int y = offset_px(0);
-    ring.emplace_back(0, y * px);
-    labels.push_back(0);
-    for (int x = 0; x < 240; ++x) {
-      const int target = offset_px(x);
-      while (y != target) { ring.emplace_back(x * px, y * px); labels.push_back(0); y += target > y ? 1 : -1; }
-      ring.emplace_back((x + 1) * px, y * px); labels.push_back(0);
-    }
-    while (y != 0) { ring.emplace_back(240 * px, y * px); labels.push_back(0); y += y < 0 ? 1 : -1; }
-    Ring box;
-    std::vector<int> box_labels;
-    close_box(240, 80, box, box_labels);
-    for (const Vec2& p : box) ring.push_back(p * px);
-    labels.insert(labels.end(), box_labels.begin(), box_labels.end());
-  };
   Ring stepped;
   std::vector<int> stepped_labels;
-  contour([](int x) { return x < 32 || x >= 208 ? -2 : 0; }, stepped, stepped_labels);
+  profile_box(px, [](int x) { return x < 32 || x >= 208 ? -2 : 0; }, stepped, stepped_labels);
   CornerOptions o = split_options();
   CornerContext context;
   context.noise = 0.17;
@@ -262,7 +267,7 @@ TEST(Corners, AStepIsJudgedByTheNoiseThePiecesLeave) {
   EXPECT_EQ(extract_corners(stepped, stepped_labels, axis_normals, px, o, &problem, unknown).size(), 4u);
   Ring wobbly;
   std::vector<int> wobbly_labels;
-  contour([&](int x) { return int(std::lround(std::sin(2 * M_PI * (x + 0.5) * px / 8.0) / px)); }, wobbly, wobbly_labels);
+  profile_box(px, [&](int x) { return int(std::lround(std::sin(2 * M_PI * (x + 0.5) * px / 8.0) / px)); }, wobbly, wobbly_labels);
   context.noise = context.mask_noise = 0.7;
   EXPECT_EQ(extract_corners(wobbly, wobbly_labels, axis_normals, px, o, &problem, context).size(), 4u) << problem;
 }
@@ -297,17 +302,7 @@ TEST(Corners, ABowOnAStraightWallIsItsOwnCurve) {
   const auto bow = [&](double x) { return std::abs(x - 12) < 8 ? -(std::sqrt(radius * radius - (x - 12) * (x - 12)) - (radius - 2.5)) : 0.0; };
   Ring ring;
   std::vector<int> labels;
-  int y = 0;  // pixels
-  for (int x = 0; x < 240; ++x) {
-    const int target = int(std::lround(bow((x + 0.5) * px) / px));
-    while (y != target) { ring.emplace_back(x * px, y * px); labels.push_back(0); y += target > y ? 1 : -1; }
-    ring.emplace_back(x * px, y * px); labels.push_back(0);
-  }
-  Ring box;
-  std::vector<int> box_labels;
-  close_box(240, 80, box, box_labels);
-  for (const Vec2& p : box) ring.push_back(p * px);
-  labels.insert(labels.end(), box_labels.begin(), box_labels.end());
+  profile_box(px, [&](int x) { return int(std::lround(bow((x + 0.5) * px) / px)); }, ring, labels);
   const auto has_vertex_near = [](const Ring& r, const Vec2& p, double within) {
     for (const Vec2& v : r) if ((v - p).norm() < within) return true;
     return false;
