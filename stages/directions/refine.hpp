@@ -25,6 +25,7 @@ struct RefineOptions {
   double min_turning = 1.5;        // ... whose outline turns less than this many full turns has no lattice
   double min_round_px = 40;        // ... unless its outline is shorter than this many pixels
   double min_round_m = 20;         // ... or than this (m)
+  double min_round_noise = 60;     // ... or than this many times the mask's boundary noise
 
   template <class V>
   void visit(V& v) {
@@ -39,6 +40,7 @@ struct RefineOptions {
     v("min_turning", min_turning, "... whose smoothed outline turns by less than this many full turns in all (a convex shape turns once, a wobble back and forth) is round or oblique: its directions are not held to a lattice", Check::at_least(0));
     v("min_round_px", min_round_px, "... unless its outer ring is shorter than this many pixels (too few to tell a round shape from a rectangle)", Check::at_least(0));
     v("min_round_m", min_round_m, "... or than this (m; the traced outline, whose pixel steps make it up to 1.4 times the true one): a shed of 3 x 4 m whose corners a network rounds by a metre shows no more of a wall than of an arc, and is taken as on a lattice (a rectangle when that explains it, models.rectangle_tolerance)", Check::at_least(0));
+    v("min_round_noise", min_round_noise, "... or than this many times the boundary noise pooled over the mask's buildings: under a noise that large a small house's walls are no straighter than an arc (0 = off)", Check::at_least(0));
     v("release_px", release_px, "a long run whose own least-squares direction differs from its label's so much that its ends move by more than this (pixels, and twice its noise) gets its own direction (0 = off)", Check::at_least(0));
   }
 };

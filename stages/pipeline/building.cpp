@@ -517,8 +517,10 @@ void run_chain(const std::vector<Ring>& rings, double pixel_size, const CoreOpti
   const Vec2 lattice = follow_chords ? chord.direction : first_main;
   // A round or oblique shape (little of it along the lattice, its outline turning about once, as
   // a convex one does, not back and forth as a wobble does) has no lattice to hold its walls to.
-  // (A building of a few dozen pixels shows no curvature: it is taken as on its lattice.)
-  const bool on_lattice = perimeter(rings[0]) < std::max(o.refinement.min_round_px * pixel_size, o.refinement.min_round_m) ||
+  // (A building of a few dozen pixels, or of a few dozen times its mask's noise, shows no curvature:
+  // it is taken as on its lattice.)
+  const bool on_lattice = perimeter(rings[0]) < std::max({o.refinement.min_round_px * pixel_size, o.refinement.min_round_m,
+                                                          o.refinement.min_round_noise * noise_floor_m}) ||
                           lattice_share(input.normals, input.lengths, lattice, o.refinement.lattice_deg) >= o.refinement.min_lattice_share ||
                           total_turning(rings[0], input.normals[0], std::max(1.0, 2 * pixel_size)) >= o.refinement.min_turning;
   result.noise_m = noise;
