@@ -8,6 +8,8 @@
 
 #include <tbb/parallel_for.h>
 
+#include "directions/lattice.hpp"
+#include "geometry/polygon.hpp"
 #include "normals/smoothing.hpp"
 #include "run/tiles.hpp"
 
@@ -127,6 +129,31 @@ PooledStarts pool_starts(const std::vector<BuildingContour>& buildings, double p
   return pooled;
 }
 
+// Each building's neighbours' lattice (lattice.neighbour_radius_m) into its start; starts are made
+// (empty, smoothed for smoothing_noise_m) where there are none. The chords' lattices of a start
+// are used, those of an empty one computed.
+void lend_neighbour_lattices(const std::vector<BuildingContour>& buildings, const CoreOptions& options, double smoothing_noise_m,
+                             std::vector<BuildingStart>& starts) {
+  if (starts.empty()) {
+    starts.resize(buildings.size());
+    for (BuildingStart& s : starts) s.smoothing_noise_m = smoothing_noise_m;
+  }
+  std::vector<Vec2> centres(buildings.size(), Vec2::Zero());
+  std::vector<ChordLattice> chords(buildings.size());
+  std::vector<double> perimeters(buildings.size(), 0.0);
+  tbb::parallel_for(std::size_t(0), buildings.size(), [&](std::size_t i) {
+    const std::vector<Ring>& rings = buildings[i].rings;
+    if (rings.empty() || rings[0].empty()) return;
+    for (const Vec2& p : rings[0]) centres[i] += p;
+    centres[i] /= double(rings[0].size());
+    perimeters[i] = perimeter(rings[0]);
+    const bool started = starts[i].normals.size() == rings.size();
+    chords[i] = started ? starts[i].chord : chord_lattice(rings, options.lattice);
+  });
+  const std::vector<Vec2> lattices = neighbour_lattices(centres, chords, perimeters, options.lattice);
+  for (std::size_t i = 0; i < buildings.size(); ++i) starts[i].neighbour_lattice = lattices[i];
+}
+
 }  // namespace
 
 bool pools_noise(const std::string& regularizer, const CoreOptions& options) {
@@ -155,6 +182,10 @@ RegularizedBatch regularize_batch(const std::string& regularizer, const std::vec
     batch.noise_floor_m = pooled.noise.floor_m;
     batch.noise_smoothing_m = pooled.noise.smoothing_m;
   }
+  // The neighbours' lattices, where the batch is the whole mask (a tile's buildings are not all
+  // of a building's neighbours, and a footprint must not depend on the tiling).
+  if (!noise && regularizer == "deformation" && options.lattice.neighbour_radius_m > 0)
+    lend_neighbour_lattices(buildings, options, batch.noise_smoothing_m, starts);
   tbb::parallel_for(std::size_t(0), buildings.size(), [&](std::size_t i) {
     batch.results[i] = regularize_with(regularizer, buildings[i].rings, pixel_size, options, batch.noise_floor_m,
                                        starts.empty() ? BuildingStart{} : std::move(starts[i]));

@@ -37,8 +37,11 @@ struct RegularizedBatch {
 // noise samples pooled (pooled_noise_floor), in rounds, each smoothing the normals for the noise
 // the round before pooled and kept only where that measures more noise (smoothing.noise_rounds,
 // noise_gain), and each regularized from its start. The same results
-// whatever the thread count: samples are pooled in the buildings' order. A building's seconds
-// count its start's. on_done is called after each building (from any thread).
+// whatever the thread count: samples are pooled in the buildings' order. Without a noise given
+// (the batch is a whole mask), each building is also lent its neighbours' lattice
+// (lattice.neighbour_radius_m, neighbour_lattices; with a noise given, a tile's buildings, none:
+// a footprint must not depend on the tiling). A building's seconds count its start's. on_done is
+// called after each building (from any thread).
 RegularizedBatch regularize_batch(const std::string& regularizer, const std::vector<BuildingContour>& buildings,
                                   double pixel_size, const CoreOptions& options, std::optional<MaskNoise> noise = std::nullopt,
                                   const std::function<void()>& on_done = {});

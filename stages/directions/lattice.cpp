@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <map>
 
 namespace lodforge {
 
@@ -86,6 +87,43 @@ ChordLattice chord_lattice(const std::vector<Ring>& rings, const LatticeOptions&
   const double angle = (sum.squaredNorm() > 0 ? std::atan2(sum.y(), sum.x()) : mode) / 4;
   const double share = share_near(samples, mode, window);
   return {Vec2(std::cos(angle), std::sin(angle)), share, std::move(samples)};
+}
+
+std::vector<Vec2> neighbour_lattices(const std::vector<Vec2>& centres, const std::vector<ChordLattice>& chords,
+                                     const std::vector<double>& perimeters, const LatticeOptions& o) {
+  const std::size_t n = centres.size();
+  std::vector<Vec2> out(n, Vec2::Zero());
+  const double radius = o.neighbour_radius_m;
+  if (radius <= 0 || chords.size() != n || perimeters.size() != n) return out;
+  // The buildings with a lattice of their own, bucketed in cells of the radius (a map: ordered).
+  std::map<std::pair<long, long>, std::vector<std::size_t>> cells;
+  const auto cell_of = [&](const Vec2& c) { return std::make_pair(long(std::floor(c.x() / radius)), long(std::floor(c.y() / radius))); };
+  for (std::size_t j = 0; j < n; ++j)
+    if (chords[j].share >= o.min_share && chords[j].direction.squaredNorm() > 0 && centres[j].allFinite()) cells[cell_of(centres[j])].push_back(j);
+  std::vector<std::size_t> near;
+  for (std::size_t i = 0; i < n; ++i) {
+    if (!centres[i].allFinite()) continue;
+    const auto [cx, cy] = cell_of(centres[i]);
+    near.clear();
+    for (long y = cy - 1; y <= cy + 1; ++y)
+      for (long x = cx - 1; x <= cx + 1; ++x)
+        if (const auto it = cells.find({x, y}); it != cells.end())
+          for (std::size_t j : it->second)
+            if (j != i && (centres[j] - centres[i]).norm() <= radius) near.push_back(j);
+    std::sort(near.begin(), near.end());  // (the sums in index order)
+    double sx = 0, sy = 0, total = 0;
+    for (std::size_t j : near) {
+      const double w = chords[j].share * perimeters[j];
+      const double a = 4.0 * std::atan2(chords[j].direction.y(), chords[j].direction.x());
+      sx += w * std::cos(a);
+      sy += w * std::sin(a);
+      total += w;
+    }
+    if (total <= 0 || std::hypot(sx, sy) < o.neighbour_agreement * total) continue;
+    const double a = std::atan2(sy, sx) / 4.0;
+    out[i] = Vec2(std::cos(a), std::sin(a));
+  }
+  return out;
 }
 
 }  // namespace lodforge

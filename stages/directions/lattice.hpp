@@ -23,6 +23,8 @@ struct LatticeOptions {
   double fit_hysteresis_deg = 15;  // ... a run keeping its axis until a normal turns this past 45 degrees
   double fit_outlier_noise = 3;    // ... samples this many spreads off their run's line left out
   double fit_keep_uncertainty = 2; // ... and the labeled lattice kept within this many standard errors of it
+  double neighbour_radius_m = 30;  // buildings within this (m, centre to centre) lend an undetermined one their lattice
+  double neighbour_agreement = 0.8;  // ... where they agree on it this well (mean resultant of 4 x their angles)
 
   template <class V>
   void visit(V& v) {
@@ -36,6 +38,8 @@ struct LatticeOptions {
     v("fit_max_turn_deg", fit_max_turn_deg, "the lattice the outline's walls are held to is fitted to the contour: one direction for every run along its axes (from the chords' direction when they give one, else the labeled main direction), each run with its own offset, which averages a wobble out over whole walls; the fit is taken when it turns at most this far from where it started (degrees; no fit, and the labeled lattice stays, when it turns farther, when fewer than two runs have a middle, or at 0 = off)", Check::between(0, 45));
     v("fit_hysteresis_deg", fit_hysteresis_deg, "... the contour cut into those runs where a smoothed normal turns this far past 45 degrees from its run's axis (a wobble's flank, up to 45 + this, does not cut a wall; a corner does) (degrees)", Check::between(0, 44));
     v("fit_outlier_noise", fit_outlier_noise, "... samples farther than this many spreads (the noise of the runs about their lines) from their run's line, and runs whose own RMS about it is over this many times the runs' median (a run stepping along row houses), left out of the fit", Check::above(0));
+    v("neighbour_radius_m", neighbour_radius_m, "a building whose own lattice is undetermined (the neighbours' lattice within fit_keep_uncertainty standard errors of its fitted one; without a fit, its chords giving it none) takes the lattice of the buildings around it: those whose centres lie within this distance of its centre and whose chords give them a lattice, weighted by that share times their perimeter (m, 0 = off). Under a metre of wobble a small house is a blob whose own direction is anyone's; its street's is not", Check::at_least(0));
+    v("neighbour_agreement", neighbour_agreement, "... when they agree: the length of the weighted mean of their lattices' directions times four (as unit vectors) at least this (1: all alike)", Check::between(0, 1));
     v("fit_keep_uncertainty", fit_keep_uncertainty, "... and the labeled lattice (the main direction, or the chords' above) kept where it lies within this many standard errors of the fit (the spread correlated over corners.snap_correlation_m): a clean wall's labeled direction is exact", Check::at_least(0));
   }
 };
@@ -53,5 +57,13 @@ struct ChordLattice {
   double share_at(const Vec2& lattice, double window_deg) const;
 };
 ChordLattice chord_lattice(const std::vector<Ring>& rings, const LatticeOptions& options);
+
+// Per building, the lattice its neighbours agree on (neighbour_radius_m, neighbour_agreement):
+// a unit normal, or zero where none is within reach, none of them has a lattice of its own, or
+// they disagree. centres: the buildings' centres; chords: their chords' lattices; perimeters:
+// their outer rings'. The building's own lattice does not count. Deterministic: each sum runs
+// over the neighbours in index order.
+std::vector<Vec2> neighbour_lattices(const std::vector<Vec2>& centres, const std::vector<ChordLattice>& chords,
+                                     const std::vector<double>& perimeters, const LatticeOptions& options);
 
 }  // namespace lodforge

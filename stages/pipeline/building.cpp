@@ -315,12 +315,14 @@ double fit_tolerance(const std::vector<Ring>& rings, double pixel_size, const Bu
 // (a high percentile, models.rectangle_quantile, of the contour's distances to each) no worse than the outline plus the allowed noise,
 // and leaves out no stretch of it that the outline explains (a wing, a notch, an arc's bow)
 // unless the outline leaves one the rectangle explains:
-// the simplest outline that explains the contour within its noise.
-void choose_rectangle(const std::vector<Ring>& rings, double pixel_size, const CoreOptions& co, BuildingResult& result) {
+// the simplest outline that explains the contour within its noise. (lattice: the rectangle is held
+// to it, a building whose own lattice is undetermined; else the best fitting one.)
+void choose_rectangle(const std::vector<Ring>& rings, double pixel_size, const CoreOptions& co, BuildingResult& result,
+                      const Vec2* lattice = nullptr) {
   const ModelOptions& o = co.models;
   if (o.rectangle_tolerance <= 0 || rings.size() != 1 || result.footprint.outer.size() <= 4) return;
   double mean_fit = 0;  // the best rectangle's mean distance, which chose it
-  Ring rectangle = best_rectangle(rings[0], result.directions, &mean_fit);
+  Ring rectangle = lattice ? moment_rectangle(rings[0], *lattice) : best_rectangle(rings[0], result.directions, &mean_fit);
   if (rectangle.empty()) return;
   PolygonWithHoles candidate{std::move(rectangle), {}};
   const auto outline_distances = boundary_distances(rings[0], result.footprint);
@@ -454,7 +456,11 @@ void run_chain(const std::vector<Ring>& rings, double pixel_size, const CoreOpti
   for (const Ring& r : rings) edges += r.size();
   bool started = start.normals.size() == rings.size();
   for (std::size_t r = 0; started && r < rings.size(); ++r) started = start.normals[r].size() == rings[r].size();
-  if (!started) start = start_building(rings, pixel_size, o, false, start.smoothing_noise_m);
+  if (!started) {
+    const Vec2 neighbour_lattice = start.neighbour_lattice;
+    start = start_building(rings, pixel_size, o, false, start.smoothing_noise_m);
+    start.neighbour_lattice = neighbour_lattice;
+  }
   LabelingInput input;
   input.normals = std::move(start.normals);
   std::vector<Vec2> all_normals;
@@ -572,6 +578,17 @@ void run_chain(const std::vector<Ring>& rings, double pixel_size, const CoreOpti
   if (on_lattice && fitted_lattice &&
       angle_between_lattices_deg(*fitted_lattice, context.lattice) * M_PI / 180.0 > o.lattice.fit_keep_uncertainty * fit_uncertainty)
     context.lattice = *fitted_lattice;
+  // A building whose own lattice is undetermined takes its neighbours' (lattice.neighbour_*): one
+  // too small to show its walls under its mask's noise (refinement.min_round_noise), one whose
+  // fitted lattice lies within fit_keep_uncertainty standard errors of theirs, or, without a fit,
+  // one whose chords give it no lattice.
+  bool lent_lattice = false;
+  if (on_lattice && start.neighbour_lattice.squaredNorm() > 0) {
+    const double gap = angle_between_lattices_deg(start.neighbour_lattice, context.lattice) * M_PI / 180.0;
+    lent_lattice = perimeter(rings[0]) < o.refinement.min_round_noise * noise_floor_m ||
+                   (fitted_lattice ? gap <= o.lattice.fit_keep_uncertainty * fit_uncertainty : chord.share < o.lattice.min_share);
+    if (lent_lattice) context.lattice = start.neighbour_lattice;
+  }
   context.noise = noise;
   context.mask_noise = noise_floor_m;
   const double allowed = o.models.outline_tolerance * model_noise(result, pixel_size, o.models);
@@ -640,7 +657,7 @@ void run_chain(const std::vector<Ring>& rings, double pixel_size, const CoreOpti
       }
     }
   }
-  if (on_lattice) choose_rectangle(rings, pixel_size, o, result);  // a round shape is no rectangle
+  if (on_lattice) choose_rectangle(rings, pixel_size, o, result, lent_lattice ? &context.lattice : nullptr);  // a round shape is no rectangle
   // Per stretch of contour, the simpler model where it explains the stretch as well: the regular
   // outline's walls off the lattice redrawn with the lattice outline's walls where those explain
   // their contour within stretch_fit_noise noises (an oblique cut across a wobble or a notch).
