@@ -581,6 +581,16 @@ TEST(NoisyMasks, UnderAMetreOfWobbleASmallHouseIsARectangle) {
   EXPECT_GE(iou, iou_off - 0.02);
 }
 
+// The largest angle of an outline's walls to a lattice (degrees).
+double largest_angle_to_lattice_deg(const PolygonWithHoles& p, const Vec2& lattice) {
+  double worst = 0;
+  for (std::size_t i = 0; i < p.outer.size(); ++i) {
+    const Vec2 e = edge_vector(p.outer, i);
+    worst = std::max(worst, angle_between_lattices_deg(Vec2(-e.y(), e.x()).normalized(), lattice));
+  }
+  return worst;
+}
+
 // The neighbours' lattice: the weighted mean of the lattices (angles times four) of the buildings
 // within the radius, centre to centre, whose chords give them one; not the building's own; none
 // where the neighbours disagree or none has a lattice.
@@ -625,14 +635,7 @@ TEST(NoisyMasks, ABlobTakesItsStreetsLattice) {
   const PolygonWithHoles truth = test::rotated({{{0, 0}, {6, 0}, {6, 5}, {0, 5}}, {}}, angle);
   const Vec2 street(std::cos(angle * M_PI / 180), std::sin(angle * M_PI / 180));
   const double pixel = 0.25, pooled_noise = 0.69, smoothing_noise = 0.53;
-  const auto worst_wall = [&](const PolygonWithHoles& p) {
-    double worst = 0;
-    for (std::size_t i = 0; i < p.outer.size(); ++i) {
-      const Vec2 e = edge_vector(p.outer, i);
-      worst = std::max(worst, angle_between_lattices_deg(Vec2(-e.y(), e.x()).normalized(), street));
-    }
-    return worst;
-  };
+  const auto worst_wall = [&](const PolygonWithHoles& p) { return largest_angle_to_lattice_deg(p, street); };
   const int masks = 8;
   double off_alone = 0, off_lent = 0, iou_alone = 0, iou_lent = 0;
   int aligned_alone = 0, aligned_lent = 0;
@@ -667,14 +670,7 @@ TEST(NoisyMasks, ABlobTakesItsStreetsLattice) {
 TEST(NoisyMasks, ABatchLendsABlobItsStreetsLattice) {
   const double angle = 27.0, pixel = 0.25;
   const Vec2 street(std::cos(angle * M_PI / 180), std::sin(angle * M_PI / 180));
-  const auto worst_wall = [&](const PolygonWithHoles& p) {
-    double worst = 0;
-    for (std::size_t i = 0; i < p.outer.size(); ++i) {
-      const Vec2 e = edge_vector(p.outer, i);
-      worst = std::max(worst, angle_between_lattices_deg(Vec2(-e.y(), e.x()).normalized(), street));
-    }
-    return worst;
-  };
+  const auto worst_wall = [&](const PolygonWithHoles& p) { return largest_angle_to_lattice_deg(p, street); };
   CoreOptions off;
   off.lattice.neighbour_radius_m = 0;
   int aligned = 0, aligned_off = 0;
