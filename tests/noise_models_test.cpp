@@ -673,7 +673,7 @@ TEST(NoisyMasks, ABatchLendsABlobItsStreetsLattice) {
   const auto worst_wall = [&](const PolygonWithHoles& p) { return largest_angle_to_lattice_deg(p, street); };
   CoreOptions off;
   off.lattice.neighbour_radius_m = 0;
-  int aligned = 0, aligned_off = 0;
+  int aligned = 0, aligned_off = 0, lent_count = 0;
   for (std::uint64_t seed = 1; seed <= 4; ++seed) {
     std::vector<BuildingContour> buildings;
     const test::RasterizedShape blob =
@@ -695,9 +695,12 @@ TEST(NoisyMasks, ABatchLendsABlobItsStreetsLattice) {
     // (The lattice lent is the houses' chords' under the same wobble: within a degree or two.)
     aligned += worst_wall(lent.results[0].footprint) < 2.0;
     aligned_off += worst_wall(alone.results[0].footprint) < 2.0;
+    EXPECT_FALSE(alone.results[0].lattice_lent);
+    lent_count += lent.results[0].lattice_lent;
   }
   EXPECT_GE(aligned, 3);
   EXPECT_LE(aligned_off, 1);
+  EXPECT_GE(lent_count, 3);
 }
 
 // A round building of 22 m under a quarter metre of wobble at 10 cm pixels stays round. Its

@@ -305,6 +305,7 @@ TEST_F(SynthRun, TheNoiseFloorIsTheRastersWhateverTheTiling) {
   ASSERT_EQ(r.code, 0) << r.output;
   const nlohmann::json stats = report_of(dir / "r.json");
   EXPECT_GT(stats.at("noise_samples").get<int>(), 20) << stats;
+  EXPECT_LE(stats.at("lattice_lent").get<int>(), stats.at("buildings").get<int>()) << stats;
   EXPECT_DOUBLE_EQ(report_of(dir / "whole_out" / "report.json").at("noise_floor_m").get<double>(), stats.at("noise_floor_m").get<double>());
   // ... and the run's footprints are regularize's, outline for outline.
   const std::multiset<std::string> run = run_outlines(dir / "whole_out"), regularized = gpkg_outlines(dir / "r.gpkg");

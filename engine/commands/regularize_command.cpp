@@ -126,7 +126,7 @@ int run_regularize(int argc, char** argv) {
 
   std::vector<FootprintRecord> records(count);
   std::map<std::string, int> failures, models;
-  int failed = 0, rerouted = 0;
+  int failed = 0, rerouted = 0, lent = 0;
   for (std::size_t i = 0; i < count; ++i) {
     const BuildingResult& r = results[i];
     FootprintRecord& rec = records[i];
@@ -139,6 +139,7 @@ int run_regularize(int argc, char** argv) {
     rec.model = r.model;
     ++models[r.ok ? r.model : "fallback"];
     if (r.ok && !r.note.empty()) ++rerouted;
+    if (r.ok && r.lattice_lent) ++lent;
     if (!r.ok) {
       ++failed;
       ++failures[r.failed_stage];
@@ -185,6 +186,7 @@ int run_regularize(int argc, char** argv) {
     out["ok"] = count - failed;
     out["fallback"] = failed;
     out["original_route"] = rerouted;
+    out["lattice_lent"] = lent;
     out["noise_floor_m"] = batch.noise_floor_m;
     out["noise_smoothing_m"] = batch.noise_smoothing_m;
     out["noise_samples"] = batch.noise_samples;

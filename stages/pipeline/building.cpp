@@ -588,6 +588,7 @@ void run_chain(const std::vector<Ring>& rings, double pixel_size, const CoreOpti
     lent_lattice = perimeter(rings[0]) < o.refinement.min_round_noise * noise_floor_m ||
                    (fitted_lattice ? gap <= o.lattice.fit_keep_uncertainty * fit_uncertainty : chord.share < o.lattice.min_share);
     if (lent_lattice) context.lattice = start.neighbour_lattice;
+    result.lattice_lent = lent_lattice;
   }
   context.noise = noise;
   context.mask_noise = noise_floor_m;

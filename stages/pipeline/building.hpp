@@ -30,6 +30,7 @@ struct BuildingResult {
                                 // "staircase_lines" (its staircases drawn as oblique walls, models.staircase_corners),
                                 // "merged_steps" (the chosen outline with steps merged, models.merge_patience);
                                 // empty for the fallback
+  bool lattice_lent = false;    // its walls held to its neighbours' lattice (BuildingStart::neighbour_lattice)
   std::string route;            // the chain's corner route taken: "original" or "deformed"; empty otherwise
   std::string note;             // when ok: why the route taken is not the one asked for (a budget), else empty
   double seconds = 0;
