@@ -95,11 +95,19 @@ std::vector<Vec2> neighbour_lattices(const std::vector<Vec2>& centres, const std
   std::vector<Vec2> out(n, Vec2::Zero());
   const double radius = o.neighbour_radius_m;
   if (radius <= 0 || chords.size() != n || perimeters.size() != n) return out;
-  // The buildings with a lattice of their own, bucketed in cells of the radius (a map: ordered).
+  // The buildings with a lattice of their own, bucketed in cells of the radius (a map: ordered),
+  // each with its weight and its lattice's angle times four as a unit vector.
   std::map<std::pair<long, long>, std::vector<std::size_t>> cells;
+  std::vector<Vec2> quadrupled(n, Vec2::Zero());
+  std::vector<double> weights(n, 0.0);
   const auto cell_of = [&](const Vec2& c) { return std::make_pair(long(std::floor(c.x() / radius)), long(std::floor(c.y() / radius))); };
-  for (std::size_t j = 0; j < n; ++j)
-    if (chords[j].share >= o.min_share && chords[j].direction.squaredNorm() > 0 && centres[j].allFinite()) cells[cell_of(centres[j])].push_back(j);
+  for (std::size_t j = 0; j < n; ++j) {
+    if (chords[j].share < o.min_share || chords[j].direction.squaredNorm() == 0 || !centres[j].allFinite()) continue;
+    const double a = 4.0 * std::atan2(chords[j].direction.y(), chords[j].direction.x());
+    quadrupled[j] = Vec2(std::cos(a), std::sin(a));
+    weights[j] = chords[j].share * perimeters[j];
+    cells[cell_of(centres[j])].push_back(j);
+  }
   std::vector<std::size_t> near;
   for (std::size_t i = 0; i < n; ++i) {
     if (!centres[i].allFinite()) continue;
@@ -113,11 +121,9 @@ std::vector<Vec2> neighbour_lattices(const std::vector<Vec2>& centres, const std
     std::sort(near.begin(), near.end());  // (the sums in index order)
     double sx = 0, sy = 0, total = 0;
     for (std::size_t j : near) {
-      const double w = chords[j].share * perimeters[j];
-      const double a = 4.0 * std::atan2(chords[j].direction.y(), chords[j].direction.x());
-      sx += w * std::cos(a);
-      sy += w * std::sin(a);
-      total += w;
+      sx += weights[j] * quadrupled[j].x();
+      sy += weights[j] * quadrupled[j].y();
+      total += weights[j];
     }
     if (total <= 0 || std::hypot(sx, sy) < o.neighbour_agreement * total) continue;
     const double a = std::atan2(sy, sx) / 4.0;

@@ -456,11 +456,8 @@ void run_chain(const std::vector<Ring>& rings, double pixel_size, const CoreOpti
   for (const Ring& r : rings) edges += r.size();
   bool started = start.normals.size() == rings.size();
   for (std::size_t r = 0; started && r < rings.size(); ++r) started = start.normals[r].size() == rings[r].size();
-  if (!started) {
-    const Vec2 neighbour_lattice = start.neighbour_lattice;
-    start = start_building(rings, pixel_size, o, false, start.smoothing_noise_m);
-    start.neighbour_lattice = neighbour_lattice;
-  }
+  const Vec2 neighbour_lattice = start.neighbour_lattice;  // (a start made here has none)
+  if (!started) start = start_building(rings, pixel_size, o, false, start.smoothing_noise_m);
   LabelingInput input;
   input.normals = std::move(start.normals);
   std::vector<Vec2> all_normals;
@@ -525,8 +522,9 @@ void run_chain(const std::vector<Ring>& rings, double pixel_size, const CoreOpti
   // a convex one does, not back and forth as a wobble does) has no lattice to hold its walls to.
   // (A building of a few dozen pixels, or of a few dozen times its mask's noise, shows no curvature:
   // it is taken as on its lattice.)
-  const bool on_lattice = perimeter(rings[0]) < std::max({o.refinement.min_round_px * pixel_size, o.refinement.min_round_m,
-                                                          o.refinement.min_round_noise * noise_floor_m}) ||
+  const double outline_m = perimeter(rings[0]);
+  const bool small_for_noise = outline_m < o.refinement.min_round_noise * noise_floor_m;
+  const bool on_lattice = small_for_noise || outline_m < std::max(o.refinement.min_round_px * pixel_size, o.refinement.min_round_m) ||
                           lattice_share(input.normals, input.lengths, lattice, o.refinement.lattice_deg) >= o.refinement.min_lattice_share ||
                           total_turning(rings[0], input.normals[0], std::max(1.0, 2 * pixel_size)) >= o.refinement.min_turning;
   result.noise_m = noise;
@@ -582,13 +580,11 @@ void run_chain(const std::vector<Ring>& rings, double pixel_size, const CoreOpti
   // too small to show its walls under its mask's noise (refinement.min_round_noise), one whose
   // fitted lattice lies within fit_keep_uncertainty standard errors of theirs, or, without a fit,
   // one whose chords give it no lattice.
-  bool lent_lattice = false;
-  if (on_lattice && start.neighbour_lattice.squaredNorm() > 0) {
-    const double gap = angle_between_lattices_deg(start.neighbour_lattice, context.lattice) * M_PI / 180.0;
-    lent_lattice = perimeter(rings[0]) < o.refinement.min_round_noise * noise_floor_m ||
-                   (fitted_lattice ? gap <= o.lattice.fit_keep_uncertainty * fit_uncertainty : chord.share < o.lattice.min_share);
-    if (lent_lattice) context.lattice = start.neighbour_lattice;
-    result.lattice_lent = lent_lattice;
+  if (on_lattice && neighbour_lattice.squaredNorm() > 0) {
+    const double gap = angle_between_lattices_deg(neighbour_lattice, context.lattice) * M_PI / 180.0;
+    result.lattice_lent = small_for_noise || (fitted_lattice ? gap <= o.lattice.fit_keep_uncertainty * fit_uncertainty
+                                                            : chord.share < o.lattice.min_share);
+    if (result.lattice_lent) context.lattice = neighbour_lattice;
   }
   context.noise = noise;
   context.mask_noise = noise_floor_m;
@@ -658,7 +654,7 @@ void run_chain(const std::vector<Ring>& rings, double pixel_size, const CoreOpti
       }
     }
   }
-  if (on_lattice) choose_rectangle(rings, pixel_size, o, result, lent_lattice ? &context.lattice : nullptr);  // a round shape is no rectangle
+  if (on_lattice) choose_rectangle(rings, pixel_size, o, result, result.lattice_lent ? &context.lattice : nullptr);  // a round shape is no rectangle
   // Per stretch of contour, the simpler model where it explains the stretch as well: the regular
   // outline's walls off the lattice redrawn with the lattice outline's walls where those explain
   // their contour within stretch_fit_noise noises (an oblique cut across a wobble or a notch).
