@@ -544,6 +544,14 @@ TEST(NoisyMasks, AWobblingShedIsARectangle) {
   EXPECT_GE(iou_sum / 12, 0.65);  // (the mask itself lies that far off the shed)
 }
 
+// A 6 x 5 m house turned by `angle` degrees, and its mask at 25 cm under a metre of wobble (8 m
+// wavelength), its corners rounded by 2 m; the campus's pooled noises at 0.25 m under that wobble.
+PolygonWithHoles small_house(double angle) { return test::rotated({{{0, 0}, {6, 0}, {6, 5}, {0, 5}}, {}}, angle); }
+test::RasterizedShape metre_wobble_mask(const PolygonWithHoles& truth, std::uint64_t seed) {
+  return test::rasterize_shape_m(truth, 0.25, 1.0, 8.0, 2.0, seed);
+}
+constexpr double kMetreWobblePooledNoise = 0.69, kMetreWobbleSmoothingNoise = 0.53;
+
 // A 6 x 5 m house under a metre of wobble, its corners rounded by 2 m, at 25 cm pixels, on a
 // mask whose buildings measure 0.69 m of boundary noise (normals smoothed for 0.53 m: the pooled
 // noises of the campus at 0.25 m under that wobble): a blob of 27-34 m of traced outline that
@@ -552,15 +560,15 @@ TEST(NoisyMasks, AWobblingShedIsARectangle) {
 // is taken as on a lattice. Of eight masks, 8 square quadrilaterals (none without the rule:
 // heptagons and the like), mean IoU 0.700 (0.698; the mask itself lies that far off).
 TEST(NoisyMasks, UnderAMetreOfWobbleASmallHouseIsARectangle) {
-  const PolygonWithHoles truth = test::rotated({{{0, 0}, {6, 0}, {6, 5}, {0, 5}}, {}}, 27.0);
-  const double pixel = 0.25, pooled_noise = 0.69, smoothing_noise = 0.53;
+  const PolygonWithHoles truth = small_house(27.0);
+  const double pixel = 0.25, pooled_noise = kMetreWobblePooledNoise, smoothing_noise = kMetreWobbleSmoothingNoise;
   CoreOptions off;
   off.refinement.min_round_noise = 0;
   int squared = 0, squared_off = 0;
   double iou = 0, iou_off = 0;
   const int masks = 8;
   for (std::uint64_t seed = 1; seed <= std::uint64_t(masks); ++seed) {
-    const test::RasterizedShape shape = test::rasterize_shape_m(truth, pixel, 1.0, 8.0, 2.0, seed);
+    const test::RasterizedShape shape = metre_wobble_mask(truth, seed);
     ASSERT_EQ(shape.buildings.size(), 1u);
     BuildingStart start;
     start.smoothing_noise_m = smoothing_noise;
@@ -632,15 +640,15 @@ TEST(Lattice, NeighboursLendTheLatticeTheyAgreeOn) {
 // a chain's outline, one wall 36 degrees off; mean 4.5), IoU 0.700 -> 0.733.
 TEST(NoisyMasks, ABlobTakesItsStreetsLattice) {
   const double angle = 27.0;
-  const PolygonWithHoles truth = test::rotated({{{0, 0}, {6, 0}, {6, 5}, {0, 5}}, {}}, angle);
+  const PolygonWithHoles truth = small_house(angle);
   const Vec2 street(std::cos(angle * M_PI / 180), std::sin(angle * M_PI / 180));
-  const double pixel = 0.25, pooled_noise = 0.69, smoothing_noise = 0.53;
+  const double pixel = 0.25, pooled_noise = kMetreWobblePooledNoise, smoothing_noise = kMetreWobbleSmoothingNoise;
   const auto worst_wall = [&](const PolygonWithHoles& p) { return largest_angle_to_lattice_deg(p, street); };
   const int masks = 8;
   double off_alone = 0, off_lent = 0, iou_alone = 0, iou_lent = 0;
   int aligned_alone = 0, aligned_lent = 0;
   for (std::uint64_t seed = 1; seed <= std::uint64_t(masks); ++seed) {
-    const test::RasterizedShape shape = test::rasterize_shape_m(truth, pixel, 1.0, 8.0, 2.0, seed);
+    const test::RasterizedShape shape = metre_wobble_mask(truth, seed);
     ASSERT_EQ(shape.buildings.size(), 1u);
     BuildingStart alone;
     alone.smoothing_noise_m = smoothing_noise;
@@ -676,13 +684,12 @@ TEST(NoisyMasks, ABatchLendsABlobItsStreetsLattice) {
   int aligned = 0, aligned_off = 0, lent_count = 0;
   for (std::uint64_t seed = 1; seed <= 4; ++seed) {
     std::vector<BuildingContour> buildings;
-    const test::RasterizedShape blob =
-        test::rasterize_shape_m(test::rotated({{{0, 0}, {6, 0}, {6, 5}, {0, 5}}, {}}, angle), pixel, 1.0, 8.0, 2.0, seed);
+    const test::RasterizedShape blob = metre_wobble_mask(small_house(angle), seed);
     ASSERT_EQ(blob.buildings.size(), 1u);
     buildings.push_back(blob.buildings[0]);
     for (int k = 0; k < 4; ++k) {
       const Vec2 shift(k % 2 ? 20.0 : -20.0, k / 2 ? 20.0 : -20.0);
-      const test::RasterizedShape house = test::rasterize_shape_m(test::rotated(kHouse, angle), pixel, 1.0, 8.0, 2.0, seed + 10 * (k + 1));
+      const test::RasterizedShape house = metre_wobble_mask(test::rotated(kHouse, angle), seed + 10 * (k + 1));
       ASSERT_EQ(house.buildings.size(), 1u);
       BuildingContour b = house.buildings[0];
       for (Ring& r : b.rings) for (Vec2& p : r) p += shift;
