@@ -607,30 +607,35 @@ TEST(Lattice, NeighboursLendTheLatticeTheyAgreeOn) {
   o.neighbour_radius_m = 30;
   o.neighbour_agreement = 0.8;
   const auto at = [](double deg) { return Vec2(std::cos(deg * M_PI / 180), std::sin(deg * M_PI / 180)); };
-  const auto chord = [&](double deg, double share) {
-    ChordLattice c;
-    c.direction = at(deg);
-    c.share = share;
-    return c;
-  };
   // 0: a blob without a lattice; 1, 2: houses at 20 and 22 degrees (22 the longer); 3: a house at
   // 65 degrees (the same lattice as -25, far off 20) 100 m away; 4: a blob between two houses at 0
-  // and 45 degrees, which disagree (their lattices are opposite, times four); 5, 6: those houses.
-  const std::vector<Vec2> centres = {{0, 0}, {10, 0}, {0, 12}, {100, 0}, {0, 300}, {10, 300}, {-10, 300}};
-  const std::vector<ChordLattice> chords = {chord(50, 0.2), chord(20, 0.8), chord(22, 0.8), chord(65, 0.9),
-                                            chord(0, 0.1), chord(0, 0.8), chord(45, 0.8)};
-  const std::vector<double> perimeters = {30, 40, 60, 40, 30, 40, 40};
-  const std::vector<Vec2> lent = neighbour_lattices(centres, chords, perimeters, o);
+  // and 45 degrees, which disagree (their lattices are opposite, times four); 5, 6: those houses;
+  // 7: a hall 120 m wide at 70 degrees beside the first blob, too large to lend (a tile finds its
+  // lenders within neighbour_radius_m plus neighbour_max_extent_m, 100 m).
+  const std::vector<Vec2> centres = {{0, 0}, {10, 0}, {0, 12}, {100, 0}, {0, 300}, {10, 300}, {-10, 300}, {-5, -5}};
+  const std::vector<double> degrees = {50, 20, 22, 65, 0, 0, 45, 70}, shares = {0.2, 0.8, 0.8, 0.9, 0.1, 0.8, 0.8, 0.9};
+  const std::vector<double> perimeters = {30, 40, 60, 40, 30, 40, 40, 300}, extents = {8, 12, 18, 12, 8, 12, 12, 120};
+  std::vector<LatticeLender> lenders;
+  std::vector<std::int64_t> ids;
+  for (std::size_t i = 0; i < centres.size(); ++i) {
+    ids.push_back(std::int64_t(100 - i));  // (given in any order: summed in order of id)
+    lenders.push_back({ids.back(), centres[i], at(degrees[i]), shares[i], perimeters[i], extents[i]});
+  }
+  const std::vector<Vec2> lent = neighbour_lattices(centres, ids, lenders, o);
   ASSERT_EQ(lent.size(), centres.size());
-  // The blob: 20 and 22 degrees weighted 40 : 60, about 21.2 (the far house is out of reach).
+  // The blob: 20 and 22 degrees weighted 40 : 60, about 21.2 (the far house is out of reach, the
+  // hall too large).
   ASSERT_GT(lent[0].squaredNorm(), 0);
   EXPECT_NEAR(angle_between_lattices_deg(lent[0], at(21.2)), 0, 0.1);
   // House 1's neighbours: house 2 alone (the blob has no lattice to lend).
   EXPECT_NEAR(angle_between_lattices_deg(lent[1], at(22)), 0, 1e-9);
   EXPECT_EQ(lent[3].squaredNorm(), 0);  // nobody within 30 m
   EXPECT_EQ(lent[4].squaredNorm(), 0);  // its neighbours disagree
+  // With no limit on the extent, the hall's lattice outweighs the houses': no agreement.
+  o.neighbour_max_extent_m = 0;
+  EXPECT_EQ(neighbour_lattices(centres, ids, lenders, o)[0].squaredNorm(), 0);
   o.neighbour_radius_m = 0;
-  for (const Vec2& l : neighbour_lattices(centres, chords, perimeters, o)) EXPECT_EQ(l.squaredNorm(), 0);  // off
+  for (const Vec2& l : neighbour_lattices(centres, ids, lenders, o)) EXPECT_EQ(l.squaredNorm(), 0);  // off
 }
 
 // The blob of the test above, on a street whose houses stand at its truth's angle: lent their
@@ -695,8 +700,8 @@ TEST(NoisyMasks, ABatchLendsABlobItsStreetsLattice) {
       for (Ring& r : b.rings) for (Vec2& p : r) p += shift;
       buildings.push_back(std::move(b));
     }
-    const RegularizedBatch lent = regularize_batch("deformation", buildings, pixel, CoreOptions{});
-    const RegularizedBatch alone = regularize_batch("deformation", buildings, pixel, off);
+    const RegularizedBatch lent = regularize_batch("deformation", buildings, pixel, CoreOptions{}, std::nullopt, Lenders{Lenders::From::batch, {}});
+    const RegularizedBatch alone = regularize_batch("deformation", buildings, pixel, off, std::nullopt, Lenders{Lenders::From::batch, {}});
     ASSERT_TRUE(lent.results[0].ok && alone.results[0].ok) << lent.results[0].reason << alone.results[0].reason;
     std::cerr << "seed " << seed << ": " << worst_wall(lent.results[0].footprint) << " (alone " << worst_wall(alone.results[0].footprint) << ")\n";
     // (The lattice lent is the houses' chords' under the same wobble: within a degree or two.)

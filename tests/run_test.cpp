@@ -103,6 +103,10 @@ class Run : public ::testing::Test {
   fs::path dir;
 };
 
+// Tiles of 32 m give the one-tile run's footprints, and `regularize`'s, on a mask where buildings
+// take their neighbours' lattice (lattice.neighbour_radius_m): each tile finds every building
+// that may lend to its own around them (lattice_lenders), whatever the tiling. Without the
+// neighbours' lattice (radius 0) some outlines differ.
 TEST_F(Run, DelftSmallTilesGiveTheSameFootprintsAsOneTile) {
   const std::string seg = test::test_data() + "/delft-ahn3-bgt/derived/top_class_50cm.tif";
   ASSERT_TRUE(fs::exists(seg));
@@ -113,6 +117,13 @@ TEST_F(Run, DelftSmallTilesGiveTheSameFootprintsAsOneTile) {
   const auto small = footprints(dir / "small_out"), whole = footprints(dir / "whole_out");
   EXPECT_GT(whole.size(), 30u);
   EXPECT_EQ(small, whole);
+  r = lodforge("regularize --mask " + seg + " --out " + (dir / "r.gpkg").string() + " --stats " + (dir / "r.json").string());
+  ASSERT_EQ(r.code, 0) << r.output;
+  EXPECT_GE(report_of(dir / "r.json").at("lattice_lent").get<int>(), 5);
+  EXPECT_TRUE(run_outlines(dir / "small_out") == gpkg_outlines(dir / "r.gpkg"));
+  r = lodforge("regularize --mask " + seg + " --out " + (dir / "alone.gpkg").string() + " --set stages.lattice.neighbour_radius_m=0");
+  ASSERT_EQ(r.code, 0) << r.output;
+  EXPECT_FALSE(gpkg_outlines(dir / "alone.gpkg") == gpkg_outlines(dir / "r.gpkg"));
 }
 
 class SynthRun : public Run {

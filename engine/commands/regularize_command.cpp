@@ -115,7 +115,8 @@ int run_regularize(int argc, char** argv) {
   if (threads > 0) limit = std::make_unique<tbb::global_control>(tbb::global_control::max_allowed_parallelism, threads);
   if (pools_noise(regularizer, options.core))
     spdlog::info("measuring the boundary noise of {} buildings, to pool it (stages.noise.pooled_floor)", count);
-  const RegularizedBatch batch = regularize_batch(regularizer, contours.buildings, pixel_size, options.core, std::nullopt, [&] {
+  const RegularizedBatch batch = regularize_batch(regularizer, contours.buildings, pixel_size, options.core, std::nullopt,
+                                                  Lenders{Lenders::From::batch, {}}, [&] {
     const std::size_t n = ++done;
     if (count >= 20 && n % (count / 10) == 0) spdlog::info("{}/{} buildings", n, count);
   });

@@ -4,6 +4,7 @@
 #include <chrono>
 #include <cmath>
 #include <iterator>
+#include <limits>
 #include <numeric>
 
 #include <tbb/parallel_for.h>
@@ -130,27 +131,29 @@ PooledStarts pool_starts(const std::vector<BuildingContour>& buildings, double p
 }
 
 // Each building's neighbours' lattice (lattice.neighbour_radius_m) into its start; starts are made
-// (empty, smoothed for smoothing_noise_m) where there are none. The chords' lattices of a start
-// are used, those of an empty one computed.
-void lend_neighbour_lattices(const std::vector<BuildingContour>& buildings, const CoreOptions& options, double smoothing_noise_m,
-                             std::vector<BuildingStart>& starts) {
+// (empty, smoothed for smoothing_noise_m) where there are none. Lent by the batch's own buildings
+// (their ids their indices; the chords' lattices of a start used, those of an empty one computed)
+// or by those given.
+void lend_neighbour_lattices(const std::vector<BuildingContour>& buildings, const Lenders& lenders, const CoreOptions& options,
+                             double smoothing_noise_m, std::vector<BuildingStart>& starts) {
   if (starts.empty()) {
     starts.resize(buildings.size());
     for (BuildingStart& s : starts) s.smoothing_noise_m = smoothing_noise_m;
   }
-  std::vector<Vec2> centres(buildings.size(), Vec2::Zero());
-  std::vector<ChordLattice> chords(buildings.size());
-  std::vector<double> perimeters(buildings.size(), 0.0);
+  const bool own = lenders.from == Lenders::From::batch;
+  std::vector<LatticeLender> own_lenders(own ? buildings.size() : 0);
+  std::vector<Vec2> centres(buildings.size(), Vec2::Constant(std::numeric_limits<double>::quiet_NaN()));
+  std::vector<std::int64_t> ids(buildings.size());
   tbb::parallel_for(std::size_t(0), buildings.size(), [&](std::size_t i) {
     const std::vector<Ring>& rings = buildings[i].rings;
-    if (rings.empty() || rings[0].empty()) return;
-    for (const Vec2& p : rings[0]) centres[i] += p;
-    centres[i] /= double(rings[0].size());
-    perimeters[i] = perimeter(rings[0]);
+    ids[i] = own ? std::int64_t(i) : contour_id(buildings[i]);
     const bool started = starts[i].normals.size() == rings.size();
-    chords[i] = started ? starts[i].chord : chord_lattice(rings, options.lattice);
+    const LatticeLender l = lattice_lender(ids[i], rings, own && !started ? chord_lattice(rings, options.lattice)
+                                                                         : own ? starts[i].chord : ChordLattice{});
+    centres[i] = l.centre;
+    if (own) own_lenders[i] = l;
   });
-  const std::vector<Vec2> lattices = neighbour_lattices(centres, chords, perimeters, options.lattice);
+  const std::vector<Vec2> lattices = neighbour_lattices(centres, ids, own ? std::move(own_lenders) : lenders.given, options.lattice);
   for (std::size_t i = 0; i < buildings.size(); ++i) starts[i].neighbour_lattice = lattices[i];
 }
 
@@ -162,7 +165,7 @@ bool pools_noise(const std::string& regularizer, const CoreOptions& options) {
 
 RegularizedBatch regularize_batch(const std::string& regularizer, const std::vector<BuildingContour>& buildings,
                                   double pixel_size, const CoreOptions& options, std::optional<MaskNoise> noise,
-                                  const std::function<void()>& on_done) {
+                                  const Lenders& lenders, const std::function<void()>& on_done) {
   RegularizedBatch batch;
   batch.results.resize(buildings.size());
   std::vector<BuildingStart> starts;
@@ -182,10 +185,9 @@ RegularizedBatch regularize_batch(const std::string& regularizer, const std::vec
     batch.noise_floor_m = pooled.noise.floor_m;
     batch.noise_smoothing_m = pooled.noise.smoothing_m;
   }
-  // The neighbours' lattices, where the batch is the whole mask (a tile's buildings are not all
-  // of a building's neighbours, and a footprint must not depend on the tiling).
-  if (!noise && regularizer == "deformation" && options.lattice.neighbour_radius_m > 0)
-    lend_neighbour_lattices(buildings, options, batch.noise_smoothing_m, starts);
+  // The neighbours' lattices.
+  if (lenders.from != Lenders::From::none && regularizer == "deformation" && options.lattice.neighbour_radius_m > 0)
+    lend_neighbour_lattices(buildings, lenders, options, batch.noise_smoothing_m, starts);
   tbb::parallel_for(std::size_t(0), buildings.size(), [&](std::size_t i) {
     batch.results[i] = regularize_with(regularizer, buildings[i].rings, pixel_size, options, batch.noise_floor_m,
                                        starts.empty() ? BuildingStart{} : std::move(starts[i]));
@@ -193,6 +195,50 @@ RegularizedBatch regularize_batch(const std::string& regularizer, const std::vec
     if (on_done) on_done();
   });
   return batch;
+}
+
+std::int64_t contour_id(const BuildingContour& building) {
+  return (std::int64_t(building.first_row) << 32) + std::int64_t(building.first_col);
+}
+
+std::vector<LatticeLender> lattice_lenders(const MaskWindowReader& mask, cv::Size raster, const GeoTransform& transform,
+                                           const ContourOptions& contour, const LatticeOptions& lattice,
+                                           const std::vector<BuildingContour>& buildings) {
+  std::vector<LatticeLender> lenders;
+  const double pixel_size = transform.pixel_size();
+  if (lattice.neighbour_radius_m <= 0 || lattice.neighbour_max_extent_m <= 0 || buildings.empty() || pixel_size <= 0) return lenders;
+  // The buildings' centres' box in pixels, with the margin: a lender within the radius of a
+  // centre, no wider than the extent, lies within both of it.
+  double x0 = std::numeric_limits<double>::infinity(), y0 = x0, x1 = -x0, y1 = -x0;
+  for (const BuildingContour& b : buildings) {
+    const LatticeLender l = lattice_lender(0, b.rings, {});
+    if (!l.centre.allFinite()) continue;
+    const Vec2 p = transform.to_pixel(l.centre);
+    x0 = std::min(x0, p.x()), x1 = std::max(x1, p.x()), y0 = std::min(y0, p.y()), y1 = std::max(y1, p.y());
+  }
+  if (!(x0 <= x1 && y0 <= y1)) return lenders;
+  const double margin = (lattice.neighbour_radius_m + lattice.neighbour_max_extent_m) / pixel_size + 2;
+  const cv::Rect full(0, 0, raster.width, raster.height);
+  const cv::Rect window = cv::Rect(cv::Point(int(std::max(-1.0, std::floor(x0 - margin))), int(std::max(-1.0, std::floor(y0 - margin)))),
+                                   cv::Point(int(std::min(double(raster.width) + 1, std::ceil(x1 + margin))),
+                                             int(std::min(double(raster.height) + 1, std::ceil(y1 + margin))))) & full;
+  if (window.empty()) return lenders;
+  // Traced: the components whole in it, no wider than the extent, whose box (which holds the
+  // centre) comes within the radius of the centres' box.
+  const double max_extent_px = lattice.neighbour_max_extent_m / pixel_size + 2, reach = lattice.neighbour_radius_m / pixel_size + 2;
+  const cv::Rect zone = cv::Rect(cv::Point(int(std::floor(x0 - reach)) - window.x, int(std::floor(y0 - reach)) - window.y),
+                                 cv::Point(int(std::ceil(x1 + reach)) - window.x, int(std::ceil(y1 + reach)) - window.y));
+  ContourResult traced = extract_contours(mask.read(window), transform.window(window.x, window.y), contour, [&](const cv::Rect& box, const cv::Point&) {
+    return !touches_inner_border(box, window, raster) && std::max(box.width, box.height) <= max_extent_px && !(box & zone).empty();
+  });
+  lenders.resize(traced.buildings.size());
+  tbb::parallel_for(std::size_t(0), traced.buildings.size(), [&](std::size_t i) {
+    BuildingContour& b = traced.buildings[i];
+    b.first_row += window.y;  // (in the raster, as the tiles' and the whole mask's)
+    b.first_col += window.x;
+    lenders[i] = lattice_lender(contour_id(b), b.rings, chord_lattice(b.rings, lattice));
+  });
+  return lenders;
 }
 
 std::vector<std::size_t> spread_indices(std::size_t n, std::size_t k) {

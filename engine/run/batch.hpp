@@ -2,12 +2,14 @@
 // and the boundary noise pooled over a mask's buildings that each of them allows for.
 #pragma once
 #include <cstddef>
+#include <cstdint>
 #include <functional>
 #include <optional>
 #include <string>
 #include <vector>
 
 #include "contour/contour.hpp"
+#include "directions/lattice.hpp"
 #include "pipeline/building.hpp"
 
 namespace lodforge {
@@ -32,19 +34,39 @@ struct RegularizedBatch {
   std::size_t noise_samples = 0;        // how many of them it was pooled over (0: given, or none)
 };
 
+// Whose lattices a batch's buildings may take (lattice.neighbour_radius_m, neighbour_lattices):
+// none, the batch's own buildings (a whole mask, as regularize holds it), or those given (a
+// tile's: lattice_lenders, every building that may lend to the tile's, whatever the tiling).
+struct Lenders {
+  enum class From { none, batch, given };
+  From from = From::none;
+  std::vector<LatticeLender> given;  // with From::given, ids as contour_id gives them
+};
+
+// A building's id among lenders: its first pixel (row, column) in the raster.
+std::int64_t contour_id(const BuildingContour& building);
+
 // The buildings through the regularizer. For the deformation chain, with the mask's noise given
 // (a run's survey), or else pooled over these buildings: each one started (start_building), their
 // noise samples pooled (pooled_noise_floor), in rounds, each smoothing the normals for the noise
 // the round before pooled and kept only where that measures more noise (smoothing.noise_rounds,
 // noise_gain), and each regularized from its start. The same results
-// whatever the thread count: samples are pooled in the buildings' order. Without a noise given
-// (the batch is a whole mask), each building is also lent its neighbours' lattice
-// (lattice.neighbour_radius_m, neighbour_lattices; with a noise given, a tile's buildings, none:
-// a footprint must not depend on the tiling). A building's seconds count its start's. on_done is
-// called after each building (from any thread).
+// whatever the thread count: samples are pooled in the buildings' order. Each building is also
+// lent its neighbours' lattice from `lenders` (the deformation chain only). A building's seconds
+// count its start's. on_done is called after each building (from any thread).
 RegularizedBatch regularize_batch(const std::string& regularizer, const std::vector<BuildingContour>& buildings,
                                   double pixel_size, const CoreOptions& options, std::optional<MaskNoise> noise = std::nullopt,
-                                  const std::function<void()>& on_done = {});
+                                  const Lenders& lenders = {}, const std::function<void()>& on_done = {});
+
+// The buildings that may lend their lattice to those given (lattice.neighbour_radius_m): every
+// building of the raster, traced whole, whose outer ring's box is at most
+// neighbour_max_extent_m wide and tall and lies within the radius plus that extent of one of
+// their centres, read in one window (their centres' box with that margin, and a pixel). The
+// same lattices as the whole mask lends, whatever the tiling. Empty when no lattice is lent
+// (the radius or the extent 0, or no buildings).
+std::vector<LatticeLender> lattice_lenders(const MaskWindowReader& mask, cv::Size raster, const GeoTransform& transform,
+                                           const ContourOptions& contour, const LatticeOptions& lattice,
+                                           const std::vector<BuildingContour>& buildings);
 
 // k of the indices 0..n-1 spread evenly over them (j n / k for j < k; all of them when k >= n):
 // the buildings a wider smoothing round is judged on (smoothing.noise_gain_buildings).

@@ -2,7 +2,10 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <map>
+
+#include "geometry/polygon.hpp"
 
 namespace lodforge {
 
@@ -89,24 +92,49 @@ ChordLattice chord_lattice(const std::vector<Ring>& rings, const LatticeOptions&
   return {Vec2(std::cos(angle), std::sin(angle)), share, std::move(samples)};
 }
 
-std::vector<Vec2> neighbour_lattices(const std::vector<Vec2>& centres, const std::vector<ChordLattice>& chords,
-                                     const std::vector<double>& perimeters, const LatticeOptions& o) {
+LatticeLender lattice_lender(std::int64_t id, const std::vector<Ring>& rings, const ChordLattice& chord) {
+  LatticeLender l;
+  l.id = id;
+  l.direction = chord.direction;
+  l.share = chord.share;
+  if (rings.empty() || rings[0].empty()) {
+    l.centre = Vec2::Constant(std::numeric_limits<double>::quiet_NaN());
+    return l;
+  }
+  Vec2 low = rings[0][0], high = rings[0][0];
+  for (const Vec2& p : rings[0]) {
+    l.centre += p;
+    low = low.cwiseMin(p);
+    high = high.cwiseMax(p);
+  }
+  l.centre /= double(rings[0].size());
+  l.perimeter = perimeter(rings[0]);
+  l.extent = (high - low).maxCoeff();
+  return l;
+}
+
+std::vector<Vec2> neighbour_lattices(const std::vector<Vec2>& centres, const std::vector<std::int64_t>& ids,
+                                     std::vector<LatticeLender> lenders, const LatticeOptions& o) {
   const std::size_t n = centres.size();
   std::vector<Vec2> out(n, Vec2::Zero());
   const double radius = o.neighbour_radius_m;
-  if (radius <= 0 || chords.size() != n || perimeters.size() != n) return out;
-  // The buildings with a lattice of their own, bucketed in cells of the radius (a map: ordered),
-  // each with its weight and its lattice's angle times four as a unit vector.
+  if (radius <= 0 || ids.size() != n) return out;
+  // The lenders that count, in order of id, bucketed in cells of the radius (a map: ordered), each
+  // with its weight and its lattice's angle times four as a unit vector.
+  std::erase_if(lenders, [&](const LatticeLender& l) {
+    return l.share < o.min_share || l.direction.squaredNorm() == 0 || !l.centre.allFinite() ||
+           (o.neighbour_max_extent_m > 0 && l.extent > o.neighbour_max_extent_m);
+  });
+  std::sort(lenders.begin(), lenders.end(), [](const LatticeLender& a, const LatticeLender& b) { return a.id < b.id; });
   std::map<std::pair<long, long>, std::vector<std::size_t>> cells;
-  std::vector<Vec2> quadrupled(n, Vec2::Zero());
-  std::vector<double> weights(n, 0.0);
+  std::vector<Vec2> quadrupled(lenders.size());
+  std::vector<double> weights(lenders.size());
   const auto cell_of = [&](const Vec2& c) { return std::make_pair(long(std::floor(c.x() / radius)), long(std::floor(c.y() / radius))); };
-  for (std::size_t j = 0; j < n; ++j) {
-    if (chords[j].share < o.min_share || chords[j].direction.squaredNorm() == 0 || !centres[j].allFinite()) continue;
-    const double a = 4.0 * std::atan2(chords[j].direction.y(), chords[j].direction.x());
+  for (std::size_t j = 0; j < lenders.size(); ++j) {
+    const double a = 4.0 * std::atan2(lenders[j].direction.y(), lenders[j].direction.x());
     quadrupled[j] = Vec2(std::cos(a), std::sin(a));
-    weights[j] = chords[j].share * perimeters[j];
-    cells[cell_of(centres[j])].push_back(j);
+    weights[j] = lenders[j].share * lenders[j].perimeter;
+    cells[cell_of(lenders[j].centre)].push_back(j);
   }
   std::vector<std::size_t> near;
   for (std::size_t i = 0; i < n; ++i) {
@@ -117,8 +145,8 @@ std::vector<Vec2> neighbour_lattices(const std::vector<Vec2>& centres, const std
       for (long x = cx - 1; x <= cx + 1; ++x)
         if (const auto it = cells.find({x, y}); it != cells.end())
           for (std::size_t j : it->second)
-            if (j != i && (centres[j] - centres[i]).norm() <= radius) near.push_back(j);
-    std::sort(near.begin(), near.end());  // (the sums in index order)
+            if (lenders[j].id != ids[i] && (lenders[j].centre - centres[i]).norm() <= radius) near.push_back(j);
+    std::sort(near.begin(), near.end());  // (the sums in order of id)
     double sx = 0, sy = 0, total = 0;
     for (std::size_t j : near) {
       sx += weights[j] * quadrupled[j].x();

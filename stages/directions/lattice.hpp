@@ -3,6 +3,7 @@
 // over a few metres) the smoothed normals spread by tens of degrees and the labeled main direction
 // follows a flank; a chord spanning several metres of contour averages the wobble out.
 #pragma once
+#include <cstdint>
 #include <utility>
 #include <vector>
 
@@ -25,6 +26,7 @@ struct LatticeOptions {
   double fit_keep_uncertainty = 2; // ... and the labeled lattice kept within this many standard errors of it
   double neighbour_radius_m = 30;  // buildings within this (m, centre to centre) lend an undetermined one their lattice
   double neighbour_agreement = 0.8;  // ... where they agree on it this well (mean resultant of 4 x their angles)
+  double neighbour_max_extent_m = 100;  // ... lent only by buildings whose box is at most this wide and tall (m)
 
   template <class V>
   void visit(V& v) {
@@ -40,6 +42,7 @@ struct LatticeOptions {
     v("fit_outlier_noise", fit_outlier_noise, "... samples farther than this many spreads (the noise of the runs about their lines) from their run's line, and runs whose own RMS about it is over this many times the runs' median (a run stepping along row houses), left out of the fit", Check::above(0));
     v("neighbour_radius_m", neighbour_radius_m, "a building whose own lattice is undetermined (the neighbours' lattice within fit_keep_uncertainty standard errors of its fitted one; without a fit, its chords giving it none) takes the lattice of the buildings around it: those whose centres lie within this distance of its centre and whose chords give them a lattice, weighted by that share times their perimeter (m, 0 = off). Under a metre of wobble a small house is a blob whose own direction is anyone's; its street's is not", Check::at_least(0));
     v("neighbour_agreement", neighbour_agreement, "... when they agree: the length of the weighted mean of their lattices' directions times four (as unit vectors) at least this (1: all alike)", Check::between(0, 1));
+    v("neighbour_max_extent_m", neighbour_max_extent_m, "... and lent only by buildings whose outer ring's box is at most this wide and tall (m): a tiled run then finds every building that may lend to its own within a margin of neighbour_radius_m plus this around them, and lends what the whole mask would (0: no limit, tiles lend nothing)", Check::at_least(0));
     v("fit_keep_uncertainty", fit_keep_uncertainty, "... and the labeled lattice (the main direction, or the chords' above) kept where it lies within this many standard errors of the fit (the spread correlated over corners.snap_correlation_m): a clean wall's labeled direction is exact", Check::at_least(0));
   }
 };
@@ -58,12 +61,25 @@ struct ChordLattice {
 };
 ChordLattice chord_lattice(const std::vector<Ring>& rings, const LatticeOptions& options);
 
-// Per building, the lattice its neighbours agree on (neighbour_radius_m, neighbour_agreement):
-// a unit normal, or zero where none is within reach, none of them has a lattice of its own, or
-// they disagree. centres: the buildings' centres; chords: their chords' lattices; perimeters:
-// their outer rings'. The building's own lattice does not count. Deterministic: each sum runs
-// over the neighbours in index order.
-std::vector<Vec2> neighbour_lattices(const std::vector<Vec2>& centres, const std::vector<ChordLattice>& chords,
-                                     const std::vector<double>& perimeters, const LatticeOptions& options);
+// What a building may lend its neighbours: its chords' lattice, where they give one, and what
+// weighs it.
+struct LatticeLender {
+  std::int64_t id = 0;  // the building's (its first pixel in raster order): a building lends to no one of the same id
+  Vec2 centre = Vec2::Zero();  // of its outer ring's vertices
+  Vec2 direction = Vec2::Zero();  // its chords' lattice (ChordLattice::direction)
+  double share = 0;               // ... and their share near it
+  double perimeter = 0;           // of its outer ring
+  double extent = 0;              // the larger side of its outer ring's box (m)
+};
+LatticeLender lattice_lender(std::int64_t id, const std::vector<Ring>& rings, const ChordLattice& chord);
+
+// Per building (centres and ids), the lattice its neighbours agree on (neighbour_radius_m,
+// neighbour_agreement): a unit normal, or zero where none is within reach, none of them has a
+// lattice of its own, or they disagree. The lenders that count: within the radius, their chords
+// giving them a lattice (min_share), their extent at most neighbour_max_extent_m, not the building
+// itself (same id); each weighs its share times its perimeter. Deterministic: each sum runs over
+// the lenders in order of id, whatever order they are given in.
+std::vector<Vec2> neighbour_lattices(const std::vector<Vec2>& centres, const std::vector<std::int64_t>& ids,
+                                     std::vector<LatticeLender> lenders, const LatticeOptions& options);
 
 }  // namespace lodforge
