@@ -132,7 +132,8 @@ PooledStarts pool_starts(const std::vector<BuildingContour>& buildings, double p
 
 // Each building's neighbours' lattice (lattice.neighbour_radius_m) into its start; starts are made
 // (empty, smoothed for smoothing_noise_m) where there are none. Lent by the batch's own buildings
-// (their ids their indices; the chords' lattices of a start used, those of an empty one computed)
+// (their ids their indices, in the order of their first pixels as extract_contours sorts them, which
+// the tiles' ids sum in; the chords' lattices of a start used, those of an empty one computed)
 // or by those given.
 void lend_neighbour_lattices(const std::vector<BuildingContour>& buildings, const Lenders& lenders, const CoreOptions& options,
                              double smoothing_noise_m, std::vector<BuildingStart>& starts) {
