@@ -5,6 +5,7 @@
 #include <cmath>
 #include <iterator>
 #include <limits>
+#include <map>
 #include <numeric>
 
 #include <tbb/parallel_for.h>
@@ -211,9 +212,13 @@ std::vector<LatticeLender> lattice_lenders(const MaskWindowReader& mask, cv::Siz
   // The buildings' centres' box in pixels, with the margin: a lender within the radius of a
   // centre, no wider than the extent, lies within both of it.
   double x0 = std::numeric_limits<double>::infinity(), y0 = x0, x1 = -x0, y1 = -x0;
+  const double radius = lattice.neighbour_radius_m;
+  const auto cell_of = [&](const Vec2& c) { return std::make_pair(long(std::floor(c.x() / radius)), long(std::floor(c.y() / radius))); };
+  std::map<std::pair<long, long>, std::vector<Vec2>> centres;  // the buildings', in cells of the radius
   for (const BuildingContour& b : buildings) {
     const LatticeLender l = lattice_lender(0, b.rings, {});
     if (!l.centre.allFinite()) continue;
+    centres[cell_of(l.centre)].push_back(l.centre);
     const Vec2 p = transform.to_pixel(l.centre);
     x0 = std::min(x0, p.x()), x1 = std::max(x1, p.x()), y0 = std::min(y0, p.y()), y1 = std::max(y1, p.y());
   }
@@ -232,13 +237,32 @@ std::vector<LatticeLender> lattice_lenders(const MaskWindowReader& mask, cv::Siz
   ContourResult traced = extract_contours(mask.read(window), transform.window(window.x, window.y), contour, [&](const cv::Rect& box, const cv::Point&) {
     return !touches_inner_border(box, window, raster) && std::max(box.width, box.height) <= max_extent_px && !(box & zone).empty();
   });
+  // Each one's chords' lattice (the costly part) where its centre lies within the radius of one
+  // of the buildings': the others lend to none of them.
+  std::vector<char> near(traced.buildings.size(), 0);
   lenders.resize(traced.buildings.size());
   tbb::parallel_for(std::size_t(0), traced.buildings.size(), [&](std::size_t i) {
     BuildingContour& b = traced.buildings[i];
     b.first_row += window.y;  // (in the raster, as the tiles' and the whole mask's)
     b.first_col += window.x;
-    lenders[i] = lattice_lender(contour_id(b), b.rings, chord_lattice(b.rings, lattice));
+    LatticeLender l = lattice_lender(contour_id(b), b.rings, {});
+    if (!l.centre.allFinite()) return;
+    const auto [cx, cy] = cell_of(l.centre);
+    for (long y = cy - 1; y <= cy + 1 && !near[i]; ++y)
+      for (long x = cx - 1; x <= cx + 1 && !near[i]; ++x)
+        if (const auto it = centres.find({x, y}); it != centres.end())
+          for (const Vec2& c : it->second)
+            if ((c - l.centre).norm() <= radius) { near[i] = 1; break; }
+    if (!near[i]) return;
+    const ChordLattice chord = chord_lattice(b.rings, lattice);
+    l.direction = chord.direction;
+    l.share = chord.share;
+    lenders[i] = l;
   });
+  std::size_t kept = 0;
+  for (std::size_t i = 0; i < lenders.size(); ++i)
+    if (near[i]) lenders[kept++] = lenders[i];
+  lenders.resize(kept);
   return lenders;
 }
 

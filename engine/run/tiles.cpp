@@ -76,21 +76,26 @@ cv::Mat MaskWindowReader::read(const cv::Rect& w) const {
     read_window(impl_->cache, *impl_->dataset, impl_->path, b, bytes ? GDT_Byte : GDT_Int32, w, m.data);
     return m;
   };
+  // The matches are 0 / 255, combined as such, and taken to 0 / 1 once (a bitwise and: dividing
+  // by 255 went through a scaled conversion, half of a window's read).
   cv::Mat mask;
   if (impl_->selector.rgb) {
-    mask = cv::Mat::ones(w.size(), CV_8U);
     for (int b = 0; b < 3; ++b) {
-      cv::Mat match = band(b + 1) == (*impl_->selector.rgb)[b];
-      cv::bitwise_and(mask, match / 255, mask);
+      cv::Mat match;
+      cv::compare(band(b + 1), cv::Scalar((*impl_->selector.rgb)[b]), match, cv::CMP_EQ);
+      if (b == 0) mask = match;
+      else cv::bitwise_and(mask, match, mask);
     }
   } else {
     const cv::Mat values = band(1);
     mask = cv::Mat::zeros(w.size(), CV_8U);
     for (int v : impl_->selector.values) {
-      cv::Mat match = values == v;
-      cv::bitwise_or(mask, match / 255, mask);
+      cv::Mat match;
+      cv::compare(values, cv::Scalar(v), match, cv::CMP_EQ);
+      cv::bitwise_or(mask, match, mask);
     }
   }
+  cv::bitwise_and(mask, cv::Scalar(1), mask);
   return mask;
 }
 
