@@ -361,6 +361,51 @@ TEST_F(Run, AFastWobbleIsSmoothedAlikeInARunAndInRegularize) {
   EXPECT_TRUE(run == regularized) << run.size() << " against " << regularized.size();
 }
 
+// The lenders' margins in pixels follow the geotransform: north-up square pixels (metres over
+// the pixel size), pixels turned by 45 degrees (a box of S a side spans S sqrt 2 along either
+// pixel axis), and pixels of 0.5 x 0.25 m (twice as many columns, four times as many rows a metre).
+TEST(LatticeLenders, MarginsFollowTheGeotransform) {
+  LatticeOptions o;
+  o.neighbour_radius_m = 30;
+  o.neighbour_max_extent_m = 100;
+  GeoTransform north;
+  north.c = {1000, 0.25, 0, 2000, 0, -0.25};
+  LenderMargins m = lender_margins(north, o);
+  EXPECT_NEAR(m.reach.x(), 122, 1e-9);
+  EXPECT_NEAR(m.reach.y(), 122, 1e-9);
+  EXPECT_NEAR(m.extent.x(), 402, 1e-9);
+  EXPECT_NEAR(m.window.y(), 122 + 402, 1e-9);
+  const double p = 0.5, a = M_PI / 4;
+  GeoTransform turned;
+  turned.c = {1000, p * std::cos(a), p * std::sin(a), 2000, p * std::sin(a), -p * std::cos(a)};
+  m = lender_margins(turned, o);
+  EXPECT_NEAR(m.reach.x(), 30 / p + 2, 1e-9);
+  EXPECT_NEAR(m.extent.x(), 100 * std::sqrt(2.0) / p + 2, 1e-9);
+  EXPECT_NEAR(m.extent.y(), 100 * std::sqrt(2.0) / p + 2, 1e-9);
+  GeoTransform oblong;
+  oblong.c = {1000, 0.5, 0, 2000, 0, -0.25};
+  m = lender_margins(oblong, o);
+  EXPECT_NEAR(m.reach.x(), 30 * 2 + 2, 1e-9);
+  EXPECT_NEAR(m.reach.y(), 30 * 4 + 2, 1e-9);
+  EXPECT_NEAR(m.extent.y(), 100 * 4 + 2, 1e-9);
+}
+
+// A neighbours' lattice the tiles cannot lend within the largest window a tile may read is
+// refused, naming the keys; without a limit on the lenders' extent the run says it lends none.
+TEST_F(Run, LendersBeyondTheLargestWindowAreRefused) {
+  const Result made = lodforge("synth --out " + (dir / "c").string() + " --size-m 120 --seed 2");
+  ASSERT_EQ(made.code, 0) << made.output;
+  const std::string seg = (dir / "c" / "seg_class.tif").string();
+  Result r = lodforge("run " + job("wide", seg, 100).string() + " --set tiling.max_window_m=300");
+  EXPECT_NE(r.code, 0);
+  EXPECT_NE(r.output.find("neighbour_max_extent_m"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("tiling.max_window_m"), std::string::npos) << r.output;
+  EXPECT_FALSE(fs::exists(dir / "wide_out" / "report.json"));
+  r = lodforge("run " + job("none", seg, 100).string() + " --set stages.lattice.neighbour_max_extent_m=0");
+  EXPECT_EQ(r.code, 0) << r.output;
+  EXPECT_NE(r.output.find("lends no building its neighbours' lattice"), std::string::npos) << r.output;
+}
+
 // The buildings a smoothing round is judged on spread over all of them, in order, each once.
 TEST(NoiseSurvey, TheJudgedBuildingsSpreadOverTheMask) {
   EXPECT_EQ(spread_indices(10, 4), (std::vector<std::size_t>{0, 2, 5, 7}));

@@ -213,6 +213,26 @@ int run_job(int argc, char** argv) {
   const TileGrid grid(seg.size, int(std::lround(job.tiling.tile_size_m / pixel)));
   const int halo_px = int(std::ceil(job.tiling.halo_m / pixel));
   const int max_window_px = int(std::ceil(job.tiling.max_window_m / pixel));
+  // The window a tile reads its lattice lenders in: its buildings' centres with the lenders'
+  // margin around them, within the largest window a tile may read (for a tile of ordinary
+  // buildings).
+  const LatticeOptions& lattice = job.stages.core.lattice;
+  if (job.regularizer == "deformation" && lattice.neighbour_radius_m > 0) {
+    if (lattice.neighbour_max_extent_m <= 0) {
+      spdlog::warn("stages.lattice.neighbour_max_extent_m: 0 (no limit): a tiled run lends no building its neighbours' lattice "
+                   "(`lodforge regularize` lends every building's); give a limit (default 100 m) for the run to lend what "
+                   "regularize lends");
+    } else {
+      const LenderMargins m = lender_margins(seg.transform, lattice);
+      const double side = double(grid.tile_px + 2 * halo_px) + 2 * std::max(m.window.x(), m.window.y());
+      if (side > max_window_px)
+        throw InputError("stages.lattice.neighbour_radius_m + neighbour_max_extent_m: " + std::to_string(lattice.neighbour_radius_m) +
+                         " + " + std::to_string(lattice.neighbour_max_extent_m) + " m around a tile of " +
+                         std::to_string(job.tiling.tile_size_m) + " m makes windows of " + std::to_string(side * pixel) +
+                         " m, more than tiling.max_window_m = " + std::to_string(job.tiling.max_window_m) +
+                         " m; give smaller tiles or a smaller neighbour_max_extent_m, or a larger max_window_m");
+    }
+  }
   std::vector<int> tiles;
   for (int t = 0; t < grid.count(); ++t) if (t % shard.count == shard.index) tiles.push_back(t);
   spdlog::info("{}: {} x {} pixels of {:.3g} m, {} tiles of {} m ({} in this shard {}/{}), {} threads",

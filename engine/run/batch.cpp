@@ -203,6 +203,21 @@ std::int64_t contour_id(const BuildingContour& building) {
   return (std::int64_t(building.first_row) << 32) + std::int64_t(building.first_col);
 }
 
+LenderMargins lender_margins(const GeoTransform& transform, const LatticeOptions& lattice) {
+  // A map offset d moves the pixel column by r0 . d and the row by r1 . d (the inverse's rows):
+  // by at most |r|_2 for a distance of one, and |r|_1 across a box of one a side.
+  const auto& c = transform.c;
+  const double det = c[1] * c[5] - c[2] * c[4];
+  LenderMargins m;
+  if (det == 0 || !std::isfinite(det)) return m;
+  const Vec2 r0 = Vec2(c[5], -c[2]) / det, r1 = Vec2(-c[4], c[1]) / det;
+  const double radius = std::max(0.0, lattice.neighbour_radius_m), extent = std::max(0.0, lattice.neighbour_max_extent_m);
+  m.reach = Vec2(radius * r0.norm(), radius * r1.norm()) + Vec2::Constant(2);
+  m.extent = Vec2(extent * r0.lpNorm<1>(), extent * r1.lpNorm<1>()) + Vec2::Constant(2);
+  m.window = m.reach + m.extent;
+  return m;
+}
+
 std::vector<LatticeLender> lattice_lenders(const MaskWindowReader& mask, cv::Size raster, const GeoTransform& transform,
                                            const ContourOptions& contour, const LatticeOptions& lattice,
                                            const std::vector<BuildingContour>& buildings) {
@@ -223,19 +238,18 @@ std::vector<LatticeLender> lattice_lenders(const MaskWindowReader& mask, cv::Siz
     x0 = std::min(x0, p.x()), x1 = std::max(x1, p.x()), y0 = std::min(y0, p.y()), y1 = std::max(y1, p.y());
   }
   if (!(x0 <= x1 && y0 <= y1)) return lenders;
-  const double margin = (lattice.neighbour_radius_m + lattice.neighbour_max_extent_m) / pixel_size + 2;
+  const LenderMargins m = lender_margins(transform, lattice);
   const cv::Rect full(0, 0, raster.width, raster.height);
-  const cv::Rect window = cv::Rect(cv::Point(int(std::max(-1.0, std::floor(x0 - margin))), int(std::max(-1.0, std::floor(y0 - margin)))),
-                                   cv::Point(int(std::min(double(raster.width) + 1, std::ceil(x1 + margin))),
-                                             int(std::min(double(raster.height) + 1, std::ceil(y1 + margin))))) & full;
+  const cv::Rect window = cv::Rect(cv::Point(int(std::max(-1.0, std::floor(x0 - m.window.x()))), int(std::max(-1.0, std::floor(y0 - m.window.y())))),
+                                   cv::Point(int(std::min(double(raster.width) + 1, std::ceil(x1 + m.window.x()))),
+                                             int(std::min(double(raster.height) + 1, std::ceil(y1 + m.window.y()))))) & full;
   if (window.empty()) return lenders;
   // Traced: the components whole in it, no wider than the extent, whose box (which holds the
   // centre) comes within the radius of the centres' box.
-  const double max_extent_px = lattice.neighbour_max_extent_m / pixel_size + 2, reach = lattice.neighbour_radius_m / pixel_size + 2;
-  const cv::Rect zone = cv::Rect(cv::Point(int(std::floor(x0 - reach)) - window.x, int(std::floor(y0 - reach)) - window.y),
-                                 cv::Point(int(std::ceil(x1 + reach)) - window.x, int(std::ceil(y1 + reach)) - window.y));
+  const cv::Rect zone = cv::Rect(cv::Point(int(std::floor(x0 - m.reach.x())) - window.x, int(std::floor(y0 - m.reach.y())) - window.y),
+                                 cv::Point(int(std::ceil(x1 + m.reach.x())) - window.x, int(std::ceil(y1 + m.reach.y())) - window.y));
   ContourResult traced = extract_contours(mask.read(window), transform.window(window.x, window.y), contour, [&](const cv::Rect& box, const cv::Point&) {
-    return !touches_inner_border(box, window, raster) && std::max(box.width, box.height) <= max_extent_px && !(box & zone).empty();
+    return !touches_inner_border(box, window, raster) && box.width <= m.extent.x() && box.height <= m.extent.y() && !(box & zone).empty();
   });
   // Each one's chords' lattice (the costly part) where its centre lies within the radius of one
   // of the buildings': the others lend to none of them.

@@ -58,6 +58,15 @@ RegularizedBatch regularize_batch(const std::string& regularizer, const std::vec
                                   double pixel_size, const CoreOptions& options, std::optional<MaskNoise> noise = std::nullopt,
                                   const Lenders& lenders = {}, const std::function<void()>& on_done = {});
 
+// In pixels along the raster's columns and rows (x, y), for any geotransform: how far a lender's
+// centre may lie from a building's centre (the radius), how wide and tall a lender's box may be
+// (the extent), and the margin around the buildings' centres within which every lender lies
+// (both), each with two pixels to spare.
+struct LenderMargins {
+  Vec2 reach = Vec2::Zero(), extent = Vec2::Zero(), window = Vec2::Zero();
+};
+LenderMargins lender_margins(const GeoTransform& transform, const LatticeOptions& lattice);
+
 // The buildings that may lend their lattice to those given (lattice.neighbour_radius_m): every
 // building of the raster, traced whole, whose outer ring's box is at most
 // neighbour_max_extent_m wide and tall and lies within the radius plus that extent of one of

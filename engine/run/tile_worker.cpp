@@ -485,7 +485,8 @@ std::shared_ptr<TileResult> process_tile(const RunPlan& plan, int tile) {
     lenders.from = Lenders::From::given;
     r->contour_seconds += seconds_since(traced);
     for (const LatticeLender& l : lenders.given) {
-      const double fields[] = {double(l.id), l.centre.x(), l.centre.y(), l.direction.x(), l.direction.y(), l.share, l.perimeter, l.extent};
+      const double fields[] = {l.centre.x(), l.centre.y(), l.direction.x(), l.direction.y(), l.share, l.perimeter, l.extent};
+      lenders_key = fnv1a(&l.id, sizeof l.id, lenders_key);
       lenders_key = fnv1a(fields, sizeof fields, lenders_key);
     }
   }
