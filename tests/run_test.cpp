@@ -361,6 +361,36 @@ TEST_F(Run, AFastWobbleIsSmoothedAlikeInARunAndInRegularize) {
   EXPECT_TRUE(run == regularized) << run.size() << " against " << regularized.size();
 }
 
+// At 0.1 m pixels (not exact in binary) under a fractional origin and half a metre of wobble,
+// tiles of 47 m, one tile and `regularize` give the same outlines (16 buildings): a
+// window's coordinates (its origin plus its pixels) come out as the whole raster's.
+TEST_F(Run, TilesAndRegularizeAgreeOnAnInexactGrid) {
+  const Result made = lodforge("synth --out " + (dir / "w").string() + " --size-m 200 --pixel-size 0.1 --seed 6 --set boundary_noise_m=0.5");
+  ASSERT_EQ(made.code, 0) << made.output;
+  GDALAllRegister();
+  const fs::path moved = dir / "w" / "moved.tif";
+  {
+    GDALDataset* source = static_cast<GDALDataset*>(GDALOpen((dir / "w" / "seg_class.tif").c_str(), GA_ReadOnly));
+    ASSERT_NE(source, nullptr);
+    GDALDataset* copy = GetGDALDriverManager()->GetDriverByName("GTiff")->CreateCopy(moved.c_str(), source, FALSE, nullptr, nullptr, nullptr);
+    ASSERT_NE(copy, nullptr);
+    double gt[6] = {85000.0371, 0.1, 0, 447000.0913, 0, -0.1};
+    copy->SetGeoTransform(gt);
+    GDALClose(copy);
+    GDALClose(source);
+  }
+  Result r = lodforge("run " + job("small", moved.string(), 47).string());
+  ASSERT_EQ(r.code, 0) << r.output;
+  r = lodforge("run " + job("whole", moved.string(), 200).string());
+  ASSERT_EQ(r.code, 0) << r.output;
+  r = lodforge("regularize --mask " + moved.string() + " --out " + (dir / "r.gpkg").string() + " --stats " + (dir / "r.json").string());
+  ASSERT_EQ(r.code, 0) << r.output;
+  EXPECT_GE(report_of(dir / "r.json").at("buildings").get<int>(), 10);
+  const auto small = run_outlines(dir / "small_out"), whole = run_outlines(dir / "whole_out"), regularized = gpkg_outlines(dir / "r.gpkg");
+  EXPECT_TRUE(small == whole);
+  EXPECT_TRUE(whole == regularized) << whole.size() << " against " << regularized.size();
+}
+
 // The lenders' margins in pixels follow the geotransform: north-up square pixels (metres over
 // the pixel size), pixels turned by 45 degrees (a box of S a side spans S sqrt 2 along either
 // pixel axis), and pixels of 0.5 x 0.25 m (twice as many columns, four times as many rows a metre).
