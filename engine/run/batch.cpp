@@ -5,7 +5,7 @@
 #include <cmath>
 #include <iterator>
 #include <limits>
-#include <map>
+#include <optional>
 #include <numeric>
 
 #include <tbb/parallel_for.h>
@@ -144,16 +144,18 @@ void lend_neighbour_lattices(const std::vector<BuildingContour>& buildings, cons
   }
   const bool own = lenders.from == Lenders::From::batch;
   std::vector<LatticeLender> own_lenders(own ? buildings.size() : 0);
-  std::vector<Vec2> centres(buildings.size(), Vec2::Constant(std::numeric_limits<double>::quiet_NaN()));
+  std::vector<Vec2> centres(buildings.size());
   std::vector<std::int64_t> ids(buildings.size());
   tbb::parallel_for(std::size_t(0), buildings.size(), [&](std::size_t i) {
     const std::vector<Ring>& rings = buildings[i].rings;
     ids[i] = own ? std::int64_t(i) : contour_id(buildings[i]);
+    if (!own) {
+      centres[i] = lattice_lender(ids[i], rings, {}).centre;
+      return;
+    }
     const bool started = starts[i].normals.size() == rings.size();
-    const LatticeLender l = lattice_lender(ids[i], rings, own && !started ? chord_lattice(rings, options.lattice)
-                                                                         : own ? starts[i].chord : ChordLattice{});
-    centres[i] = l.centre;
-    if (own) own_lenders[i] = l;
+    own_lenders[i] = started ? lattice_lender(ids[i], rings, starts[i].chord) : lattice_lender(ids[i], rings, chord_lattice(rings, options.lattice));
+    centres[i] = own_lenders[i].centre;
   });
   const std::vector<Vec2> lattices = neighbour_lattices(centres, ids, own ? std::move(own_lenders) : lenders.given, options.lattice);
   for (std::size_t i = 0; i < buildings.size(); ++i) starts[i].neighbour_lattice = lattices[i];
@@ -227,13 +229,11 @@ std::vector<LatticeLender> lattice_lenders(const MaskWindowReader& mask, cv::Siz
   // The buildings' centres' box in pixels, with the margin: a lender within the radius of a
   // centre, no wider than the extent, lies within both of it.
   double x0 = std::numeric_limits<double>::infinity(), y0 = x0, x1 = -x0, y1 = -x0;
-  const double radius = lattice.neighbour_radius_m;
-  const auto cell_of = [&](const Vec2& c) { return std::make_pair(long(std::floor(c.x() / radius)), long(std::floor(c.y() / radius))); };
-  std::map<std::pair<long, long>, std::vector<Vec2>> centres;  // the buildings', in cells of the radius
+  std::vector<Vec2> centres;
   for (const BuildingContour& b : buildings) {
     const LatticeLender l = lattice_lender(0, b.rings, {});
     if (!l.centre.allFinite()) continue;
-    centres[cell_of(l.centre)].push_back(l.centre);
+    centres.push_back(l.centre);
     const Vec2 p = transform.to_pixel(l.centre);
     x0 = std::min(x0, p.x()), x1 = std::max(x1, p.x()), y0 = std::min(y0, p.y()), y1 = std::max(y1, p.y());
   }
@@ -253,30 +253,21 @@ std::vector<LatticeLender> lattice_lenders(const MaskWindowReader& mask, cv::Siz
   });
   // Each one's chords' lattice (the costly part) where its centre lies within the radius of one
   // of the buildings': the others lend to none of them.
-  std::vector<char> near(traced.buildings.size(), 0);
-  lenders.resize(traced.buildings.size());
+  const PointsWithinRadius within(std::move(centres), lattice.neighbour_radius_m);
+  std::vector<std::optional<LatticeLender>> found(traced.buildings.size());
   tbb::parallel_for(std::size_t(0), traced.buildings.size(), [&](std::size_t i) {
     BuildingContour& b = traced.buildings[i];
     b.first_row += window.y;  // (in the raster, as the tiles' and the whole mask's)
     b.first_col += window.x;
     LatticeLender l = lattice_lender(contour_id(b), b.rings, {});
-    if (!l.centre.allFinite()) return;
-    const auto [cx, cy] = cell_of(l.centre);
-    for (long y = cy - 1; y <= cy + 1 && !near[i]; ++y)
-      for (long x = cx - 1; x <= cx + 1 && !near[i]; ++x)
-        if (const auto it = centres.find({x, y}); it != centres.end())
-          for (const Vec2& c : it->second)
-            if ((c - l.centre).norm() <= radius) { near[i] = 1; break; }
-    if (!near[i]) return;
+    if (!within.any_near(l.centre)) return;
     const ChordLattice chord = chord_lattice(b.rings, lattice);
     l.direction = chord.direction;
     l.share = chord.share;
-    lenders[i] = l;
+    found[i] = l;
   });
-  std::size_t kept = 0;
-  for (std::size_t i = 0; i < lenders.size(); ++i)
-    if (near[i]) lenders[kept++] = lenders[i];
-  lenders.resize(kept);
+  for (const std::optional<LatticeLender>& l : found)
+    if (l) lenders.push_back(*l);
   return lenders;
 }
 

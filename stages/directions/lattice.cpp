@@ -113,42 +113,61 @@ LatticeLender lattice_lender(std::int64_t id, const std::vector<Ring>& rings, co
   return l;
 }
 
+PointsWithinRadius::PointsWithinRadius(std::vector<Vec2> points, double radius) : points_(std::move(points)), radius_(radius) {
+  for (std::size_t j = 0; j < points_.size(); ++j)
+    if (points_[j].allFinite() && radius_ > 0) cells_[cell_of(points_[j])].push_back(j);
+}
+
+std::pair<long, long> PointsWithinRadius::cell_of(const Vec2& p) const {
+  return {long(std::floor(p.x() / radius_)), long(std::floor(p.y() / radius_))};
+}
+
+void PointsWithinRadius::near(const Vec2& p, std::vector<std::size_t>& out) const {
+  out.clear();
+  if (!p.allFinite() || radius_ <= 0) return;
+  const auto [cx, cy] = cell_of(p);
+  for (long y = cy - 1; y <= cy + 1; ++y)
+    for (long x = cx - 1; x <= cx + 1; ++x)
+      if (const auto it = cells_.find({x, y}); it != cells_.end())
+        for (std::size_t j : it->second)
+          if ((points_[j] - p).norm() <= radius_) out.push_back(j);
+  std::sort(out.begin(), out.end());
+}
+
+bool PointsWithinRadius::any_near(const Vec2& p) const {
+  std::vector<std::size_t> found;
+  near(p, found);
+  return !found.empty();
+}
+
 std::vector<Vec2> neighbour_lattices(const std::vector<Vec2>& centres, const std::vector<std::int64_t>& ids,
                                      std::vector<LatticeLender> lenders, const LatticeOptions& o) {
   const std::size_t n = centres.size();
   std::vector<Vec2> out(n, Vec2::Zero());
   const double radius = o.neighbour_radius_m;
   if (radius <= 0 || ids.size() != n) return out;
-  // The lenders that count, in order of id, bucketed in cells of the radius (a map: ordered), each
-  // with its weight and its lattice's angle times four as a unit vector.
+  // The lenders that count, in order of id, each with its weight and its lattice's angle times
+  // four as a unit vector.
   std::erase_if(lenders, [&](const LatticeLender& l) {
     return l.share < o.min_share || l.direction.squaredNorm() == 0 || !l.centre.allFinite() ||
            (o.neighbour_max_extent_m > 0 && l.extent > o.neighbour_max_extent_m);
   });
   std::sort(lenders.begin(), lenders.end(), [](const LatticeLender& a, const LatticeLender& b) { return a.id < b.id; });
-  std::map<std::pair<long, long>, std::vector<std::size_t>> cells;
-  std::vector<Vec2> quadrupled(lenders.size());
+  std::vector<Vec2> quadrupled(lenders.size()), lender_centres(lenders.size());
   std::vector<double> weights(lenders.size());
-  const auto cell_of = [&](const Vec2& c) { return std::make_pair(long(std::floor(c.x() / radius)), long(std::floor(c.y() / radius))); };
   for (std::size_t j = 0; j < lenders.size(); ++j) {
     const double a = 4.0 * std::atan2(lenders[j].direction.y(), lenders[j].direction.x());
     quadrupled[j] = Vec2(std::cos(a), std::sin(a));
     weights[j] = lenders[j].share * lenders[j].perimeter;
-    cells[cell_of(lenders[j].centre)].push_back(j);
+    lender_centres[j] = lenders[j].centre;
   }
+  const PointsWithinRadius within(std::move(lender_centres), radius);
   std::vector<std::size_t> near;
   for (std::size_t i = 0; i < n; ++i) {
-    if (!centres[i].allFinite()) continue;
-    const auto [cx, cy] = cell_of(centres[i]);
-    near.clear();
-    for (long y = cy - 1; y <= cy + 1; ++y)
-      for (long x = cx - 1; x <= cx + 1; ++x)
-        if (const auto it = cells.find({x, y}); it != cells.end())
-          for (std::size_t j : it->second)
-            if (lenders[j].id != ids[i] && (lenders[j].centre - centres[i]).norm() <= radius) near.push_back(j);
-    std::sort(near.begin(), near.end());  // (the sums in order of id)
+    within.near(centres[i], near);  // (ascending: the sums in order of id)
     double sx = 0, sy = 0, total = 0;
     for (std::size_t j : near) {
+      if (lenders[j].id == ids[i]) continue;
       sx += weights[j] * quadrupled[j].x();
       sy += weights[j] * quadrupled[j].y();
       total += weights[j];

@@ -4,6 +4,7 @@
 // follows a flank; a chord spanning several metres of contour averages the wobble out.
 #pragma once
 #include <cstdint>
+#include <map>
 #include <utility>
 #include <vector>
 
@@ -72,6 +73,22 @@ struct LatticeLender {
   double extent = 0;              // the larger side of its outer ring's box (m)
 };
 LatticeLender lattice_lender(std::int64_t id, const std::vector<Ring>& rings, const ChordLattice& chord);
+
+// Points bucketed in square cells as wide as a radius, for those within the radius of another
+// point (at most that far: the 3 x 3 cells around it). Points that are not finite are left out.
+class PointsWithinRadius {
+ public:
+  PointsWithinRadius(std::vector<Vec2> points, double radius);
+  // The indices of the points within the radius of p, ascending, into out (cleared first).
+  void near(const Vec2& p, std::vector<std::size_t>& out) const;
+  bool any_near(const Vec2& p) const;
+
+ private:
+  std::pair<long, long> cell_of(const Vec2& p) const;
+  std::vector<Vec2> points_;
+  double radius_;
+  std::map<std::pair<long, long>, std::vector<std::size_t>> cells_;
+};
 
 // Per building (centres and ids), the lattice its neighbours agree on (neighbour_radius_m,
 // neighbour_agreement): a unit normal, or zero where none is within reach, none of them has a
