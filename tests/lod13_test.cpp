@@ -111,8 +111,9 @@ TEST(Lod13, RowsOfHousesOfDifferentHeightsComeBackAsPartsOfTheirBlock) {
                                                    (dir / "lod13_again").string());
   ASSERT_EQ(again.code, 0) << again.output;
   for (const auto& e : fs::directory_iterator(dir / "lod13" / "tiles"))
-    if (e.path().extension() == ".json" || e.path().extension() == ".gml")
+    if (e.path().extension() == ".json" || e.path().extension() == ".gml") {
       EXPECT_EQ(test::slurp(e.path()), test::slurp(dir / "lod13_again" / "tiles" / e.path().filename())) << e.path();
+    }
   // (The heights and parts were read back, not computed: no time in the heights stage.)
   EXPECT_EQ(nlohmann::json::parse(test::slurp(dir / "lod13_again" / "report.json")).at("stage_seconds").at("heights"), 0.0);
 }

@@ -9,6 +9,7 @@
 #include <sstream>
 #include <sys/wait.h>
 #include <unistd.h>
+#include <vector>
 
 namespace lodforge::test {
 
@@ -48,11 +49,45 @@ std::map<long, std::string> gpkg_footprints(const std::filesystem::path& file) {
   return out;
 }
 
+namespace {
+
+// Removes the directories fresh_test_directory made for a test when the test has passed; a failed
+// test's stay, for a look, and their paths are printed.
+class RemoveTestDirectories : public ::testing::EmptyTestEventListener {
+ public:
+  std::vector<std::filesystem::path> made;
+
+  void OnTestEnd(const ::testing::TestInfo& info) override {
+    for (const std::filesystem::path& dir : made) {
+      if (info.result() && info.result()->Failed()) {
+        std::fprintf(stderr, "kept for a look at the failed test: %s\n", dir.c_str());
+        continue;
+      }
+      std::error_code ignored;
+      std::filesystem::remove_all(dir, ignored);
+    }
+    made.clear();
+  }
+};
+
+RemoveTestDirectories& test_directories() {
+  // (Appended once, on the first test that asks for a directory; gtest owns it from then on.)
+  static RemoveTestDirectories* listener = [] {
+    auto* l = new RemoveTestDirectories;
+    ::testing::UnitTest::GetInstance()->listeners().Append(l);
+    return l;
+  }();
+  return *listener;
+}
+
+}  // namespace
+
 std::filesystem::path fresh_test_directory(const std::string& prefix) {
   const auto dir = std::filesystem::temp_directory_path() /
                    (prefix + "_" + std::to_string(::getpid()) + "_" + ::testing::UnitTest::GetInstance()->current_test_info()->name());
   std::filesystem::remove_all(dir);
   std::filesystem::create_directories(dir);
+  test_directories().made.push_back(dir);
   return dir;
 }
 

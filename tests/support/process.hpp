@@ -18,7 +18,7 @@ std::string slurp(const std::filesystem::path& path);
 // the test and gives none).
 std::map<long, std::string> gpkg_footprints(const std::filesystem::path& file);
 
-// A fresh directory per test, named after it, removed afterwards.
+// A fresh directory per test, named after it, removed when the test passes (kept when it fails).
 std::filesystem::path fresh_test_directory(const std::string& prefix);
 
 }  // namespace lodforge::test
