@@ -74,6 +74,65 @@ std::vector<std::pair<Vec2, double>> run_middle(const Ring& ring, int first, int
   return middle;
 }
 
+// Cuts of one run's samples (in order along it; t along, y across, w weight) into pieces at
+// parallel offsets: the steps of a row of houses under one label, which tilt a line fitted
+// through them. Greedy, as corners' split_parallel: each cut where it leaves the least spread
+// about lines of one shared slope (one offset a piece, pieces at least 4 * apart_m long, up to 8),
+// taken while the cut's two pieces lie at least apart_m apart. None where the run's RMS about a
+// line along the start direction (t) is at most max_rms_m: its noise explains it. Returns the
+// pieces' first indices after the first.
+std::vector<std::size_t> step_cuts(const std::vector<double>& t, const std::vector<double>& y, const std::vector<double>& w,
+                                   double apart_m, double max_rms_m) {
+  struct Sums {
+    double w = 0, t = 0, y = 0, tt = 0, ty = 0, yy = 0;
+    Sums operator-(const Sums& o) const { return {w - o.w, t - o.t, y - o.y, tt - o.tt, ty - o.ty, yy - o.yy}; }
+    Sums operator+(const Sums& o) const { return {w + o.w, t + o.t, y + o.y, tt + o.tt, ty + o.ty, yy + o.yy}; }
+    double stt() const { return w > 0 ? tt - t * t / w : 0.0; }
+    double sty() const { return w > 0 ? ty - t * y / w : 0.0; }
+    double syy() const { return w > 0 ? yy - y * y / w : 0.0; }
+  };
+  const std::size_t m = t.size();
+  if (m < 4 || !(apart_m > 0)) return {};
+  std::vector<Sums> sums(m + 1);
+  for (std::size_t k = 0; k < m; ++k)
+    sums[k + 1] = sums[k] + Sums{w[k], w[k] * t[k], w[k] * y[k], w[k] * t[k] * t[k], w[k] * t[k] * y[k], w[k] * y[k] * y[k]};
+  const auto piece = [&](std::size_t a, std::size_t b) { return sums[b] - sums[a]; };
+  const auto spread = [](double stt, double sty, double syy) { return stt > 1e-12 ? syy - sty * sty / stt : syy; };
+  std::vector<std::size_t> cuts = {0, m};
+  const Sums all = piece(0, m);
+  double stt = all.stt(), sty = all.sty(), syy = all.syy();
+  // (About a line along the start: a line of its own would tilt toward the steps and explain them.)
+  if (syy <= max_rms_m * max_rms_m * all.w) return {};  // the noise explains the run
+  while (cuts.size() - 1 < 8) {
+    std::size_t best_cut = 0;
+    double best_total = spread(stt, sty, syy);
+    for (std::size_t p = 0; p + 1 < cuts.size(); ++p) {
+      const std::size_t a = cuts[p], b = cuts[p + 1];
+      const Sums own = piece(a, b);
+      for (std::size_t k = a + 1; k < b; ++k) {
+        if (sums[k].w - sums[a].w < 4 * apart_m || sums[b].w - sums[k].w < 4 * apart_m) continue;
+        const Sums left = piece(a, k), right = piece(k, b);
+        const double total = spread(stt - own.stt() + left.stt() + right.stt(), sty - own.sty() + left.sty() + right.sty(),
+                                    syy - own.syy() + left.syy() + right.syy());
+        if (total < best_total) best_total = total, best_cut = k;
+      }
+    }
+    if (best_cut == 0) break;
+    const auto at = std::upper_bound(cuts.begin(), cuts.end(), best_cut);
+    const std::size_t a = *(at - 1), b = *at;
+    const Sums own = piece(a, b), left = piece(a, best_cut), right = piece(best_cut, b);
+    const double nstt = stt + left.stt() + right.stt() - own.stt(), nsty = sty + left.sty() + right.sty() - own.sty();
+    // The cut's two pieces' offsets about the shared slope: a step, or no more cuts.
+    const double slope = nstt > 1e-12 ? nsty / nstt : 0.0;
+    const double step = (left.y - slope * left.t) / left.w - (right.y - slope * right.t) / right.w;
+    if (std::abs(step) < apart_m) break;
+    stt = nstt, sty = nsty;
+    syy += left.syy() + right.syy() - own.syy();
+    cuts.insert(at, best_cut);
+  }
+  return std::vector<std::size_t>(cuts.begin() + 1, cuts.end() - 1);
+}
+
 }  // namespace
 
 double lattice_noise(const std::vector<Ring>& rings, const std::vector<std::vector<Vec2>>& normals, const Vec2& lattice,
@@ -154,7 +213,7 @@ double lattice_noise(const std::vector<Ring>& rings, const std::vector<std::vect
 
 std::optional<Vec2> fit_lattice(const std::vector<Ring>& rings, const std::vector<std::vector<Vec2>>& normals,
                                 const Vec2& start, double pixel_size, const LatticeOptions& lo, const NoiseOptions& no,
-                                double correlation_m, double* uncertainty, double* spread_out) {
+                                double correlation_m, double* uncertainty, double* spread_out, double step_noise_m) {
   if (uncertainty) *uncertainty = 0;
   if (spread_out) *spread_out = 0;
   const Vec2 axes[4] = {start, Vec2(-start.y(), start.x()), -start, Vec2(start.y(), -start.x())};
@@ -180,6 +239,35 @@ std::optional<Vec2> fit_lattice(const std::vector<Ring>& rings, const std::vecto
       }
       if (!middle.empty()) ++runs;
     }
+  }
+  // A run stepping between parallel offsets (row houses) is fitted piece by piece, each its own
+  // offset: steps of at least fit_step_noise noises (lattice.fit_step_noise).
+  if (lo.fit_step_noise > 0 && step_noise_m > 0 && runs > 0) {
+    const Vec2 along(-start.y(), start.x());
+    std::vector<Sample> split;
+    split.reserve(samples.size());
+    int pieces = 0;
+    for (std::size_t a = 0; a < samples.size();) {
+      std::size_t b = a;
+      while (b < samples.size() && samples[b].run == samples[a].run) ++b;
+      std::vector<double> t, y, w;
+      for (std::size_t k = a; k < b; ++k) {
+        t.push_back(along.dot(samples[k].q));
+        y.push_back(start.dot(samples[k].q));
+        w.push_back(samples[k].w);
+      }
+      const std::vector<std::size_t> cuts =
+          step_cuts(t, y, w, std::max(lo.fit_step_noise * step_noise_m, 2 * pixel_size), 2.0 * step_noise_m);
+      std::size_t next_cut = 0;
+      for (std::size_t k = a; k < b; ++k) {
+        if (next_cut < cuts.size() && k - a == cuts[next_cut]) ++next_cut, ++pieces;
+        split.push_back({samples[k].q, samples[k].w, pieces});
+      }
+      ++pieces;
+      a = b;
+    }
+    samples.swap(split);
+    runs = pieces;
   }
   if (runs < 2 || samples.size() < std::size_t(runs) + 3) return std::nullopt;  // a line per run needs points to spare
   // One direction for every run, each run its own offset: the scatter about the runs' means.

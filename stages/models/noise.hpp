@@ -58,9 +58,11 @@ double lattice_noise(const std::vector<Ring>& rings, const std::vector<std::vect
 // `start`. When fitted: *uncertainty, the standard error of its direction (radians), the spread
 // taken as correlated over correlation_m; *spread, the runs' spread about their lines (map
 // units, read as lattice_noise reads its distances, at noise.quantile); both 0 otherwise.
+// step_noise_m (the building's boundary noise; 0 = not given): a run stepping between parallel
+// offsets by lattice.fit_step_noise times that is fitted piece by piece, each its own offset.
 std::optional<Vec2> fit_lattice(const std::vector<Ring>& rings, const std::vector<std::vector<Vec2>>& normals,
                                 const Vec2& start, double pixel_size, const LatticeOptions& lattice,
                                 const NoiseOptions& noise, double correlation_m, double* uncertainty = nullptr,
-                                double* spread = nullptr);
+                                double* spread = nullptr, double step_noise_m = 0);
 
 }  // namespace lodforge

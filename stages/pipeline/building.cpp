@@ -509,7 +509,7 @@ void run_chain(const std::vector<Ring>& rings, double pixel_size, const CoreOpti
   const std::optional<Vec2> fitted_lattice =
       o.lattice.fit_max_turn_deg > 0
           ? fit_lattice(rings, input.normals, chord.share >= o.lattice.min_share ? chord.direction : first_main, pixel_size,
-                        o.lattice, o.noise, o.corners.snap_correlation_m, &fit_uncertainty, &fit_spread)
+                        o.lattice, o.noise, o.corners.snap_correlation_m, &fit_uncertainty, &fit_spread, noise)
           : std::nullopt;
   const auto building_lattice = [&] {
     const Vec2 main = main_direction(labels, input.lengths, input.directions);
