@@ -227,15 +227,7 @@ void split_parallel(const Ring& ring, int first, int count, const Vec2& normal, 
   if (o.split_px <= 0 || count < 4) { out.push_back({first, count}); return; }
   // Length-weighted prefix sums of each edge's position t along the run and offset y across it
   // (both from the run's first edge, for range).
-  struct Sums {
-    double w = 0, t = 0, y = 0, tt = 0, ty = 0, yy = 0;
-    Sums operator-(const Sums& o) const { return {w - o.w, t - o.t, y - o.y, tt - o.tt, ty - o.ty, yy - o.yy}; }
-    Sums operator+(const Sums& o) const { return {w + o.w, t + o.t, y + o.y, tt + o.tt, ty + o.ty, yy + o.yy}; }
-    // The centred second moments: spread of t, covariance, spread of y.
-    double stt() const { return w > 0 ? tt - t * t / w : 0.0; }
-    double sty() const { return w > 0 ? ty - t * y / w : 0.0; }
-    double syy() const { return w > 0 ? yy - y * y / w : 0.0; }
-  };
+  using Sums = LineMoments;
   const Vec2 along(-normal.y(), normal.x());
   const Vec2 origin = ring[first % ring.size()];
   std::vector<Sums> sums(count + 1);
@@ -244,12 +236,12 @@ void split_parallel(const Ring& ring, int first, int count, const Vec2& normal, 
     const Vec2 e = edge_vector(ring, i);
     const Vec2 mid = ring[i] + 0.5 * e - origin;
     const double len = e.norm(), t = along.dot(mid), y = normal.dot(mid);
-    sums[k + 1] = sums[k] + Sums{len, len * t, len * y, len * t * t, len * t * y, len * y * y};
+    sums[k + 1] = sums[k] + Sums::of(len, t, y);
   }
   auto piece = [&](int a, int b) { return sums[b] - sums[a]; };
   // The spread left about lines of one shared slope, one offset per piece, from the pieces'
   // centred moments added up.
-  auto spread = [](double stt, double sty, double syy) { return stt > 1e-12 ? syy - sty * sty / stt : syy; };
+  const auto spread = LineMoments::spread;
   std::vector<int> cuts = {0, count};  // piece p is [cuts[p], cuts[p + 1])
   const Sums all = piece(0, count);
   double stt = all.stt(), sty = all.sty(), syy = all.syy();

@@ -83,21 +83,14 @@ std::vector<std::pair<Vec2, double>> run_middle(const Ring& ring, int first, int
 // pieces' first indices after the first.
 std::vector<std::size_t> step_cuts(const std::vector<double>& t, const std::vector<double>& y, const std::vector<double>& w,
                                    double apart_m, double max_rms_m) {
-  struct Sums {
-    double w = 0, t = 0, y = 0, tt = 0, ty = 0, yy = 0;
-    Sums operator-(const Sums& o) const { return {w - o.w, t - o.t, y - o.y, tt - o.tt, ty - o.ty, yy - o.yy}; }
-    Sums operator+(const Sums& o) const { return {w + o.w, t + o.t, y + o.y, tt + o.tt, ty + o.ty, yy + o.yy}; }
-    double stt() const { return w > 0 ? tt - t * t / w : 0.0; }
-    double sty() const { return w > 0 ? ty - t * y / w : 0.0; }
-    double syy() const { return w > 0 ? yy - y * y / w : 0.0; }
-  };
+  using Sums = LineMoments;
   const std::size_t m = t.size();
   if (m < 4 || !(apart_m > 0)) return {};
   std::vector<Sums> sums(m + 1);
   for (std::size_t k = 0; k < m; ++k)
-    sums[k + 1] = sums[k] + Sums{w[k], w[k] * t[k], w[k] * y[k], w[k] * t[k] * t[k], w[k] * t[k] * y[k], w[k] * y[k] * y[k]};
+    sums[k + 1] = sums[k] + Sums::of(w[k], t[k], y[k]);
   const auto piece = [&](std::size_t a, std::size_t b) { return sums[b] - sums[a]; };
-  const auto spread = [](double stt, double sty, double syy) { return stt > 1e-12 ? syy - sty * sty / stt : syy; };
+  const auto spread = LineMoments::spread;
   std::vector<std::size_t> cuts = {0, m};
   const Sums all = piece(0, m);
   double stt = all.stt(), sty = all.sty(), syy = all.syy();

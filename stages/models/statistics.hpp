@@ -51,4 +51,21 @@ inline double weighted_quantile(std::vector<std::pair<double, double>> values, d
   return values[hi - 1].first;
 }
 
+// Weighted sums of points (t along a line, y across it) and their centred second moments, which
+// add and subtract: prefix sums of them give any stretch's in constant time. The cuts of a run
+// into parallel pieces (corners' split_parallel, fit_lattice's steps) are chosen by them.
+struct LineMoments {
+  double w = 0, t = 0, y = 0, tt = 0, ty = 0, yy = 0;
+  static LineMoments of(double weight, double t, double y) { return {weight, weight * t, weight * y, weight * t * t, weight * t * y, weight * y * y}; }
+  LineMoments operator-(const LineMoments& o) const { return {w - o.w, t - o.t, y - o.y, tt - o.tt, ty - o.ty, yy - o.yy}; }
+  LineMoments operator+(const LineMoments& o) const { return {w + o.w, t + o.t, y + o.y, tt + o.tt, ty + o.ty, yy + o.yy}; }
+  // The centred second moments: spread of t, covariance, spread of y.
+  double stt() const { return w > 0 ? tt - t * t / w : 0.0; }
+  double sty() const { return w > 0 ? ty - t * y / w : 0.0; }
+  double syy() const { return w > 0 ? yy - y * y / w : 0.0; }
+  // The spread left about lines of one slope, from summed centred moments (of one or more pieces,
+  // each about its own mean: one offset a piece).
+  static double spread(double stt, double sty, double syy) { return stt > 1e-12 ? syy - sty * sty / stt : syy; }
+};
+
 }  // namespace lodforge
