@@ -41,7 +41,6 @@ class BlockCacheTest : public ::testing::Test {
     EXPECT_EQ(d->GetRasterBand(1)->RasterIO(GF_Write, 0, 0, 300, 200, values.data(), 300, 200, GDT_Float32, 0, 0), CE_None);
     GDALClose(d);
   }
-  void TearDown() override { fs::remove_all(dir); }
 
   template <class T>
   std::vector<T> direct(const cv::Rect& w, GDALDataType type) {

@@ -25,7 +25,6 @@ using test::lodforge;
 class Cli : public ::testing::Test {
  protected:
   void SetUp() override { dir = test::fresh_test_directory("lodforge_cli"); }
-  void TearDown() override { fs::remove_all(dir); }
   std::string path(const std::string& name) const { return (dir / name).string(); }
   fs::path dir;
 };

@@ -183,7 +183,6 @@ std::string slurp_file(const fs::path& p) { return test::slurp(p); }
 class ModelFiles : public ::testing::Test {
  protected:
   void SetUp() override { dir = test::fresh_test_directory("lodforge_models"); }
-  void TearDown() override { fs::remove_all(dir); }
   fs::path dir;
 };
 

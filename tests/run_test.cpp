@@ -91,7 +91,6 @@ std::multiset<std::string> gpkg_outlines(const fs::path& path) {
 class Run : public ::testing::Test {
  protected:
   void SetUp() override { dir = test::fresh_test_directory("lodforge_run"); }
-  void TearDown() override { fs::remove_all(dir); }
   // Writes a job; `extra` is appended verbatim.
   fs::path job(const std::string& name, const std::string& segmentation, double tile_m, const std::string& extra = "") {
     const fs::path p = dir / (name + ".yaml");
@@ -632,7 +631,6 @@ class Rerun : public ::testing::Test {
     dir = test::fresh_test_directory("lodforge_rerun");
     ASSERT_EQ(lodforge("synth --out " + (dir / "city").string() + " --size-m 200 --seed 6").code, 0);
   }
-  void TearDown() override { fs::remove_all(dir); }
   fs::path write_job(const std::string& formats, const std::string& extra = "") {
     std::ofstream(dir / "job.yaml") << "inputs: {segmentation: {path: city/seg_class.tif}}\ntiling: {tile_size_m: 50}\n"
                                     << "output: {dir: out, formats: [" << formats << "], quicklook: false}\nwork_dir: work\n" << extra;

@@ -79,8 +79,8 @@ std::vector<std::pair<Vec2, double>> run_middle(const Ring& ring, int first, int
 // through them. Greedy, as corners' split_parallel: each cut where it leaves the least spread
 // about lines of one shared slope (one offset a piece, pieces at least 4 * apart_m long, up to 8),
 // taken while the cut's two pieces lie at least apart_m apart. None where the run's RMS about a
-// line along the start direction (t) is at most max_rms_m: its noise explains it. Returns the
-// pieces' first indices after the first.
+// line along t (its axis: the walls of the lattice the fit starts from) is at most max_rms_m: its
+// noise explains it. Returns the pieces' first indices after the first.
 std::vector<std::size_t> step_cuts(const std::vector<double>& t, const std::vector<double>& y, const std::vector<double>& w,
                                    double apart_m, double max_rms_m) {
   using Sums = LineMoments;
@@ -94,7 +94,7 @@ std::vector<std::size_t> step_cuts(const std::vector<double>& t, const std::vect
   std::vector<std::size_t> cuts = {0, m};
   const Sums all = piece(0, m);
   double stt = all.stt(), sty = all.sty(), syy = all.syy();
-  // (About a line along the start: a line of its own would tilt toward the steps and explain them.)
+  // (About a line along the axis: a line of its own would tilt toward the steps and explain them.)
   if (syy <= max_rms_m * max_rms_m * all.w) return {};  // the noise explains the run
   while (cuts.size() - 1 < 8) {
     std::size_t best_cut = 0;

@@ -60,7 +60,7 @@ class RemoveTestDirectories : public ::testing::EmptyTestEventListener {
   void OnTestEnd(const ::testing::TestInfo& info) override {
     for (const std::filesystem::path& dir : made) {
       if (info.result() && info.result()->Failed()) {
-        std::fprintf(stderr, "kept for a look at the failed test: %s\n", dir.c_str());
+        if (std::filesystem::exists(dir)) std::fprintf(stderr, "kept for a look at the failed test: %s\n", dir.c_str());
         continue;
       }
       std::error_code ignored;
