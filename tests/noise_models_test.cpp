@@ -628,9 +628,6 @@ double largest_angle_to_lattice_deg(const PolygonWithHoles& p, const Vec2& latti
   return worst;
 }
 
-// The neighbours' lattice: the weighted mean of the lattices (angles times four) of the buildings
-// within the radius, centre to centre, whose chords give them one; not the building's own; none
-// where the neighbours disagree or none has a lattice.
 // The points within a radius of another: across cells, the radius itself included, ascending,
 // points that are not finite left out.
 TEST(Lattice, PointsWithinARadiusAcrossCells) {
@@ -641,10 +638,15 @@ TEST(Lattice, PointsWithinARadiusAcrossCells) {
   EXPECT_EQ(near, (std::vector<std::size_t>{0, 1, 4}));
   within.near(Vec2(-45, 0), near);
   EXPECT_EQ(near, (std::vector<std::size_t>{0, 5}));
+  EXPECT_TRUE(within.any_near(Vec2(60, 0)));  // (30, 0), the radius away
+  EXPECT_FALSE(within.any_near(Vec2(60.5, 0)));
   EXPECT_FALSE(within.any_near(Vec2(200, 200)));
   EXPECT_FALSE(within.any_near(Vec2(nan, 0)));
 }
 
+// The neighbours' lattice: the weighted mean of the lattices (angles times four) of the buildings
+// within the radius, centre to centre, whose chords give them one; not the building's own; none
+// where the neighbours disagree or none has a lattice.
 TEST(Lattice, NeighboursLendTheLatticeTheyAgreeOn) {
   LatticeOptions o;
   o.neighbour_radius_m = 30;

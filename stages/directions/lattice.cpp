@@ -135,9 +135,15 @@ void PointsWithinRadius::near(const Vec2& p, std::vector<std::size_t>& out) cons
 }
 
 bool PointsWithinRadius::any_near(const Vec2& p) const {
-  std::vector<std::size_t> found;
-  near(p, found);
-  return !found.empty();
+  // (As near, without collecting: the first point found will do.)
+  if (!p.allFinite() || radius_ <= 0) return false;
+  const auto [cx, cy] = cell_of(p);
+  for (long y = cy - 1; y <= cy + 1; ++y)
+    for (long x = cx - 1; x <= cx + 1; ++x)
+      if (const auto it = cells_.find({x, y}); it != cells_.end())
+        for (std::size_t j : it->second)
+          if ((points_[j] - p).norm() <= radius_) return true;
+  return false;
 }
 
 std::vector<Vec2> neighbour_lattices(const std::vector<Vec2>& centres, const std::vector<std::int64_t>& ids,
