@@ -664,23 +664,60 @@ TEST(Lattice, NeighboursLendTheLatticeTheyAgreeOn) {
   std::vector<std::int64_t> ids;
   for (std::size_t i = 0; i < centres.size(); ++i) {
     ids.push_back(std::int64_t(100 - i));  // (given in any order: summed in order of id)
-    lenders.push_back({ids.back(), centres[i], at(degrees[i]), shares[i], perimeters[i], extents[i]});
+    const Vec2 half = Vec2::Constant(extents[i] / 2);
+    lenders.push_back({ids.back(), centres[i], at(degrees[i]), shares[i], perimeters[i], extents[i], centres[i] - half, centres[i] + half});
   }
-  const std::vector<Vec2> lent = neighbour_lattices(centres, ids, lenders, o);
+  const double pixel = 0.25;
+  const std::vector<NeighbourLattice> lent = neighbour_lattices(centres, ids, lenders, pixel, o);
   ASSERT_EQ(lent.size(), centres.size());
   // The blob: 20 and 22 degrees weighted 40 : 60, about 21.2 (the far house is out of reach, the
   // hall too large).
-  ASSERT_GT(lent[0].squaredNorm(), 0);
-  EXPECT_NEAR(angle_between_lattices_deg(lent[0], at(21.2)), 0, 0.1);
+  ASSERT_GT(lent[0].direction.squaredNorm(), 0);
+  EXPECT_NEAR(angle_between_lattices_deg(lent[0].direction, at(21.2)), 0, 0.1);
   // House 1's neighbours: house 2 alone (the blob has no lattice to lend).
-  EXPECT_NEAR(angle_between_lattices_deg(lent[1], at(22)), 0, 1e-9);
-  EXPECT_EQ(lent[3].squaredNorm(), 0);  // nobody within 30 m
-  EXPECT_EQ(lent[4].squaredNorm(), 0);  // its neighbours disagree
+  EXPECT_NEAR(angle_between_lattices_deg(lent[1].direction, at(22)), 0, 1e-9);
+  EXPECT_EQ(lent[3].direction.squaredNorm(), 0);  // nobody within 30 m
+  EXPECT_EQ(lent[4].direction.squaredNorm(), 0);  // its neighbours disagree
   // With no limit on the extent, the hall's lattice outweighs the houses': no agreement.
   o.neighbour_max_extent_m = 0;
-  EXPECT_EQ(neighbour_lattices(centres, ids, lenders, o)[0].squaredNorm(), 0);
+  EXPECT_EQ(neighbour_lattices(centres, ids, lenders, pixel, o)[0].direction.squaredNorm(), 0);
   o.neighbour_radius_m = 0;
-  for (const Vec2& l : neighbour_lattices(centres, ids, lenders, o)) EXPECT_EQ(l.squaredNorm(), 0);  // off
+  for (const NeighbourLattice& l : neighbour_lattices(centres, ids, lenders, pixel, o)) EXPECT_EQ(l.direction.squaredNorm(), 0);  // off
+}
+
+// Which neighbours lend where none is near: a shed 40 m from the centre of a long block at 24
+// degrees, 10 m from its wall, takes the block's lattice (its box comes within the radius), unless
+// a house's centre lies within the radius, which then lends alone; a shed of a few pixels lends
+// nothing, its chords spanning less than 1 / tan(window_deg) pixels (3.7): at 2 m a pixel, a shed of
+// 12 m of outline spans 1.5 m (chord_share of it), whose direction the pixel grid gives.
+TEST(Lattice, NeighboursBesideALongBlockAndShedsOfAFewPixels) {
+  LatticeOptions o;
+  o.neighbour_radius_m = 30;
+  const auto at = [](double deg) { return Vec2(std::cos(deg * M_PI / 180), std::sin(deg * M_PI / 180)); };
+  const auto lender = [&](std::int64_t id, Vec2 centre, double deg, double perimeter, Vec2 size) {
+    return LatticeLender{id, centre, at(deg), 0.9, perimeter, size.maxCoeff(), centre - size / 2, centre + size / 2};
+  };
+  // 1: the shed (no lattice of its own); 2: the block, 80 x 16 m, its centre 40 m off, its wall
+  // 10 m; 3: a second shed, of 12 m outline, 5 m away, at 0 degrees.
+  std::vector<LatticeLender> lenders = {lender(1, {0, 0}, 0, 12, {3, 3}), lender(2, {40, 18}, 24, 192, {80, 16}),
+                                        lender(3, {5, 0}, 0, 12, {3, 3})};
+  lenders[0].share = 0;
+  const std::vector<Vec2> shed = {Vec2(0, 0)};
+  const std::vector<std::int64_t> shed_id = {1};
+  // At 0.25 m the second shed's chords (1.5 m, 6 px) lend: it is the one near, at 0 degrees.
+  std::vector<NeighbourLattice> lent = neighbour_lattices(shed, shed_id, lenders, 0.25, o);
+  EXPECT_NEAR(angle_between_lattices_deg(lent[0].direction, at(0)), 0, 1e-9);
+  EXPECT_FALSE(lent[0].from_boxes);
+  // At 2 m they span less than a pixel: the block lends, by its box.
+  lent = neighbour_lattices(shed, shed_id, lenders, 2.0, o);
+  ASSERT_GT(lent[0].direction.squaredNorm(), 0);
+  EXPECT_NEAR(angle_between_lattices_deg(lent[0].direction, at(24)), 0, 1e-9);
+  EXPECT_TRUE(lent[0].from_boxes);
+  // Its wall 31 m away: nobody lends.
+  lenders[1].low.y() = lenders[1].centre.y() - 8 + 21;
+  lenders[1].centre.y() += 21;
+  lenders[1].high.y() += 21;
+  EXPECT_EQ(neighbour_lattices(shed, shed_id, lenders, 2.0, o)[0].direction.squaredNorm(), 0);
 }
 
 // The blob of the test above, on a street whose houses stand at its truth's angle: lent their
@@ -703,7 +740,7 @@ TEST(NoisyMasks, ABlobTakesItsStreetsLattice) {
     BuildingStart alone;
     alone.smoothing_noise_m = smoothing_noise;
     BuildingStart lent = alone;
-    lent.neighbour_lattice = street;
+    lent.neighbour_lattice.direction = street;
     const BuildingResult a = regularize_building(shape.buildings[0].rings, pixel, CoreOptions{}, pooled_noise, alone);
     const BuildingResult b = regularize_building(shape.buildings[0].rings, pixel, CoreOptions{}, pooled_noise, lent);
     ASSERT_TRUE(a.ok && b.ok) << "seed " << seed << ": " << a.reason << b.reason;

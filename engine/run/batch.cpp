@@ -136,7 +136,7 @@ PooledStarts pool_starts(const std::vector<BuildingContour>& buildings, double p
 // (their ids their indices, in the order of their first pixels as extract_contours sorts them, which
 // the tiles' ids sum in; the chords' lattices of a start used, those of an empty one computed)
 // or by those given.
-void lend_neighbour_lattices(const std::vector<BuildingContour>& buildings, const Lenders& lenders, const CoreOptions& options,
+void lend_neighbour_lattices(const std::vector<BuildingContour>& buildings, double pixel_size, const Lenders& lenders, const CoreOptions& options,
                              double smoothing_noise_m, std::vector<BuildingStart>& starts) {
   if (starts.empty()) {
     starts.resize(buildings.size());
@@ -157,7 +157,7 @@ void lend_neighbour_lattices(const std::vector<BuildingContour>& buildings, cons
     own_lenders[i] = started ? lattice_lender(ids[i], rings, starts[i].chord) : lattice_lender(ids[i], rings, chord_lattice(rings, options.lattice));
     centres[i] = own_lenders[i].centre;
   });
-  const std::vector<Vec2> lattices = neighbour_lattices(centres, ids, own ? std::move(own_lenders) : lenders.given, options.lattice);
+  const std::vector<NeighbourLattice> lattices = neighbour_lattices(centres, ids, own ? std::move(own_lenders) : lenders.given, pixel_size, options.lattice);
   for (std::size_t i = 0; i < buildings.size(); ++i) starts[i].neighbour_lattice = lattices[i];
 }
 
@@ -191,7 +191,7 @@ RegularizedBatch regularize_batch(const std::string& regularizer, const std::vec
   }
   // The neighbours' lattices.
   if (lenders.from != Lenders::From::none && regularizer == "deformation" && options.lattice.neighbour_radius_m > 0)
-    lend_neighbour_lattices(buildings, lenders, options, batch.noise_smoothing_m, starts);
+    lend_neighbour_lattices(buildings, pixel_size, lenders, options, batch.noise_smoothing_m, starts);
   tbb::parallel_for(std::size_t(0), buildings.size(), [&](std::size_t i) {
     batch.results[i] = regularize_with(regularizer, buildings[i].rings, pixel_size, options, batch.noise_floor_m,
                                        starts.empty() ? BuildingStart{} : std::move(starts[i]));
@@ -252,8 +252,9 @@ std::vector<LatticeLender> lattice_lenders(const MaskWindowReader& mask, cv::Siz
     return !touches_inner_border(box, window, raster) && box.width <= m.extent.x() && box.height <= m.extent.y() && !(box & zone).empty();
   });
   // Each one's chords' lattice (the costly part) where its centre lies within the radius of one
-  // of the buildings': the others lend to none of them.
-  const PointsWithinRadius within(std::move(centres), lattice.neighbour_radius_m);
+  // of the buildings' and its box's diagonal (its box may come within the radius): the others lend
+  // to none of them.
+  const PointsWithinRadius within(std::move(centres), lattice.neighbour_radius_m + std::sqrt(2.0) * lattice.neighbour_max_extent_m);
   std::vector<std::optional<LatticeLender>> found(traced.buildings.size());
   tbb::parallel_for(std::size_t(0), traced.buildings.size(), [&](std::size_t i) {
     BuildingContour& b = traced.buildings[i];

@@ -59,7 +59,7 @@ RegularizedBatch regularize_batch(const std::string& regularizer, const std::vec
                                   const Lenders& lenders = {}, const std::function<void()>& on_done = {});
 
 // In pixels along the raster's columns and rows (x, y), for any geotransform: how far a lender's
-// centre may lie from a building's centre (the radius), how wide and tall a lender's box may be
+// centre, or its box, may lie from a building's centre (the radius), how wide and tall a lender's box may be
 // (the extent), and the margin around the buildings' centres within which every lender lies
 // (both), each with two pixels to spare.
 struct LenderMargins {

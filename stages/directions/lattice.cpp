@@ -110,7 +110,13 @@ LatticeLender lattice_lender(std::int64_t id, const std::vector<Ring>& rings, co
   l.centre /= double(rings[0].size());
   l.perimeter = perimeter(rings[0]);
   l.extent = (high - low).maxCoeff();
+  l.low = low;
+  l.high = high;
   return l;
+}
+
+double distance_to_box(const LatticeLender& lender, const Vec2& p) {
+  return (lender.low - p).cwiseMax(p - lender.high).cwiseMax(Vec2::Zero()).norm();
 }
 
 PointsWithinRadius::PointsWithinRadius(std::vector<Vec2> points, double radius) : points_(std::move(points)), radius_(radius) {
@@ -146,41 +152,53 @@ bool PointsWithinRadius::any_near(const Vec2& p) const {
   return false;
 }
 
-std::vector<Vec2> neighbour_lattices(const std::vector<Vec2>& centres, const std::vector<std::int64_t>& ids,
-                                     std::vector<LatticeLender> lenders, const LatticeOptions& o) {
+std::vector<NeighbourLattice> neighbour_lattices(const std::vector<Vec2>& centres, const std::vector<std::int64_t>& ids,
+                                                std::vector<LatticeLender> lenders, double pixel_size, const LatticeOptions& o) {
   const std::size_t n = centres.size();
-  std::vector<Vec2> out(n, Vec2::Zero());
+  std::vector<NeighbourLattice> out(n);
   const double radius = o.neighbour_radius_m;
   if (radius <= 0 || ids.size() != n) return out;
   // The lenders that count, in order of id, each with its weight and its lattice's angle times
   // four as a unit vector.
+  const double min_span = pixel_size / std::tan(o.window_deg * M_PI / 180.0);
   std::erase_if(lenders, [&](const LatticeLender& l) {
     return l.share < o.min_share || l.direction.squaredNorm() == 0 || !l.centre.allFinite() ||
-           (o.neighbour_max_extent_m > 0 && l.extent > o.neighbour_max_extent_m);
+           (o.neighbour_max_extent_m > 0 && l.extent > o.neighbour_max_extent_m) ||
+           std::min(o.chord_m, o.chord_share * l.perimeter) < min_span;
   });
   std::sort(lenders.begin(), lenders.end(), [](const LatticeLender& a, const LatticeLender& b) { return a.id < b.id; });
   std::vector<Vec2> quadrupled(lenders.size()), lender_centres(lenders.size());
   std::vector<double> weights(lenders.size());
+  double largest = 0;  // extent
   for (std::size_t j = 0; j < lenders.size(); ++j) {
     const double a = 4.0 * std::atan2(lenders[j].direction.y(), lenders[j].direction.x());
     quadrupled[j] = Vec2(std::cos(a), std::sin(a));
     weights[j] = lenders[j].share * lenders[j].perimeter;
     lender_centres[j] = lenders[j].centre;
+    largest = std::max(largest, lenders[j].extent);
   }
-  const PointsWithinRadius within(std::move(lender_centres), radius);
+  // (A box within the radius has its centre, a mean of its vertices, within the radius and its
+  // diagonal.)
+  const PointsWithinRadius within(std::move(lender_centres), radius + std::sqrt(2.0) * largest);
   std::vector<std::size_t> near;
   for (std::size_t i = 0; i < n; ++i) {
     within.near(centres[i], near);  // (ascending: the sums in order of id)
     double sx = 0, sy = 0, total = 0;
-    for (std::size_t j : near) {
-      if (lenders[j].id == ids[i]) continue;
-      sx += weights[j] * quadrupled[j].x();
-      sy += weights[j] * quadrupled[j].y();
-      total += weights[j];
+    bool by_box = false;
+    for (const bool boxes : {false, true}) {
+      if (total > 0) break;
+      by_box = boxes;
+      for (std::size_t j : near) {
+        if (lenders[j].id == ids[i]) continue;
+        if ((by_box ? distance_to_box(lenders[j], centres[i]) : (lenders[j].centre - centres[i]).norm()) > radius) continue;
+        sx += weights[j] * quadrupled[j].x();
+        sy += weights[j] * quadrupled[j].y();
+        total += weights[j];
+      }
     }
     if (total <= 0 || std::hypot(sx, sy) < o.neighbour_agreement * total) continue;
     const double a = std::atan2(sy, sx) / 4.0;
-    out[i] = Vec2(std::cos(a), std::sin(a));
+    out[i] = {Vec2(std::cos(a), std::sin(a)), by_box};
   }
   return out;
 }

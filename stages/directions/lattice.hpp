@@ -43,7 +43,7 @@ struct LatticeOptions {
     v("fit_hysteresis_deg", fit_hysteresis_deg, "... the contour cut into those runs where a smoothed normal turns this far past 45 degrees from its run's axis (a wobble's flank, up to 45 + this, does not cut a wall; a corner does) (degrees)", Check::between(0, 44));
     v("fit_outlier_noise", fit_outlier_noise, "... samples farther than this many spreads (the noise of the runs about their lines) from their run's line, and runs whose own RMS about it is over this many times the runs' median (a run stepping along row houses), left out of the fit", Check::above(0));
     v("fit_step_noise", fit_step_noise, "... a run whose contour steps between parallel offsets (a row of houses set back in turn, under one label) fitted piece by piece, each piece its own offset, one slope: where the run lies more than twice the building's boundary noise (RMS) off a line along its axis (the walls of the lattice the fit starts from), cut where its steps are at least this many noises (and 2 pixels) apart, pieces at least 4 times that step long. A line through the steps tilts toward them (0 = off)", Check::at_least(0));
-    v("neighbour_radius_m", neighbour_radius_m, "a building whose own lattice is undetermined (the neighbours' lattice within fit_keep_uncertainty standard errors of its fitted one; without a fit, its chords giving it none) takes the lattice of the buildings around it: those whose centres lie within this distance of its centre and whose chords give them a lattice, weighted by that share times their perimeter (m, 0 = off). Under a metre of wobble a small house is a blob whose own direction is anyone's; its street's is not", Check::at_least(0));
+    v("neighbour_radius_m", neighbour_radius_m, "a building whose own lattice is undetermined (the neighbours' lattice within fit_keep_uncertainty standard errors of its fitted one; without a fit, its chords giving it none) takes the lattice of the buildings around it: those whose centres lie within this distance of its centre (where none does, those whose boxes come within it: a shed beside a long block) and whose chords give them a lattice, spanning at least 1 / tan(window_deg) pixels (shorter ones measure the pixel grid), weighted by that share times their perimeter (m, 0 = off). Under a metre of wobble a small house is a blob whose own direction is anyone's; its street's is not", Check::at_least(0));
     v("neighbour_agreement", neighbour_agreement, "... when they agree: the length of the weighted mean of their lattices' directions times four (as unit vectors) at least this (1: all alike)", Check::between(0, 1));
     v("neighbour_max_extent_m", neighbour_max_extent_m, "... and lent only by buildings whose outer ring's box is at most this wide and tall (m): a tiled run then finds every building that may lend to its own within a margin of neighbour_radius_m plus this around them, and lends what the whole mask would (0: no limit, tiles lend nothing)", Check::at_least(0));
     v("fit_keep_uncertainty", fit_keep_uncertainty, "... and the labeled lattice (the main direction, or the chords' above) kept where it lies within this many standard errors of the fit (the spread correlated over corners.snap_correlation_m): a clean wall's labeled direction is exact", Check::at_least(0));
@@ -73,8 +73,12 @@ struct LatticeLender {
   double share = 0;               // ... and their share near it
   double perimeter = 0;           // of its outer ring
   double extent = 0;              // the larger side of its outer ring's box (m)
+  Vec2 low = Vec2::Zero(), high = Vec2::Zero();  // that box's corners
 };
 LatticeLender lattice_lender(std::int64_t id, const std::vector<Ring>& rings, const ChordLattice& chord);
+
+// The distance from p to a lender's box (0 inside it).
+double distance_to_box(const LatticeLender& lender, const Vec2& p);
 
 // Points bucketed in square cells as wide as a radius, for those within the radius of another
 // point (at most that far: the 3 x 3 cells around it). Points that are not finite are left out.
@@ -92,13 +96,24 @@ class PointsWithinRadius {
   std::map<std::pair<long, long>, std::vector<std::size_t>> cells_;
 };
 
+// The lattice a building's neighbours lend it (a unit normal, zero: none), and whether they are
+// those whose boxes, not centres, come within the radius.
+struct NeighbourLattice {
+  Vec2 direction = Vec2::Zero();
+  bool from_boxes = false;
+};
+
 // Per building (centres and ids), the lattice its neighbours agree on (neighbour_radius_m,
-// neighbour_agreement): a unit normal, or zero where none is within reach, none of them has a
-// lattice of its own, or they disagree. The lenders that count: within the radius, their chords
-// giving them a lattice (min_share), their extent at most neighbour_max_extent_m, not the building
-// itself (same id); each weighs its share times its perimeter. Deterministic: each sum runs over
-// the lenders in order of id, whatever order they are given in.
-std::vector<Vec2> neighbour_lattices(const std::vector<Vec2>& centres, const std::vector<std::int64_t>& ids,
-                                     std::vector<LatticeLender> lenders, const LatticeOptions& options);
+// neighbour_agreement), none where none is within reach, none of them has a lattice of its own, or
+// they disagree. The lenders that count: their chords giving them a
+// lattice (min_share) and spanning at least 1 / tan(window_deg) pixels of pixel_size (a shorter
+// chord, its ends on pixel corners, is turned up to window_deg by the pixel grid: a shed of a few
+// pixels lends the grid's axes), their extent at most neighbour_max_extent_m, not the building
+// itself (same id); those whose centres lie within the radius of its centre, or, where none does,
+// those whose boxes come within the radius of it (a shed beside a long block, whose centre is far);
+// each weighs its share times its perimeter. Deterministic: each sum runs over the lenders in order
+// of id, whatever order they are given in.
+std::vector<NeighbourLattice> neighbour_lattices(const std::vector<Vec2>& centres, const std::vector<std::int64_t>& ids,
+                                                std::vector<LatticeLender> lenders, double pixel_size, const LatticeOptions& options);
 
 }  // namespace lodforge

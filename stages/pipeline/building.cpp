@@ -456,7 +456,7 @@ void run_chain(const std::vector<Ring>& rings, double pixel_size, const CoreOpti
   for (const Ring& r : rings) edges += r.size();
   bool started = start.normals.size() == rings.size();
   for (std::size_t r = 0; started && r < rings.size(); ++r) started = start.normals[r].size() == rings[r].size();
-  const Vec2 neighbour_lattice = start.neighbour_lattice;  // (a start made here has none)
+  const NeighbourLattice neighbour_lattice = start.neighbour_lattice;  // (a start made here has none)
   if (!started) start = start_building(rings, pixel_size, o, false, start.smoothing_noise_m);
   LabelingInput input;
   input.normals = std::move(start.normals);
@@ -579,12 +579,16 @@ void run_chain(const std::vector<Ring>& rings, double pixel_size, const CoreOpti
   // A building whose own lattice is undetermined takes its neighbours' (lattice.neighbour_*): one
   // too small to show its walls under its mask's noise (refinement.min_round_noise), one whose
   // fitted lattice lies within fit_keep_uncertainty standard errors of theirs, or, without a fit,
-  // one whose chords give it no lattice.
-  if (on_lattice && neighbour_lattice.squaredNorm() > 0) {
-    const double gap = angle_between_lattices_deg(neighbour_lattice, context.lattice) * M_PI / 180.0;
-    result.lattice_lent = small_for_noise || (fitted_lattice ? gap <= o.lattice.fit_keep_uncertainty * fit_uncertainty
-                                                            : chord.share < o.lattice.min_share);
-    if (result.lattice_lent) context.lattice = neighbour_lattice;
+  // one whose chords give it no lattice. (A fitted lattice is held only to its near neighbours',
+  // those whose centres are near: the lattice of the walls whose boxes alone come near is the
+  // street's, which a building with walls of its own need not follow.)
+  const Vec2& lent = neighbour_lattice.direction;
+  if (on_lattice && lent.squaredNorm() > 0) {
+    const double gap = angle_between_lattices_deg(lent, context.lattice) * M_PI / 180.0;
+    result.lattice_lent =
+        small_for_noise || (fitted_lattice ? !neighbour_lattice.from_boxes && gap <= o.lattice.fit_keep_uncertainty * fit_uncertainty
+                                           : chord.share < o.lattice.min_share);
+    if (result.lattice_lent) context.lattice = lent;
   }
   context.noise = noise;
   context.mask_noise = noise_floor_m;

@@ -56,7 +56,7 @@ struct BuildingStart {
   ChordLattice chord;                      // the lattice of the contour's chords
   NoiseSample sample;
   double smoothing_noise_m = 0;  // the noise its normals are smoothed for; of an empty start, the noise the chain smooths for
-  Vec2 neighbour_lattice = Vec2::Zero();  // the lattice of the buildings around it (neighbour_lattices), zero: none
+  NeighbourLattice neighbour_lattice;  // the lattice of the buildings around it (neighbour_lattices)
 };
 // smoothing_noise_m: the boundary noise pooled over the mask that the normals are smoothed for
 // (smoothing.noise_neighbourhood; 0: none known).
