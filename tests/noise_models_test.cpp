@@ -686,7 +686,7 @@ TEST(Lattice, NeighboursLendTheLatticeTheyAgreeOn) {
 }
 
 // Which neighbours lend where none is near: a shed 40 m from the centre of a long block at 24
-// degrees, 10 m from its wall, takes the block's lattice (its box comes within the radius), unless
+// degrees, 10 m from its wall, takes the block's lattice (its box comes within half the radius), unless
 // a house's centre lies within the radius, which then lends alone; a shed of a few pixels lends
 // nothing, its chords spanning less than 1 / tan(window_deg) pixels (3.7): at 2 m a pixel, a shed of
 // 12 m of outline spans 1.5 m (chord_share of it), whose direction the pixel grid gives.
@@ -713,10 +713,10 @@ TEST(Lattice, NeighboursBesideALongBlockAndShedsOfAFewPixels) {
   ASSERT_GT(lent[0].direction.squaredNorm(), 0);
   EXPECT_NEAR(angle_between_lattices_deg(lent[0].direction, at(24)), 0, 1e-9);
   EXPECT_TRUE(lent[0].from_boxes);
-  // Its wall 31 m away: nobody lends.
-  lenders[1].low.y() = lenders[1].centre.y() - 8 + 21;
-  lenders[1].centre.y() += 21;
-  lenders[1].high.y() += 21;
+  // Its wall 16 m away: nobody lends.
+  lenders[1].low.y() += 6;
+  lenders[1].centre.y() += 6;
+  lenders[1].high.y() += 6;
   EXPECT_EQ(neighbour_lattices(shed, shed_id, lenders, 2.0, o)[0].direction.squaredNorm(), 0);
 }
 

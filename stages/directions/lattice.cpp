@@ -177,7 +177,7 @@ std::vector<NeighbourLattice> neighbour_lattices(const std::vector<Vec2>& centre
     lender_centres[j] = lenders[j].centre;
     largest = std::max(largest, lenders[j].extent);
   }
-  // (A box within the radius has its centre, a mean of its vertices, within the radius and its
+  // (A box within half the radius has its centre, a mean of its vertices, within that and its
   // diagonal.)
   const PointsWithinRadius within(std::move(lender_centres), radius + std::sqrt(2.0) * largest);
   std::vector<std::size_t> near;
@@ -190,7 +190,7 @@ std::vector<NeighbourLattice> neighbour_lattices(const std::vector<Vec2>& centre
       by_box = boxes;
       for (std::size_t j : near) {
         if (lenders[j].id == ids[i]) continue;
-        if ((by_box ? distance_to_box(lenders[j], centres[i]) : (lenders[j].centre - centres[i]).norm()) > radius) continue;
+        if (by_box ? distance_to_box(lenders[j], centres[i]) > radius / 2 : (lenders[j].centre - centres[i]).norm() > radius) continue;
         sx += weights[j] * quadrupled[j].x();
         sy += weights[j] * quadrupled[j].y();
         total += weights[j];
