@@ -5,7 +5,7 @@
 # half a metre), every regularizer on each, scored by `lodforge eval`. Regenerates the sweep
 # section of docs/quality.md (between its sweep markers).
 #
-#   bench/sweep.sh [--work DIR] [--sets synth,campus] [--pixels 0.1,0.25,0.5,1,2]
+#   bench/sweep.sh [--work DIR] [--sets synth,campus[,delft]] [--pixels 0.1,0.25,0.5,1,2]
 #                  [--wobbles 0,0.25,0.5,1] [--wavelength 8]
 #                  [--methods lodforge,cgal,douglas_peucker,none] [--no-docs]
 #
@@ -14,7 +14,8 @@
 # speckle_size_m=0.5` (W = 0: the exact rasterization, no rounding, no speckles), L = 8 m unless
 # --wavelength says otherwise (its rows then go to their own section, sweep-results-lL, and their
 # files are named ROW.lL). The synthetic city is 500 m x 500 m (seed 11); the campus is its 1,529
-# BAG footprints (seed 1). Methods: lodforge (the default), paper (the deformed route), nocriterion
+# BAG footprints (seed 1); delft (not in the default sets) the 160 BGT footprints of Delft's old town
+# (seed 1): row houses in blocks at about 37 degrees to the grid, with rear annexes of a few metres. Methods: lodforge (the default), paper (the deformed route), nocriterion
 # (the default without the outlines an information criterion chooses: the coarse lattice outlines,
 # the staircases drawn as lines and the merged steps: models.coarse_scale = 0,
 # models.staircase_corners = 0, models.merge_patience = 0), cgal,
@@ -45,6 +46,7 @@ while [ $# -gt 0 ]; do
 done
 [ -x "$lodforge" ] || { echo "bench/sweep.sh: no lodforge binary at $lodforge; run scripts/build.sh first" >&2; exit 1; }
 campus_gt="$shared/tudelft-campus-bag/tudcampus_bag_footprints.geojson"
+delft_gt="$shared/delft-ahn3-bgt/derived/bgt_pand_buildings.geojson"
 # The wavelength as a number: 8 (also 8.0) is the main sweep's; another has its own rows and section.
 if [ "$(/usr/bin/python3 -c "import sys; print(float(sys.argv[1]) == 8)" "$wavelength" 2>/dev/null)" = True ]; then
   wavelength=8 section=sweep-results
@@ -65,6 +67,7 @@ for s in "${set_list[@]}"; do
   case "$s" in
     synth) ;;
     campus) [ -f "$campus_gt" ] || { echo "bench/sweep.sh: no campus footprints at $campus_gt (set LODFORGE_SHARED_DATA)" >&2; exit 1; } ;;
+    delft) [ -f "$delft_gt" ] || { echo "bench/sweep.sh: no Delft footprints at $delft_gt (set LODFORGE_SHARED_DATA)" >&2; exit 1; } ;;
     *) echo "bench/sweep.sh: unknown set '$s'" >&2; exit 2 ;;
   esac
 done
@@ -98,11 +101,14 @@ for s in "${set_list[@]}"; do
         if [ "$s" = synth ]; then
           "$lodforge" synth --size-m 500x500 --pixel-size "$p" --seed 11 "${degrade[@]}" --out "$data" >/dev/null 2>&1
         else
-          "$lodforge" synth --from "$campus_gt" --pixel-size "$p" --seed 1 "${degrade[@]}" --out "$data" >/dev/null 2>&1
+          from="$campus_gt"
+          [ "$s" = delft ] && from="$delft_gt"
+          "$lodforge" synth --from "$from" --pixel-size "$p" --seed 1 "${degrade[@]}" --out "$data" >/dev/null 2>&1
         fi
       fi
       gt="$data/footprints.gpkg"
       [ "$s" = campus ] && gt="$campus_gt"
+      [ "$s" = delft ] && gt="$delft_gt"
       for m in "${method_list[@]}"; do
         out="$work/$row.$m"
         echo "bench/sweep.sh: $row / $m" >&2

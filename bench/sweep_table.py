@@ -8,7 +8,8 @@ from doc_section import write_section
 
 PEERS = ["cgal", "douglas_peucker"]
 SHORT = {"lodforge": "ours", "cgal": "CGAL", "douglas_peucker": "DP", "none": "raw", "paper": "paper", "nocriterion": "no criterion"}
-TITLES = {"synth": "Synthetic city, 500 m x 500 m (seed 11)", "campus": "TU Delft campus, 1,529 BAG footprints (seed 1)"}
+TITLES = {"synth": "Synthetic city, 500 m x 500 m (seed 11)", "campus": "TU Delft campus, 1,529 BAG footprints (seed 1)",
+          "delft": "Delft old town, 160 BGT footprints (seed 1)"}
 
 ap = argparse.ArgumentParser()
 ap.add_argument("work")

@@ -28,6 +28,7 @@ struct ModelOptions {
   double staircase_square_deg = 10.0;  // ... a corner within this of 90 degrees counting as square
   int merge_patience = 8;            // then the chosen outline's steps merged one at a time, the walk going this many merges past its least criterion
   double merge_parallel_deg = 2.0;   // ... a step's two walls parallel within this (degrees)
+  double criterion_stretch_noise = 20.0;  // ... each of those three leaving no stretch of contour farther than the chosen outline by this many standard errors
   double min_noise_px = 0.3;         // the noise assumed at least (a staircase's quantization)
   double fallback_fit_px = 0.5;      // a rectangle replaces a failed building's fallback when it fits within this ...
   double fallback_fit_ratio = 2.0;   // ... or this many times as far as the fallback (mean distances)
@@ -51,6 +52,7 @@ struct ModelOptions {
     v("staircase_square_deg", staircase_square_deg, "... a corner within this of 90 degrees counting as square", Check::between(0, 45));
     v("merge_patience", merge_patience, "after staircase_corners, under the same conditions and criterion: the chosen outline's steps merged one at a time, the cheapest first (of three walls in a row whose first and last are parallel and face the same way, the two become one at their length-weighted mean offset; the cheapest moves the least area), each outline of that path competing; the walk stops once this many merges have passed without a new least criterion (the criterion is not monotone along it), and the least among its valid polygons is kept. What the wobble's crests leave as notches a metre wide the coarse lattice outline may not reach (0 = off)", Check::between(0, 1000));
     v("merge_parallel_deg", merge_parallel_deg, "... a step's two walls count as parallel within this (degrees)", Check::between(0, 45));
+    v("criterion_stretch_noise", criterion_stretch_noise, "... and each of those simpler outlines (coarse lattice, staircases as lines, merged steps) taken only where it leaves no stretch of contour that the chosen outline explains, as rectangle_stretch_noise says, by this many standard errors: the criterion weighs the fit over the whole contour, and a block of row houses whose real setbacks are drawn as one oblique wall, or merged, still fits well on the whole (0 = off)", Check::at_least(0));
     v("min_noise_px", min_noise_px, "the boundary noise is taken as at least this (pixels; a staircase's own)", Check::at_least(0));
     v("fallback_fit_px", fallback_fit_px, "when the chain fails, the rectangle replaces the Douglas-Peucker fallback if the contour lies within this (pixels, mean distance) of it ...", Check::at_least(0));
     v("fallback_fit_ratio", fallback_fit_ratio, "... or within this many times the fallback's own mean distance to the contour", Check::at_least(0));
