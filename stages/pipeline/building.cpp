@@ -718,21 +718,14 @@ void run_chain(const std::vector<Ring>& rings, double pixel_size, const CoreOpti
       return samples * std::log(fit * fit) + 2.0 * std::log(samples) * double(vertices);
     };
     const auto criterion = [&](const PolygonWithHoles& p) { return criterion_of(contour_fit(rings, p), vertex_count(p)); };
-    // A simpler outline that explains the contour as well on the whole may still leave a stretch
-    // of it that the chosen one explains (a block's real setbacks drawn as one oblique wall): then
-    // it is not taken (models.criterion_stretch_noise, as leaves_a_stretch judges a rectangle).
-    const double stretch_noise = model_noise(result, pixel_size, o.models), stretch_correlation = noise_correlation_m(o.corners, pixel_size);
-    const PolygonWithHoles chosen = result.footprint;
-    std::vector<std::vector<std::pair<double, double>>> chosen_distances;  // per ring, when first needed
-    const auto leaves_stretch = [&](const PolygonWithHoles& p) {
-      if (o.models.criterion_stretch_noise <= 0) return false;
-      if (chosen_distances.empty())
-        for (const Ring& ring : rings) chosen_distances.push_back(boundary_distances(ring, chosen));
-      for (std::size_t r = 0; r < rings.size(); ++r)
-        if (leaves_a_stretch(boundary_distances(rings[r], p), chosen_distances[r], stretch_noise, stretch_correlation,
-                             o.models.criterion_stretch_noise))
-          return true;
-      return false;
+    const PolygonWithHoles chosen = result.footprint;  // (the outline chosen before these, and its model)
+    const std::string chosen_model = result.model;
+    // Each outline taken as the least so far, in turn (its model's name with it).
+    std::vector<std::pair<PolygonWithHoles, std::string>> taken;
+    const auto take = [&](const PolygonWithHoles& p, const char* model) {
+      taken.emplace_back(p, model);
+      result.footprint = p;
+      result.model = model;
     };
     // (The merge path measures the chosen outline's fit, as contour_fit does, for the walk below:
     // made first, it gives the criterion's start, and is made again only if another outline wins.)
@@ -752,10 +745,9 @@ void run_chain(const std::vector<Ring>& rings, double pixel_size, const CoreOpti
           vertex_count(candidate) >= vertex_count(result.footprint))
         continue;
       const double c = criterion(candidate);
-      if (c < best && !leaves_stretch(candidate)) {
+      if (c < best) {
         best = c;
-        result.footprint = std::move(candidate);
-        result.model = "coarse_lattice";
+        take(candidate, "coarse_lattice");
         replaced = true;
       }
     }
@@ -765,10 +757,9 @@ void run_chain(const std::vector<Ring>& rings, double pixel_size, const CoreOpti
       if (std::optional<PolygonWithHoles> lines =
               staircases_as_lines(result.footprint, o.models.staircase_corners, o.models.staircase_square_deg)) {
         const double c = criterion(*lines);
-        if (c < best && polygon_problem(*lines).empty() && !leaves_stretch(*lines)) {
+        if (c < best && polygon_problem(*lines).empty()) {
           best = c;
-          result.footprint = std::move(*lines);
-          result.model = "staircase_lines";
+          take(*lines, "staircase_lines");
           replaced = true;
         }
       }
@@ -780,15 +771,33 @@ void run_chain(const std::vector<Ring>& rings, double pixel_size, const CoreOpti
       if (replaced) path.emplace(rings, result.footprint, o.models.merge_parallel_deg);
       for (int since_best = 0; since_best < o.models.merge_patience && !over_budget() && path->merge_next();) {
         const double c = criterion_of(path->fit(), vertex_count(path->outline()));
-        if (c < best && polygon_problem(path->outline()).empty() && !leaves_stretch(path->outline())) {
+        if (c < best && polygon_problem(path->outline()).empty()) {
           best = c;
-          result.footprint = path->outline();
-          result.model = "merged_steps";
+          take(path->outline(), "merged_steps");
           since_best = 0;
         } else {
           ++since_best;
         }
       }
+    }
+    // A simpler outline that explains the contour as well on the whole may still leave a stretch
+    // of it that the chosen one explains (a block's real setbacks drawn as one oblique wall): the
+    // last one taken that leaves none stands, else the chosen one (models.criterion_stretch_noise,
+    // as leaves_a_stretch judges a rectangle).
+    if (!taken.empty() && o.models.criterion_stretch_noise > 0) {
+      const double stretch_noise = model_noise(result, pixel_size, o.models), correlation = noise_correlation_m(o.corners, pixel_size);
+      std::vector<std::vector<std::pair<double, double>>> chosen_distances;
+      for (const Ring& ring : rings) chosen_distances.push_back(boundary_distances(ring, chosen));
+      const auto leaves_stretch = [&](const PolygonWithHoles& p) {
+        for (std::size_t r = 0; r < rings.size(); ++r)
+          if (leaves_a_stretch(boundary_distances(rings[r], p), chosen_distances[r], stretch_noise, correlation,
+                               o.models.criterion_stretch_noise))
+            return true;
+        return false;
+      };
+      while (!taken.empty() && leaves_stretch(taken.back().first)) taken.pop_back();
+      result.footprint = taken.empty() ? chosen : std::move(taken.back().first);
+      result.model = taken.empty() ? chosen_model : taken.back().second;
     }
   }
 }
