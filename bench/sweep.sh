@@ -1,11 +1,11 @@
 #!/usr/bin/env bash
-# The resolution x noise sweep of the quality benchmark (issue 14): the synthetic city and the TU
-# Delft campus footprints, their segmentation simulated at several pixel sizes with the same
-# physical degradation (a boundary wobble given in metres, corners rounded in metres, speckles of
-# half a metre), every regularizer on each, scored by `lodforge eval`. Regenerates the sweep
-# section of docs/quality.md (between its sweep markers).
+# The resolution x noise sweep of the quality benchmark (issue 14): the synthetic city, the TU
+# Delft campus footprints and Delft's old town, their segmentation simulated at several pixel
+# sizes with the same physical degradation (a boundary wobble given in metres, corners rounded in
+# metres, speckles of half a metre), every regularizer on each, scored by `lodforge eval`.
+# Regenerates the sweep section of docs/quality.md (between its sweep markers).
 #
-#   bench/sweep.sh [--work DIR] [--sets synth,campus[,delft]] [--pixels 0.1,0.25,0.5,1,2]
+#   bench/sweep.sh [--work DIR] [--sets synth,campus,delft] [--pixels 0.1,0.25,0.5,1,2]
 #                  [--wobbles 0,0.25,0.5,1] [--wavelength 8]
 #                  [--methods lodforge,cgal,douglas_peucker,none] [--no-docs]
 #
@@ -13,19 +13,19 @@
 # --set noise_wavelength_m=L --set corner_radius_m=2W --set speckle_per_km2=400 --set
 # speckle_size_m=0.5` (W = 0: the exact rasterization, no rounding, no speckles), L = 8 m unless
 # --wavelength says otherwise (its rows then go to their own section, sweep-results-lL, and their
-# files are named ROW.lL). The synthetic city is 500 m x 500 m (seed 11); the campus is its 1,529
-# BAG footprints (seed 1); delft (not in the default sets) the 160 BGT footprints of Delft's old town
-# (seed 1): row houses in blocks at about 37 degrees to the grid, with rear annexes of a few metres. Methods: lodforge (the default), paper (the deformed route), nocriterion
-# (the default without the outlines an information criterion chooses: the coarse lattice outlines,
-# the staircases drawn as lines and the merged steps: models.coarse_scale = 0,
-# models.staircase_corners = 0, models.merge_patience = 0), cgal,
-# douglas_peucker, none (the raw contour).
+# files are named ROW.lL). The synthetic city is 500 m x 500 m (seed 11); the campus its 1,529
+# BAG footprints (seed 1); delft the 160 BGT footprints of Delft's old town (seed 1: row houses in
+# blocks at about 37 degrees to the grid, with rear annexes of a few metres). Methods: lodforge
+# (the default), paper (the deformed route), nocriterion (the default without the outlines an
+# information criterion chooses: the coarse lattice outlines, the staircases drawn as lines and
+# the merged steps: models.coarse_scale = 0, models.staircase_corners = 0,
+# models.merge_patience = 0), cgal, douglas_peucker, none (the raw contour).
 set -euo pipefail
 root="$(cd "$(dirname "$0")/.." && pwd)"
 lodforge="${LODFORGE:-$root/build/lodforge}"
 shared="${LODFORGE_SHARED_DATA:-$root/../shared/data}"
 work="$root/build/bench-sweep"
-sets="synth,campus"
+sets="synth,campus,delft"
 pixels="0.1,0.25,0.5,1,2"
 wobbles="0,0.25,0.5,1"
 wavelength=8
@@ -40,13 +40,14 @@ while [ $# -gt 0 ]; do
     --wavelength) wavelength="$2"; shift 2 ;;
     --methods) methods="$2"; shift 2 ;;
     --no-docs) docs=0; shift ;;
-    -h|--help) sed -n '2,19p' "$0"; exit 0 ;;
+    -h|--help) sed -n '2,22p' "$0"; exit 0 ;;
     *) echo "bench/sweep.sh: unknown argument '$1' (see --help)" >&2; exit 2 ;;
   esac
 done
 [ -x "$lodforge" ] || { echo "bench/sweep.sh: no lodforge binary at $lodforge; run scripts/build.sh first" >&2; exit 1; }
 campus_gt="$shared/tudelft-campus-bag/tudcampus_bag_footprints.geojson"
 delft_gt="$shared/delft-ahn3-bgt/derived/bgt_pand_buildings.geojson"
+[ -f "$delft_gt" ] || delft_gt="$root/tests/data/delft-ahn3-bgt/derived/bgt_pand_buildings.geojson"  # (the copy the tests carry)
 # The wavelength as a number: 8 (also 8.0) is the main sweep's; another has its own rows and section.
 if [ "$(/usr/bin/python3 -c "import sys; print(float(sys.argv[1]) == 8)" "$wavelength" 2>/dev/null)" = True ]; then
   wavelength=8 section=sweep-results

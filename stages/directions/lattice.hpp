@@ -105,15 +105,14 @@ struct NeighbourLattice {
 
 // Per building (centres and ids), the lattice its neighbours agree on (neighbour_radius_m,
 // neighbour_agreement), none where none is within reach, none of them has a lattice of its own, or
-// they disagree. The lenders that count: their chords giving them a
-// lattice (min_share) and spanning at least 1 / tan(window_deg) pixels of pixel_size (a shorter
-// chord, its ends on pixel corners, is turned up to window_deg by the pixel grid: a shed of a few
-// pixels lends the grid's axes), their extent at most neighbour_max_extent_m, not the building
-// itself (same id); those whose centres lie within the radius of its centre, or, where none does,
-// those whose boxes come within half the radius of it, about as near as a near neighbour's walls
-// (a shed beside a long block, whose centre is far);
-// each weighs its share times its perimeter. Deterministic: each sum runs over the lenders in order
-// of id, whatever order they are given in.
+// they disagree. The lenders that count: their chords giving them a lattice (min_share) and
+// spanning at least 1 / tan(window_deg) pixels of pixel_size (a shorter chord, its ends on pixel
+// corners, is turned up to window_deg by the pixel grid: a shed of a few pixels lends the grid's
+// axes), their extent at most neighbour_max_extent_m, not the building itself (same id); those
+// whose centres lie within the radius of its centre, or, where none does, those whose boxes come
+// within half the radius of it, about as near as a near neighbour's walls (a shed beside a long
+// block, whose centre is far). Each weighs its share times its perimeter. Deterministic: each sum
+// runs over the lenders in order of id, whatever order they are given in.
 std::vector<NeighbourLattice> neighbour_lattices(const std::vector<Vec2>& centres, const std::vector<std::int64_t>& ids,
                                                 std::vector<LatticeLender> lenders, double pixel_size, const LatticeOptions& options);
 
