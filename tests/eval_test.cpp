@@ -129,8 +129,8 @@ TEST(EvalCommand, ReportsOnFilesAndRefusesMissingOnes) {
 // with rear annexes of a few metres), its segmentation simulated at 2 m with a quarter metre of
 // wobble as bench/sweep.sh does: the information criterion's simpler outlines drew a block's
 // stepped west end as one oblique wall across its houses (145 m² off the truth), overall IoU
-// 0.8410 against the raw contour's 0.8564. Each simpler outline must leave no stretch of
-// contour the chosen one explains (models.criterion_stretch_noise): 0.8583.
+// 0.8410 against the raw contour's 0.8564. The simpler outline that stands must leave no stretch
+// of contour the chosen one explains (models.criterion_stretch_noise).
 TEST(EvalCommand, DelftBlocksAt2mAreNotCutAcross) {
   const auto dir = test::fresh_test_directory("lodforge_delft2m");
   const std::string truth = test::test_data() + "/delft-ahn3-bgt/derived/bgt_pand_buildings.geojson";

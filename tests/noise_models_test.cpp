@@ -676,7 +676,7 @@ TEST(Lattice, NeighboursLendTheLatticeTheyAgreeOn) {
   EXPECT_NEAR(angle_between_lattices_deg(lent[0].direction, at(21.2)), 0, 0.1);
   // House 1's neighbours: house 2 alone (the blob has no lattice to lend).
   EXPECT_NEAR(angle_between_lattices_deg(lent[1].direction, at(22)), 0, 1e-9);
-  EXPECT_EQ(lent[3].direction.squaredNorm(), 0);  // nobody within 30 m
+  EXPECT_EQ(lent[3].direction.squaredNorm(), 0);  // no centre within 30 m, no box within 15 m
   EXPECT_EQ(lent[4].direction.squaredNorm(), 0);  // its neighbours disagree
   // With no limit on the extent, the hall's lattice outweighs the houses': no agreement.
   o.neighbour_max_extent_m = 0;
@@ -685,11 +685,12 @@ TEST(Lattice, NeighboursLendTheLatticeTheyAgreeOn) {
   for (const NeighbourLattice& l : neighbour_lattices(centres, ids, lenders, pixel, o)) EXPECT_EQ(l.direction.squaredNorm(), 0);  // off
 }
 
-// Which neighbours lend where none is near: a shed 40 m from the centre of a long block at 24
-// degrees, 10 m from its wall, takes the block's lattice (its box comes within half the radius), unless
-// a house's centre lies within the radius, which then lends alone; a shed of a few pixels lends
-// nothing, its chords spanning less than 1 / tan(window_deg) pixels (3.7): at 2 m a pixel, a shed of
-// 12 m of outline spans 1.5 m (chord_share of it), whose direction the pixel grid gives.
+// Which neighbours lend where none is near: a shed 44 m from the centre of a long block at 24
+// degrees, 10 m from its wall, takes the block's lattice (its box comes within half the radius),
+// unless a lender's centre lies within the radius (a second shed, 5 m off), which then lends
+// alone; a shed of a few pixels lends nothing, its chords spanning less than 1 / tan(window_deg)
+// pixels (3.7): at 2 m a pixel, a shed of 12 m of outline spans 1.5 m (chord_share of it), whose
+// direction the pixel grid gives.
 TEST(Lattice, NeighboursBesideALongBlockAndShedsOfAFewPixels) {
   LatticeOptions o;
   o.neighbour_radius_m = 30;

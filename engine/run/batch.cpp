@@ -252,9 +252,10 @@ std::vector<LatticeLender> lattice_lenders(const MaskWindowReader& mask, cv::Siz
     return !touches_inner_border(box, window, raster) && box.width <= m.extent.x() && box.height <= m.extent.y() && !(box & zone).empty();
   });
   // Each one's chords' lattice (the costly part) where its centre lies within the radius of one
-  // of the buildings' and its box's diagonal (its box may come within the radius): the others lend
-  // to none of them.
-  const PointsWithinRadius within(std::move(centres), lattice.neighbour_radius_m + std::sqrt(2.0) * lattice.neighbour_max_extent_m);
+  // of the buildings', or within half of it and its box's diagonal (its box may come within half
+  // the radius): the others lend to none of them.
+  const PointsWithinRadius within(std::move(centres), std::max(lattice.neighbour_radius_m, lattice.neighbour_radius_m / 2 +
+                                                                                            std::sqrt(2.0) * lattice.neighbour_max_extent_m));
   std::vector<std::optional<LatticeLender>> found(traced.buildings.size());
   tbb::parallel_for(std::size_t(0), traced.buildings.size(), [&](std::size_t i) {
     BuildingContour& b = traced.buildings[i];

@@ -69,8 +69,9 @@ LenderMargins lender_margins(const GeoTransform& transform, const LatticeOptions
 
 // The buildings that may lend their lattice to those given (lattice.neighbour_radius_m): every
 // building of the raster, traced whole, whose outer ring's box is at most
-// neighbour_max_extent_m wide and tall and lies within the radius plus that extent of one of
-// their centres, read in one window (their centres' box with that margin, and a pixel). The
+// neighbour_max_extent_m wide and tall and that may lend to one of them (its centre within the
+// radius of theirs, or its box within half of it: neighbour_lattices), read in one window (their
+// centres' box with the radius and that extent as margin, and a pixel). The
 // same lattices as the whole mask lends, whatever the tiling. Empty when no lattice is lent
 // (the radius or the extent 0, or no buildings).
 std::vector<LatticeLender> lattice_lenders(const MaskWindowReader& mask, cv::Size raster, const GeoTransform& transform,

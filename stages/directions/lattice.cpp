@@ -4,6 +4,7 @@
 #include <cmath>
 #include <limits>
 #include <map>
+#include <optional>
 
 #include "geometry/polygon.hpp"
 
@@ -177,20 +178,25 @@ std::vector<NeighbourLattice> neighbour_lattices(const std::vector<Vec2>& centre
     lender_centres[j] = lenders[j].centre;
     largest = std::max(largest, lenders[j].extent);
   }
-  // (A box within half the radius has its centre, a mean of its vertices, within that and its
-  // diagonal.)
-  const PointsWithinRadius within(std::move(lender_centres), radius + std::sqrt(2.0) * largest);
+  const PointsWithinRadius within(lender_centres, radius);
+  // Those whose boxes come within half the radius, where none's centre is near: their centres (a
+  // mean of their vertices, in their boxes) lie within that and their diagonals (made when needed).
+  std::optional<PointsWithinRadius> beside;
   std::vector<std::size_t> near;
   for (std::size_t i = 0; i < n; ++i) {
-    within.near(centres[i], near);  // (ascending: the sums in order of id)
     double sx = 0, sy = 0, total = 0;
     bool by_box = false;
     for (const bool boxes : {false, true}) {
       if (total > 0) break;
       by_box = boxes;
+      if (!boxes) {
+        within.near(centres[i], near);  // (ascending: the sums in order of id)
+      } else {
+        if (!beside) beside.emplace(lender_centres, radius / 2 + std::sqrt(2.0) * largest);
+        beside->near(centres[i], near);
+      }
       for (std::size_t j : near) {
-        if (lenders[j].id == ids[i]) continue;
-        if (by_box ? distance_to_box(lenders[j], centres[i]) > radius / 2 : (lenders[j].centre - centres[i]).norm() > radius) continue;
+        if (lenders[j].id == ids[i] || (boxes && distance_to_box(lenders[j], centres[i]) > radius / 2)) continue;
         sx += weights[j] * quadrupled[j].x();
         sy += weights[j] * quadrupled[j].y();
         total += weights[j];

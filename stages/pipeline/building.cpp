@@ -317,6 +317,26 @@ double fit_tolerance(const std::vector<Ring>& rings, double pixel_size, const Bu
 // unless the outline leaves one the rectangle explains:
 // the simplest outline that explains the contour within its noise. (lattice: the rectangle is held
 // to it, a building whose own lattice is undetermined; else the best fitting one.)
+// Whether an outline leaves a stretch of the contour that a reference outline explains:
+// leaves_a_stretch on each ring, the reference's distances computed once.
+class StretchGuard {
+ public:
+  StretchGuard(const std::vector<Ring>& rings, const PolygonWithHoles& reference, double noise, double correlation, double k)
+      : rings_(rings), noise_(noise), correlation_(correlation), k_(k) {
+    for (const Ring& ring : rings) reference_.push_back(boundary_distances(ring, reference));
+  }
+  bool leaves_stretch(const PolygonWithHoles& outline) const {
+    for (std::size_t r = 0; r < rings_.size(); ++r)
+      if (leaves_a_stretch(boundary_distances(rings_[r], outline), reference_[r], noise_, correlation_, k_)) return true;
+    return false;
+  }
+
+ private:
+  const std::vector<Ring>& rings_;
+  double noise_, correlation_, k_;
+  std::vector<std::vector<std::pair<double, double>>> reference_;
+};
+
 void choose_rectangle(const std::vector<Ring>& rings, double pixel_size, const CoreOptions& co, BuildingResult& result,
                       const Vec2* lattice = nullptr) {
   const ModelOptions& o = co.models;
@@ -718,13 +738,16 @@ void run_chain(const std::vector<Ring>& rings, double pixel_size, const CoreOpti
       return samples * std::log(fit * fit) + 2.0 * std::log(samples) * double(vertices);
     };
     const auto criterion = [&](const PolygonWithHoles& p) { return criterion_of(contour_fit(rings, p), vertex_count(p)); };
-    const PolygonWithHoles chosen = result.footprint;  // (the outline chosen before these, and its model)
-    const std::string chosen_model = result.model;
-    // Each outline taken as the least so far, in turn (its model's name with it).
+    // Each outline taken as the least so far, in turn, with its model's name (when guarded below).
+    const bool guarded = o.models.criterion_stretch_noise > 0;
+    std::optional<std::pair<PolygonWithHoles, std::string>> chosen;  // the outline chosen before these
     std::vector<std::pair<PolygonWithHoles, std::string>> taken;
-    const auto take = [&](const PolygonWithHoles& p, const char* model) {
-      taken.emplace_back(p, model);
-      result.footprint = p;
+    const auto take = [&](PolygonWithHoles p, const char* model) {
+      if (guarded) {
+        if (!chosen) chosen.emplace(result.footprint, result.model);
+        taken.emplace_back(p, model);
+      }
+      result.footprint = std::move(p);
       result.model = model;
     };
     // (The merge path measures the chosen outline's fit, as contour_fit does, for the walk below:
@@ -747,7 +770,7 @@ void run_chain(const std::vector<Ring>& rings, double pixel_size, const CoreOpti
       const double c = criterion(candidate);
       if (c < best) {
         best = c;
-        take(candidate, "coarse_lattice");
+        take(std::move(candidate), "coarse_lattice");
         replaced = true;
       }
     }
@@ -759,7 +782,7 @@ void run_chain(const std::vector<Ring>& rings, double pixel_size, const CoreOpti
         const double c = criterion(*lines);
         if (c < best && polygon_problem(*lines).empty()) {
           best = c;
-          take(*lines, "staircase_lines");
+          take(std::move(*lines), "staircase_lines");
           replaced = true;
         }
       }
@@ -784,20 +807,13 @@ void run_chain(const std::vector<Ring>& rings, double pixel_size, const CoreOpti
     // of it that the chosen one explains (a block's real setbacks drawn as one oblique wall): the
     // last one taken that leaves none stands, else the chosen one (models.criterion_stretch_noise,
     // as leaves_a_stretch judges a rectangle).
-    if (!taken.empty() && o.models.criterion_stretch_noise > 0) {
-      const double stretch_noise = model_noise(result, pixel_size, o.models), correlation = noise_correlation_m(o.corners, pixel_size);
-      std::vector<std::vector<std::pair<double, double>>> chosen_distances;
-      for (const Ring& ring : rings) chosen_distances.push_back(boundary_distances(ring, chosen));
-      const auto leaves_stretch = [&](const PolygonWithHoles& p) {
-        for (std::size_t r = 0; r < rings.size(); ++r)
-          if (leaves_a_stretch(boundary_distances(rings[r], p), chosen_distances[r], stretch_noise, correlation,
-                               o.models.criterion_stretch_noise))
-            return true;
-        return false;
-      };
-      while (!taken.empty() && leaves_stretch(taken.back().first)) taken.pop_back();
-      result.footprint = taken.empty() ? chosen : std::move(taken.back().first);
-      result.model = taken.empty() ? chosen_model : taken.back().second;
+    if (chosen) {
+      const StretchGuard guard(rings, chosen->first, model_noise(result, pixel_size, o.models), noise_correlation_m(o.corners, pixel_size),
+                               o.models.criterion_stretch_noise);
+      while (!taken.empty() && guard.leaves_stretch(taken.back().first)) taken.pop_back();
+      auto& stands = taken.empty() ? *chosen : taken.back();
+      result.footprint = std::move(stands.first);
+      result.model = std::move(stands.second);
     }
   }
 }
