@@ -390,6 +390,56 @@ TEST_F(Run, TilesAndRegularizeAgreeOnAnInexactGrid) {
   EXPECT_TRUE(whole == regularized) << whole.size() << " against " << regularized.size();
 }
 
+// A shed beside a long block whose centre lies 36 m off, beyond the neighbours' radius, takes the
+// block's lattice by its box (6 m from the shed's centre, within half the radius): in tiles of 40 m, where
+// the shed's tile is not the block's, as in `regularize` (a tile's lenders reach the boxes that
+// come within half the radius of its buildings' centres, not only the centres within it).
+TEST_F(Run, AShedTakesTheLatticeOfABlockBesideItInEveryTiling) {
+  const int size = 60;  // pixels of 2 m: 120 m a side
+  const double pixel = 2, west = 85000, north = 447120;
+  // (u, v): metres east and north of the raster's south-west corner.
+  const auto in_rectangle = [](double u, double v, double cu, double cv, double deg, double length, double width) {
+    const double a = deg * M_PI / 180, du = u - cu, dv = v - cv;
+    return std::abs(du * std::cos(a) + dv * std::sin(a)) <= length / 2 && std::abs(-du * std::sin(a) + dv * std::cos(a)) <= width / 2;
+  };
+  std::vector<unsigned char> mask(std::size_t(size * size), 0);
+  for (int row = 0; row < size; ++row)
+    for (int col = 0; col < size; ++col) {
+      const double u = (col + 0.5) * pixel, v = size * pixel - (row + 0.5) * pixel;
+      // The block, 80 x 16 m at 24 degrees; the shed, 4 x 4 m, 30 m back along it from its centre
+      // and 20 m across (36 m off), in another tile than the block's first pixel (its north-east end).
+      if (in_rectangle(u, v, 70, 40, 24, 80, 16) || in_rectangle(u, v, 50.7, 9.5, 0, 4, 4)) mask[std::size_t(row * size + col)] = 6;
+    }
+  GDALAllRegister();
+  const fs::path tif = dir / "shed.tif";
+  {
+    GDALDataset* d = GetGDALDriverManager()->GetDriverByName("GTiff")->Create(tif.c_str(), size, size, 1, GDT_Byte, nullptr);
+    ASSERT_NE(d, nullptr);
+    double gt[6] = {west, pixel, 0, north, 0, -pixel};
+    d->SetGeoTransform(gt);
+    OGRSpatialReference crs;
+    crs.importFromEPSG(28992);
+    d->SetSpatialRef(&crs);
+    ASSERT_EQ(d->GetRasterBand(1)->RasterIO(GF_Write, 0, 0, size, size, mask.data(), size, size, GDT_Byte, 0, 0, nullptr), CE_None);
+    GDALClose(d);
+  }
+  Result r = lodforge("regularize --mask " + tif.string() + " --out " + (dir / "r.gpkg").string() + " --stats " + (dir / "r.json").string());
+  ASSERT_EQ(r.code, 0) << r.output;
+  const nlohmann::json stats = report_of(dir / "r.json");
+  ASSERT_EQ(stats.at("buildings").get<int>(), 2);
+  EXPECT_EQ(stats.at("lattice_lent").get<int>(), 1);
+  r = lodforge("run " + job("small", tif.string(), 40).string());
+  ASSERT_EQ(r.code, 0) << r.output;
+  EXPECT_TRUE(run_outlines(dir / "small_out") == gpkg_outlines(dir / "r.gpkg"));
+  // The block's box (its traced pixels') 6 m from the shed's centre: a radius of 10 m reaches
+  // neither its centre nor, at half of it, its box, and the shed keeps the pixel grid.
+  r = lodforge("regularize --mask " + tif.string() + " --out " + (dir / "alone.gpkg").string() + " --stats " + (dir / "alone.json").string() +
+               " --set stages.lattice.neighbour_radius_m=10");
+  ASSERT_EQ(r.code, 0) << r.output;
+  EXPECT_EQ(report_of(dir / "alone.json").at("lattice_lent").get<int>(), 0);
+  EXPECT_FALSE(gpkg_outlines(dir / "alone.gpkg") == gpkg_outlines(dir / "r.gpkg"));
+}
+
 // The lenders' margins in pixels follow the geotransform: north-up square pixels (metres over
 // the pixel size), pixels turned by 45 degrees (a box of S a side spans S sqrt 2 along either
 // pixel axis), and pixels of 0.5 x 0.25 m (twice as many columns, four times as many rows a metre).
