@@ -227,49 +227,25 @@ void split_parallel(const Ring& ring, int first, int count, const Vec2& normal, 
   if (o.split_px <= 0 || count < 4) { out.push_back({first, count}); return; }
   // Length-weighted prefix sums of each edge's position t along the run and offset y across it
   // (both from the run's first edge, for range).
-  using Sums = LineMoments;
   const Vec2 along(-normal.y(), normal.x());
   const Vec2 origin = ring[first % ring.size()];
-  std::vector<Sums> sums(count + 1);
+  std::vector<LineMoments> sums(count + 1);
   for (int k = 0; k < count; ++k) {
     const std::size_t i = (first + k) % ring.size();
     const Vec2 e = edge_vector(ring, i);
     const Vec2 mid = ring[i] + 0.5 * e - origin;
     const double len = e.norm(), t = along.dot(mid), y = normal.dot(mid);
-    sums[k + 1] = sums[k] + Sums::of(len, t, y);
+    sums[k + 1] = sums[k] + LineMoments::of(len, t, y);
   }
-  auto piece = [&](int a, int b) { return sums[b] - sums[a]; };
-  // The spread left about lines of one shared slope, one offset per piece, from the pieces'
-  // centred moments added up.
-  const auto spread = LineMoments::spread;
-  std::vector<int> cuts = {0, count};  // piece p is [cuts[p], cuts[p + 1])
-  const Sums all = piece(0, count);
-  double stt = all.stt(), sty = all.sty(), syy = all.syy();
-  const double whole = spread(stt, sty, syy), w_total = all.w;
+  ParallelPieces pieces(sums);
+  const double whole = pieces.spread(), w_total = sums.back().w;
   const double noise_rms = o.split_max_rms_noise * noise, max_rms = std::max(o.split_max_rms_px * pixel_size, noise_rms);
-  while (int(cuts.size()) - 1 < max_pieces) {
-    int best_cut = -1;
-    double best_total = spread(stt, sty, syy);
-    for (std::size_t p = 0; p + 1 < cuts.size(); ++p) {
-      const int a = cuts[p], b = cuts[p + 1];
-      const Sums own = piece(a, b);
-      for (int k = a + 1; k < b; ++k) {
-        if (sums[k].w - sums[a].w < 4 * split || sums[b].w - sums[k].w < 4 * split) continue;
-        const Sums left = piece(a, k), right = piece(k, b);
-        const double total = spread(stt - own.stt() + left.stt() + right.stt(), sty - own.sty() + left.sty() + right.sty(),
-                                    syy - own.syy() + left.syy() + right.syy());
-        if (total < best_total) { best_total = total; best_cut = k; }
-      }
-    }
-    if (best_cut < 0) break;
-    const auto at = std::upper_bound(cuts.begin(), cuts.end(), best_cut);
-    const Sums own = piece(*(at - 1), *at), left = piece(*(at - 1), best_cut), right = piece(best_cut, *at);
-    stt += left.stt() + right.stt() - own.stt();
-    sty += left.sty() + right.sty() - own.sty();
-    syy += left.syy() + right.syy() - own.syy();
-    cuts.insert(at, best_cut);
+  while (int(pieces.cuts().size()) - 1 < max_pieces) {
+    const std::size_t best_cut = pieces.best_cut(4 * split);
+    if (best_cut == 0) break;
+    pieces.cut(best_cut);
     // The parts explain the run: they leave little of its spread, or no more than the noise does.
-    const double total = spread(stt, sty, syy);
+    const double total = pieces.spread();
     const bool explained = total <= o.split_max_residual * whole || total <= noise_rms * noise_rms * w_total;
     if (!explained || total > max_rms * max_rms * w_total) continue;
     // Neighbouring pieces' lines (the shared slope, each its own offset) at least `split` apart.
@@ -281,14 +257,13 @@ void split_parallel(const Ring& ring, int first, int count, const Vec2& normal, 
     const double step_noise =
         mask_noise > 0 && left_rms <= o.split_max_rms_px * pixel_size ? std::min(noise, std::max(mask_noise, left_rms)) : noise;
     const double apart_by = std::max({o.split_px * pixel_size, o.split_m, o.split_noise * step_noise});
-    const double slope = stt > 1e-12 ? sty / stt : 0.0;
-    auto offset = [&](int a, int b) { const Sums q = piece(a, b); return (q.y - slope * q.t) / q.w; };
+    const std::vector<std::size_t>& cuts = pieces.cuts();
     bool apart = true;
     for (std::size_t p = 1; p + 1 < cuts.size(); ++p)
-      apart &= std::abs(offset(cuts[p - 1], cuts[p]) - offset(cuts[p], cuts[p + 1])) >= apart_by;
+      apart &= std::abs(pieces.offset(cuts[p - 1], cuts[p]) - pieces.offset(cuts[p], cuts[p + 1])) >= apart_by;
     if (!apart) continue;
     for (std::size_t p = 0; p + 1 < cuts.size(); ++p)
-      out.push_back({int((first + cuts[p]) % ring.size()), cuts[p + 1] - cuts[p]});
+      out.push_back({int((first + int(cuts[p])) % int(ring.size())), int(cuts[p + 1] - cuts[p])});
     return;
   }
   out.push_back({first, count});

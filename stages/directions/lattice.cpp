@@ -185,7 +185,7 @@ std::vector<NeighbourLattice> neighbour_lattices(const std::vector<Vec2>& centre
   std::vector<std::size_t> near;
   for (std::size_t i = 0; i < n; ++i) {
     double sx = 0, sy = 0, total = 0;
-    bool by_box = false;
+    bool by_box = false;  // (the pass that found lenders)
     for (const bool boxes : {false, true}) {
       if (total > 0) break;
       by_box = boxes;

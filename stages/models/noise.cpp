@@ -83,46 +83,24 @@ std::vector<std::pair<Vec2, double>> run_middle(const Ring& ring, int first, int
 // noise explains it. Returns the pieces' first indices after the first.
 std::vector<std::size_t> step_cuts(const std::vector<double>& t, const std::vector<double>& y, const std::vector<double>& w,
                                    double apart_m, double max_rms_m) {
-  using Sums = LineMoments;
   const std::size_t m = t.size();
   if (m < 4 || !(apart_m > 0)) return {};
-  std::vector<Sums> sums(m + 1);
-  for (std::size_t k = 0; k < m; ++k)
-    sums[k + 1] = sums[k] + Sums::of(w[k], t[k], y[k]);
-  const auto piece = [&](std::size_t a, std::size_t b) { return sums[b] - sums[a]; };
-  const auto spread = LineMoments::spread;
-  std::vector<std::size_t> cuts = {0, m};
-  const Sums all = piece(0, m);
-  double stt = all.stt(), sty = all.sty(), syy = all.syy();
+  std::vector<LineMoments> sums(m + 1);
+  for (std::size_t k = 0; k < m; ++k) sums[k + 1] = sums[k] + LineMoments::of(w[k], t[k], y[k]);
+  ParallelPieces pieces(sums);
   // (About a line along the axis: a line of its own would tilt toward the steps and explain them.)
-  if (syy <= max_rms_m * max_rms_m * all.w) return {};  // the noise explains the run
-  while (cuts.size() - 1 < 8) {
-    std::size_t best_cut = 0;
-    double best_total = spread(stt, sty, syy);
-    for (std::size_t p = 0; p + 1 < cuts.size(); ++p) {
-      const std::size_t a = cuts[p], b = cuts[p + 1];
-      const Sums own = piece(a, b);
-      for (std::size_t k = a + 1; k < b; ++k) {
-        if (sums[k].w - sums[a].w < 4 * apart_m || sums[b].w - sums[k].w < 4 * apart_m) continue;
-        const Sums left = piece(a, k), right = piece(k, b);
-        const double total = spread(stt - own.stt() + left.stt() + right.stt(), sty - own.sty() + left.sty() + right.sty(),
-                                    syy - own.syy() + left.syy() + right.syy());
-        if (total < best_total) best_total = total, best_cut = k;
-      }
-    }
+  if (sums.back().syy() <= max_rms_m * max_rms_m * sums.back().w) return {};  // the noise explains the run
+  while (pieces.cuts().size() - 1 < 8) {
+    const std::size_t best_cut = pieces.best_cut(4 * apart_m);
     if (best_cut == 0) break;
-    const auto at = std::upper_bound(cuts.begin(), cuts.end(), best_cut);
-    const std::size_t a = *(at - 1), b = *at;
-    const Sums own = piece(a, b), left = piece(a, best_cut), right = piece(best_cut, b);
-    const double nstt = stt + left.stt() + right.stt() - own.stt(), nsty = sty + left.sty() + right.sty() - own.sty();
     // The cut's two pieces' offsets about the shared slope: a step, or no more cuts.
-    const double slope = nstt > 1e-12 ? nsty / nstt : 0.0;
-    const double step = (left.y - slope * left.t) / left.w - (right.y - slope * right.t) / right.w;
-    if (std::abs(step) < apart_m) break;
-    stt = nstt, sty = nsty;
-    syy += left.syy() + right.syy() - own.syy();
-    cuts.insert(at, best_cut);
+    ParallelPieces cut = pieces;
+    cut.cut(best_cut);
+    const auto at = std::upper_bound(cut.cuts().begin(), cut.cuts().end(), best_cut);
+    if (std::abs(cut.offset(*(at - 2), best_cut) - cut.offset(best_cut, *at)) < apart_m) break;
+    pieces = std::move(cut);
   }
+  const std::vector<std::size_t>& cuts = pieces.cuts();
   return std::vector<std::size_t>(cuts.begin() + 1, cuts.end() - 1);
 }
 

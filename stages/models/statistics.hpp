@@ -68,4 +68,57 @@ struct LineMoments {
   static double spread(double stt, double sty, double syy) { return stt > 1e-12 ? syy - sty * sty / stt : syy; }
 };
 
+// A run's samples cut greedily into pieces at parallel offsets, one slope shared, one offset a
+// piece (corners' split_parallel, fit_lattice's steps): over the prefix sums of the samples'
+// moments (sums[0] zero, sums[k] those of the first k), the cuts made so far (piece p is
+// [cuts()[p], cuts()[p + 1])) and the pieces' centred moments summed.
+class ParallelPieces {
+ public:
+  explicit ParallelPieces(const std::vector<LineMoments>& sums) : sums_(&sums), cuts_{0, sums.size() - 1} {
+    const LineMoments all = piece(0, cuts_.back());
+    stt_ = all.stt(), sty_ = all.sty(), syy_ = all.syy();
+  }
+  const std::vector<std::size_t>& cuts() const { return cuts_; }
+  LineMoments piece(std::size_t a, std::size_t b) const { return (*sums_)[b] - (*sums_)[a]; }
+  // The spread left about the pieces' lines.
+  double spread() const { return LineMoments::spread(stt_, sty_, syy_); }
+  // The shared slope, and a piece's offset across the run about it.
+  double slope() const { return stt_ > 1e-12 ? sty_ / stt_ : 0.0; }
+  double offset(std::size_t a, std::size_t b) const {
+    const LineMoments q = piece(a, b);
+    return (q.y - slope() * q.t) / q.w;
+  }
+  // The cut that leaves the least spread, its two pieces each at least min_weight; 0 where none
+  // leaves less than now.
+  std::size_t best_cut(double min_weight) const {
+    std::size_t best = 0;
+    double least = spread();
+    for (std::size_t p = 0; p + 1 < cuts_.size(); ++p) {
+      const std::size_t a = cuts_[p], b = cuts_[p + 1];
+      const LineMoments own = piece(a, b);
+      for (std::size_t k = a + 1; k < b; ++k) {
+        if ((*sums_)[k].w - (*sums_)[a].w < min_weight || (*sums_)[b].w - (*sums_)[k].w < min_weight) continue;
+        const LineMoments left = piece(a, k), right = piece(k, b);
+        const double total = LineMoments::spread(stt_ - own.stt() + left.stt() + right.stt(), sty_ - own.sty() + left.sty() + right.sty(),
+                                                 syy_ - own.syy() + left.syy() + right.syy());
+        if (total < least) least = total, best = k;
+      }
+    }
+    return best;
+  }
+  void cut(std::size_t k) {
+    const auto at = std::upper_bound(cuts_.begin(), cuts_.end(), k);
+    const LineMoments own = piece(*(at - 1), *at), left = piece(*(at - 1), k), right = piece(k, *at);
+    stt_ += left.stt() + right.stt() - own.stt();
+    sty_ += left.sty() + right.sty() - own.sty();
+    syy_ += left.syy() + right.syy() - own.syy();
+    cuts_.insert(at, k);
+  }
+
+ private:
+  const std::vector<LineMoments>* sums_;
+  std::vector<std::size_t> cuts_;
+  double stt_ = 0, sty_ = 0, syy_ = 0;
+};
+
 }  // namespace lodforge
