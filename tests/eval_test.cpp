@@ -152,5 +152,30 @@ TEST(EvalCommand, DelftBlocksAt2mAreNotCutAcross) {
   EXPECT_LT(unguarded, raw - 0.01);
 }
 
+// The synthetic city at 2 m a pixel under a metre of wobble (bench/sweep.sh's row): a corner
+// whose two walls meet too far from their runs' junction is drawn with a connector between
+// their ends, a few pixels long and oblique, as is a pixel's step of a wall. Squared
+// (models.square_noise), more of the outlines' corners are right angles, with the same IoU.
+TEST(EvalCommand, ShortConnectorsAt2mAreSquared) {
+  const auto dir = test::fresh_test_directory("lodforge_square2m");
+  ASSERT_EQ(test::lodforge("synth --size-m 500x500 --pixel-size 2 --seed 11 --set boundary_noise_m=1 --set noise_wavelength_m=8" +
+                           std::string(" --set corner_radius_m=2 --set speckle_per_km2=400 --set speckle_size_m=0.5 --out ") +
+                           (dir / "mask").string())
+                .code,
+            0);
+  const auto metrics = [&](const std::string& name, const std::string& options) {
+    const std::string out = (dir / (name + ".gpkg")).string(), json = (dir / (name + ".json")).string();
+    const auto r = test::lodforge("regularize --mask " + (dir / "mask" / "seg_class.tif").string() + " --out " + out + " " + options);
+    EXPECT_EQ(r.code, 0) << r.output;
+    EXPECT_EQ(test::lodforge("eval --pred " + out + " --gt " + (dir / "mask" / "footprints.gpkg").string() + " --json " + json).code, 0);
+    return nlohmann::json::parse(test::slurp(json));
+  };
+  const nlohmann::json squared = metrics("squared", ""), kept = metrics("kept", "--set stages.models.square_noise=0");
+  const double share = squared.at("right_angle_share").get<double>(), share_kept = kept.at("right_angle_share").get<double>();
+  std::cout << "right angles " << share_kept << " -> " << share << ", IoU " << kept.at("overall_iou") << " -> " << squared.at("overall_iou") << '\n';
+  EXPECT_GE(share, share_kept + 0.015);
+  EXPECT_NEAR(squared.at("overall_iou").get<double>(), kept.at("overall_iou").get<double>(), 0.001);
+}
+
 }  // namespace
 }  // namespace lodforge

@@ -1356,5 +1356,44 @@ TEST(Staircases, ACutCornerUnderAWobbleIsAnObliqueWall) {
   EXPECT_GT(oblique_on, oblique_off);
   EXPECT_GE(iou_on, iou_off);
 }
+// A connector a pixel or two long between two walls on the lattice, whose direction the noise
+// does not tell from the lattice's, is squared: between parallel walls it becomes a step at its
+// middle (the area kept), between square ones the corner where they meet. One long enough to
+// tell, or under too little noise, stays; so does a real cut corner.
+TEST(Squaring, AShortConnectorBecomesAStepOrACorner) {
+  const Vec2 lattice(0, 1);
+  const PolygonWithHoles stepped{{{0, 0}, {8, 0}, {9, 0.6}, {20, 0.6}, {20, 10}, {0, 10}}, {}};
+  // The connector: 1.17 m at 31 degrees, its ends moved 0.30 m by a turn onto the lattice; the
+  // uncertainty at 0.3 m of noise correlated over 1 m: 0.3 sqrt(3 / 1.17) = 0.48 m.
+  const std::optional<PolygonWithHoles> step = square_connectors(stepped, lattice, 2.0, 0.3, 1.0, 2.0);
+  ASSERT_TRUE(step);
+  ASSERT_EQ(step->outer.size(), 6u);
+  EXPECT_TRUE(polygon_problem(*step).empty());
+  EXPECT_NEAR(std::abs(signed_area(step->outer)), std::abs(signed_area(stepped.outer)), 1e-9);
+  int at_middle = 0;
+  for (const Vec2& p : step->outer) at_middle += (p - Vec2(8.5, 0)).norm() < 1e-9 || (p - Vec2(8.5, 0.6)).norm() < 1e-9;
+  EXPECT_EQ(at_middle, 2);
+  // Under 0.05 m of noise the turn moves its ends by more than twice 0.08 m: it stays.
+  EXPECT_FALSE(square_connectors(stepped, lattice, 2.0, 0.05, 1.0, 2.0));
+  // A corner cut by 0.8 m becomes the corner; one cut by 12 m is a wall of its own.
+  const PolygonWithHoles cut_small{{{0, 0}, {19.2, 0}, {20, 0.8}, {20, 10}, {0, 10}}, {}};
+  const std::optional<PolygonWithHoles> corner = square_connectors(cut_small, lattice, 2.0, 0.3, 1.0, 2.0);
+  ASSERT_TRUE(corner);
+  ASSERT_EQ(corner->outer.size(), 4u);
+  EXPECT_NEAR(std::abs(signed_area(corner->outer)), 200, 1e-9);
+  const PolygonWithHoles cut_large{{{0, 0}, {30, 0}, {30, 8}, {18, 20}, {0, 20}}, {}};
+  EXPECT_FALSE(square_connectors(cut_large, lattice, 2.0, 0.3, 1.0, 2.0));
+  // Between walls neither parallel nor square (a wall at 30 degrees), nothing is squared; a hole's
+  // connector is squared as the outer ring's.
+  const PolygonWithHoles skew{{{0, 0}, {8, 0}, {9, 0.6}, {20, 0.6 + 11 * std::tan(M_PI / 6)}, {20, 10}, {0, 10}}, {}};
+  EXPECT_FALSE(square_connectors(skew, lattice, 2.0, 0.3, 1.0, 2.0));
+  const Ring hole(stepped.outer.rbegin(), stepped.outer.rend());
+  const PolygonWithHoles holed{{{-10, -10}, {30, -10}, {30, 30}, {-10, 30}}, {hole}};
+  const std::optional<PolygonWithHoles> in_hole = square_connectors(holed, lattice, 2.0, 0.3, 1.0, 2.0);
+  ASSERT_TRUE(in_hole);
+  EXPECT_EQ(in_hole->outer.size(), 4u);
+  EXPECT_EQ(in_hole->holes.at(0).size(), 6u);
+}
+
 }  // namespace
 }  // namespace lodforge

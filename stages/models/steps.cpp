@@ -86,7 +86,69 @@ std::pair<int, Step> cheapest_of(const PolygonWithHoles& polygon, double cos_par
 
 Ring& ring_at(PolygonWithHoles& polygon, int r) { return r == 0 ? polygon.outer : polygon.holes[std::size_t(r) - 1]; }
 
+// square_connectors on one ring; true when a wall was squared.
+bool square_ring(Ring& ring, const Vec2& lattice, double on_deg, double noise, double correlation, double k) {
+  const Vec2 axis = lattice.normalized(), quarter(-axis.y(), axis.x());
+  const double on_sin = std::sin(on_deg * M_PI / 180.0), on_cos = std::cos(on_deg * M_PI / 180.0);
+  // The sine of the angle between a wall and the nearest axis of the lattice.
+  const auto off_sin = [&](const Vec2& e) {
+    const double length = e.norm();
+    return length > 0 ? std::min(std::abs(e.dot(axis)), std::abs(e.dot(quarter))) / length : 0.0;
+  };
+  bool any = false;
+  for (bool changed = true; changed && ring.size() >= 5;) {
+    changed = false;
+    const std::size_t n = ring.size();
+    for (std::size_t i = 0; i < n && !changed; ++i) {
+      // Walls a = (i-1, i), b = (i, i+1), c = (i+1, i+2).
+      const Vec2 p0 = ring[(i + n - 1) % n], p1 = ring[i], p2 = ring[(i + 1) % n], p3 = ring[(i + 2) % n];
+      const Vec2 a = p1 - p0, b = p2 - p1, c = p3 - p2;
+      const double la = a.norm(), lb = b.norm(), lc = c.norm();
+      if (la <= 0 || lb <= 0 || lc <= 0 || off_sin(a) > on_sin || off_sin(c) > on_sin) continue;
+      const double sin_turn = off_sin(b);
+      if (sin_turn <= on_sin) continue;
+      const double uncertainty = noise * std::sqrt(3 * correlation / std::max(lb, correlation));
+      if (sin_turn * 0.5 * lb > k * uncertainty) continue;
+      const Vec2 ua = a / la, uc = c / lc;
+      if (ua.dot(uc) >= on_cos) {
+        // A step at b's middle, square to a and c: the two triangles it swaps are equal.
+        const Vec2 middle = 0.5 * (p1 + p2);
+        const Vec2 from = p0 + (middle - p0).dot(ua) * ua, to = p3 - (p3 - middle).dot(uc) * uc;
+        if ((from - p0).dot(ua) <= 0 || (p3 - to).dot(uc) <= 0) continue;
+        ring[i] = from;
+        ring[(i + 1) % n] = to;
+      } else if (std::abs(ua.dot(uc)) <= on_sin) {
+        const std::optional<Vec2> corner = meet(p0, a, p3, c);
+        if (!corner || !corner->allFinite() || (*corner - p0).dot(ua) <= 0 || (p3 - *corner).dot(uc) <= 0) continue;
+        ring[i] = *corner;
+        ring.erase(ring.begin() + long((i + 1) % n));
+      } else {
+        continue;
+      }
+      changed = any = true;
+    }
+  }
+  return any;
+}
+
 }  // namespace
+
+std::optional<PolygonWithHoles> square_connectors(const PolygonWithHoles& polygon, const Vec2& lattice, double on_deg,
+                                                  double noise, double correlation, double k) {
+  if (lattice.squaredNorm() <= 0 || !(noise > 0) || !(k > 0)) return std::nullopt;
+  PolygonWithHoles out = polygon;
+  bool any = square_ring(out.outer, lattice, on_deg, noise, correlation, k);
+  for (Ring& hole : out.holes) any |= square_ring(hole, lattice, on_deg, noise, correlation, k);
+  if (!any) return std::nullopt;
+  // (A step between two walls on one line has no width: its vertices go.)
+  double extent = 0;
+  for (const Vec2& p : out.outer) extent = std::max(extent, p.cwiseAbs().maxCoeff());
+  const double eps = 1e-9 * std::max(1.0, extent);
+  out.outer = remove_degenerate_vertices(out.outer, eps);
+  for (Ring& hole : out.holes) hole = remove_degenerate_vertices(hole, eps);
+  if (!polygon_problem(out).empty()) return std::nullopt;
+  return out;
+}
 
 std::optional<PolygonWithHoles> merge_cheapest_step(const PolygonWithHoles& polygon, double parallel_deg) {
   const auto [r, step] = cheapest_of(polygon, std::cos(parallel_deg * M_PI / 180.0));

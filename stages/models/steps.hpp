@@ -27,6 +27,18 @@ std::optional<PolygonWithHoles> merge_cheapest_step(const PolygonWithHoles& poly
 // None when no run is replaced.
 std::optional<PolygonWithHoles> staircases_as_lines(const PolygonWithHoles& polygon, int min_corners, double square_deg);
 
+// The outline with its short oblique walls squared: a wall off the lattice (farther than on_deg
+// from its main direction and quarter turns) between two walls on it is drawn as a square step
+// at its middle where those two are parallel and face the same way, or dropped for the corner
+// where they meet where they are square to each other, when its direction is not told apart from
+// the lattice's under the boundary noise: turning it onto the nearest axis moves its ends by at
+// most k times the uncertainty a noise of standard deviation `noise`, correlated over
+// `correlation`, leaves at the ends of a fitted line of its length L, noise sqrt(3 correlation /
+// L) (the rule corners.snap_* applies to the runs). None when no wall is squared, or the result
+// is no valid polygon.
+std::optional<PolygonWithHoles> square_connectors(const PolygonWithHoles& polygon, const Vec2& lattice, double on_deg,
+                                                  double noise, double correlation, double k);
+
 // The same merges one after another, with the contour's mean distance to the outline (each
 // contour edge's midpoint to the nearest wall, weighted by the edge's length: contour_fit) kept
 // up to date: a merge changes five walls, so only the midpoints nearest them are measured again,

@@ -816,6 +816,13 @@ void run_chain(const std::vector<Ring>& rings, double pixel_size, const CoreOpti
       result.model = std::move(stands.second);
     }
   }
+  // Last, the short oblique walls between two walls on the lattice that the noise does not tell
+  // from it: square steps and corners (models.square_noise).
+  if (on_lattice && o.models.square_noise > 0 && !has_arc(result.footprint))
+    if (std::optional<PolygonWithHoles> squared =
+            square_connectors(result.footprint, context.lattice, o.models.merge_parallel_deg, noise,
+                              noise_correlation_m(o.corners, pixel_size), o.models.square_noise))
+      result.footprint = std::move(*squared);
 }
 
 // The start's noise sample, from its normals and chords.
