@@ -1,4 +1,5 @@
 // The quality metrics on cases computed by hand.
+#include <filesystem>
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
@@ -125,6 +126,17 @@ TEST(EvalCommand, ReportsOnFilesAndRefusesMissingOnes) {
   EXPECT_NE(missing.output.find("nope.gpkg': file not found"), std::string::npos) << missing.output;
 }
 
+// `lodforge regularize` on dir/mask/seg_class.tif with the options, written to dir/NAME.gpkg,
+// and `lodforge eval` of it against the truth: its metrics.
+nlohmann::json regularize_and_eval(const std::filesystem::path& dir, const std::string& truth, const std::string& name,
+                                   const std::string& options) {
+  const std::string out = (dir / (name + ".gpkg")).string(), json = (dir / (name + ".json")).string();
+  const auto r = test::lodforge("regularize --mask " + (dir / "mask" / "seg_class.tif").string() + " --out " + out + " " + options);
+  EXPECT_EQ(r.code, 0) << r.output;
+  EXPECT_EQ(test::lodforge("eval --pred " + out + " --gt " + truth + " --json " + json).code, 0);
+  return nlohmann::json::parse(test::slurp(json));
+}
+
 // Delft's old town (the BGT footprints: row houses in blocks at about 37 degrees to the grid,
 // with rear annexes of a few metres), its segmentation simulated at 2 m with a quarter metre of
 // wobble as bench/sweep.sh does: the information criterion's simpler outlines drew a block's
@@ -139,11 +151,7 @@ TEST(EvalCommand, DelftBlocksAt2mAreNotCutAcross) {
                 .code,
             0);
   const auto iou = [&](const std::string& name, const std::string& options) {
-    const std::string out = (dir / (name + ".gpkg")).string(), json = (dir / (name + ".json")).string();
-    const auto r = test::lodforge("regularize --mask " + (dir / "mask" / "seg_class.tif").string() + " --out " + out + " " + options);
-    EXPECT_EQ(r.code, 0) << r.output;
-    EXPECT_EQ(test::lodforge("eval --pred " + out + " --gt " + truth + " --json " + json).code, 0);
-    return nlohmann::json::parse(test::slurp(json)).at("overall_iou").get<double>();
+    return regularize_and_eval(dir, truth, name, options).at("overall_iou").get<double>();
   };
   const double raw = iou("raw", "--regularizer none"), ours = iou("ours", ""),
                unguarded = iou("unguarded", "--set stages.models.criterion_stretch_noise=0");
@@ -163,14 +171,9 @@ TEST(EvalCommand, ShortConnectorsAt2mAreSquared) {
                            (dir / "mask").string())
                 .code,
             0);
-  const auto metrics = [&](const std::string& name, const std::string& options) {
-    const std::string out = (dir / (name + ".gpkg")).string(), json = (dir / (name + ".json")).string();
-    const auto r = test::lodforge("regularize --mask " + (dir / "mask" / "seg_class.tif").string() + " --out " + out + " " + options);
-    EXPECT_EQ(r.code, 0) << r.output;
-    EXPECT_EQ(test::lodforge("eval --pred " + out + " --gt " + (dir / "mask" / "footprints.gpkg").string() + " --json " + json).code, 0);
-    return nlohmann::json::parse(test::slurp(json));
-  };
-  const nlohmann::json squared = metrics("squared", ""), kept = metrics("kept", "--set stages.models.square_noise=0");
+  const std::string truth = (dir / "mask" / "footprints.gpkg").string();
+  const nlohmann::json squared = regularize_and_eval(dir, truth, "squared", ""),
+                       kept = regularize_and_eval(dir, truth, "kept", "--set stages.models.square_noise=0");
   const double share = squared.at("right_angle_share").get<double>(), share_kept = kept.at("right_angle_share").get<double>();
   std::cout << "right angles " << share_kept << " -> " << share << ", IoU " << kept.at("overall_iou") << " -> " << squared.at("overall_iou") << '\n';
   EXPECT_GE(share, share_kept + 0.015);
