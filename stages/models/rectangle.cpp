@@ -75,13 +75,16 @@ std::vector<std::pair<double, double>> boundary_distances(const Ring& ring, cons
   if (nearest_segments) nearest_segments->clear();
   if (segments.empty()) return distances;
   distances.reserve(ring.size());
-  // Many segments (a contour of pixel edges, against which an outline is measured) are bucketed
-  // in a uniform grid over their bounding box (about four cells a segment, at most 512 a side):
-  // each midpoint looks at the cells around its own, ring by ring, until a ring lies farther than
-  // the nearest segment found. A few (an outline's) are all looked at, their boxes first.
+  // More than 24 segments (a contour of pixel edges, against which an outline is measured, or an
+  // outline of a few dozen walls) are bucketed in a uniform grid over their bounding box (about
+  // four cells a segment, at most 512 a side): each midpoint looks at the cells around its own,
+  // ring by ring, until a ring lies farther than the nearest segment found. Fewer are all looked
+  // at, their boxes first. (Past 24 the grid costs less: 3.5 % fewer instructions in all on the
+  // campus at 0.25 m under a metre of wobble than past 64, 16 and 32 about the same; the
+  // distances, and the nearest segment of equals, are the same either way.)
   Vec2 low = segments[0].low, high = segments[0].high;
   for (const Segment& s : segments) low = low.cwiseMin(s.low), high = high.cwiseMax(s.high);
-  const bool grid = segments.size() > 64 && low.allFinite() && high.allFinite();
+  const bool grid = segments.size() > 24 && low.allFinite() && high.allFinite();
   const Vec2 extent = (high - low).cwiseMax(1e-9);
   const double cell = std::max({std::sqrt(extent.x() * extent.y() / (4.0 * double(segments.size()))), extent.x() / 512, extent.y() / 512});
   const long nx = std::max(1L, long(std::ceil(extent.x() / cell))), ny = std::max(1L, long(std::ceil(extent.y() / cell)));
