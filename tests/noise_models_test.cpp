@@ -467,6 +467,22 @@ TEST(Models, MomentRectangleOfARectangleIsItself) {
   EXPECT_NEAR(test::iou({best, {}}, truth), 1.0, 1e-6);
 }
 
+// A 20 x 10 m house with an annex of 4 x 1 m on its long wall: the moments alone would widen
+// the rectangle by the annex's share all along the wall (its area is the house's and the
+// annex's); each side moved to the median of the contour nearest to it lies on the walls.
+TEST(Models, TheRectanglesSidesLieOnTheWallsBesideAnAnnex) {
+  const Ring annexed{{0, 0}, {8, 0}, {8, -1}, {12, -1}, {12, 0}, {20, 0}, {20, 10}, {0, 10}};
+  for (const Ring& r : {moment_rectangle(annexed, Vec2(0, 1)), [&] {
+                          double fit = 0;
+                          return best_rectangle(annexed, {Vec2(0, 1)}, &fit);
+                        }()}) {
+    ASSERT_EQ(r.size(), 4u);
+    const PolygonWithHoles house{{{0, 0}, {20, 0}, {20, 10}, {0, 10}}, {}};
+    EXPECT_NEAR(std::abs(signed_area(r)), 200.0, 1e-9);
+    EXPECT_NEAR(test::iou({r, {}}, house), 1.0, 1e-9);
+  }
+}
+
 // A stretch the finer outline explains and the simpler one leaves: a notch 2 m wide and 1.5 m
 // deep in the long wall of a 20 x 10 m house, its contour in 0.25 m edges, against the house
 // without it. Beyond the noise at 0.1 m (a mean excess of about 1 m over the notch's 5 m of
@@ -498,7 +514,10 @@ TEST(Models, AStretchTheOutlineExplainsIsLeftOutOnlyBeyondTheNoise) {
 // rule, a rectangle explained the contour "within the noise" on all eight masks when this was
 // written). Along the set-backs, the contour lies farther from the rectangle than from the
 // outline by more than the noise allows over their length (models.rectangle_stretch_noise): the
-// outline stays on some of the masks, and the mean IoU rises.
+// outline stays on some of the masks, and the mean IoU does not fall. (It rose by 0.0027 while
+// the rectangle's ends lay where the moments put them, beyond the set-backs; since session 30
+// each side lies on the median of the contour nearest to it, the rectangle cuts the block's
+// corners instead, and the rule's gain in IoU is 0.0003.)
 TEST(NoisyMasks, ABlockWithSetBackEndsIsNoRectangle) {
   const PolygonWithHoles block = test::rotated(
       {{{0, 0}, {60, 0}, {60, 3}, {58, 3}, {58, 11}, {60, 11}, {60, 14}, {0, 14}, {0, 11}, {2, 11}, {2, 3}, {0, 3}}, {}}, 20.0);
@@ -510,7 +529,7 @@ TEST(NoisyMasks, ABlockWithSetBackEndsIsNoRectangle) {
   std::cout << "set-backs kept on " << kept(c.vertices) << " of 8 masks (" << kept(c.vertices_other) << " without the rule), mean IoU "
             << c.mean_iou() << " (" << c.mean_iou_other() << ")\n";
   EXPECT_GE(kept(c.vertices), kept(c.vertices_other) + 2);
-  EXPECT_GE(c.mean_iou(), c.mean_iou_other() + 0.002);
+  EXPECT_GE(c.mean_iou(), c.mean_iou_other());
 }
 
 // The paper's deformed route on a fine raster: a 40 x 30 m house at 5 cm (a 2,800-pixel

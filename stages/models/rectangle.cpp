@@ -1,6 +1,7 @@
 #include "models/rectangle.hpp"
 
 #include "geometry/polygon.hpp"
+#include "models/statistics.hpp"
 
 #include <Eigen/Eigenvalues>
 #include <algorithm>
@@ -52,11 +53,34 @@ Ring rectangle_of(const Moments& m, const Vec2& normal) {
   return {c - u - v, c - u + v, c + u + v, c + u - v};  // counter-clockwise (t is n turned left)
 }
 
+// The rectangle with each side moved to the weighted median offset of the contour's edge
+// midpoints nearest to it (along its normal): a side along a wall lies on the wall, where the
+// moments put it out by an annex or a notch elsewhere along it.
+Ring refit_sides(const Ring& ring, const Ring& rectangle) {
+  if (rectangle.size() != 4) return rectangle;
+  const Vec2 c = 0.25 * (rectangle[0] + rectangle[1] + rectangle[2] + rectangle[3]);
+  const Vec2 t = (rectangle[3] - rectangle[0]).normalized(), n = (rectangle[1] - rectangle[0]).normalized();
+  const double a = 0.5 * (rectangle[3] - rectangle[0]).norm(), b = 0.5 * (rectangle[1] - rectangle[0]).norm();
+  std::vector<std::pair<double, double>> sides[4];  // -t, +t, -n, +n: (offset, weight)
+  for (std::size_t i = 0; i < ring.size(); ++i) {
+    const Vec2 e = edge_vector(ring, i), q = ring[i] + 0.5 * e - c;
+    const double x = t.dot(q), y = n.dot(q);
+    const double d[4] = {std::abs(x + a), std::abs(x - a), std::abs(y + b), std::abs(y - b)};
+    const int k = int(std::min_element(d, d + 4) - d);
+    sides[k].push_back({k < 2 ? x : y, e.norm()});
+  }
+  double bounds[4] = {-a, a, -b, b};
+  for (int k = 0; k < 4; ++k) if (!sides[k].empty()) bounds[k] = weighted_quantile(std::move(sides[k]), 0.5);
+  if (!(bounds[0] < bounds[1]) || !(bounds[2] < bounds[3])) return rectangle;
+  return {c + bounds[0] * t + bounds[2] * n, c + bounds[0] * t + bounds[3] * n, c + bounds[1] * t + bounds[3] * n,
+          c + bounds[1] * t + bounds[2] * n};
+}
+
 }  // namespace
 
 Ring moment_rectangle(const Ring& ring, const Vec2& normal) {
   if (ring.size() < 3) return {};
-  return rectangle_of(moments_of(ring), normal);
+  return refit_sides(ring, rectangle_of(moments_of(ring), normal));
 }
 
 std::vector<std::pair<double, double>> boundary_distances(const Ring& ring, const PolygonWithHoles& polygon,
@@ -218,7 +242,10 @@ Ring best_rectangle(const Ring& ring, const std::vector<Vec2>& normals, double* 
     const double d = weight > 0 ? sum / weight : 0.0;
     if (d < *fit) { *fit = d; best_normal = n; }
   }
-  return best_normal.squaredNorm() > 0 ? rectangle_of(m, best_normal) : Ring{};
+  if (best_normal.squaredNorm() <= 0) return {};
+  Ring best = refit_sides(ring, rectangle_of(m, best_normal));
+  *fit = mean_distance_to_boundary(ring, {best, {}});
+  return best;
 }
 
 }  // namespace lodforge

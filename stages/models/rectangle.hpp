@@ -1,7 +1,8 @@
 // The simplest outline a building can have, as a model to choose against the chain's: an
 // oriented rectangle with the contour's area, centroid and second moments along its axes (a
 // rasterized rectangle's pixels have nearly the true rectangle's moments, whatever the noise on
-// its boundary, so the fit needs no corner and no run: it holds on buildings of a dozen pixels).
+// its boundary, so the fit needs no corner and no run: it holds on buildings of a dozen pixels),
+// each side then moved onto the median of the contour nearest to it.
 #pragma once
 #include <vector>
 
@@ -62,7 +63,10 @@ struct ModelOptions {
 };
 
 // The rectangle with edges along `normal` and its quarter turn whose area, centroid and second
-// moments about its axes are those of the ring (counter-clockwise). Empty for a degenerate ring.
+// moments about its axes are those of the ring (counter-clockwise), each side then moved to the
+// length-weighted median offset of the ring's edge midpoints nearest to it: a side lies on its
+// wall, where the moments alone would move a long wall out by an annex's share, or in by a
+// notch's. Empty for a degenerate ring.
 Ring moment_rectangle(const Ring& ring, const Vec2& normal);
 
 // The distance of each of the ring's edge midpoints to the polygon's boundary, with the edge's
@@ -83,7 +87,8 @@ bool leaves_a_stretch(const std::vector<std::pair<double, double>>& simple, cons
                       double noise, double correlation, double k);
 
 // The best moment rectangle of the ring over the candidate normals, its principal axes and
-// every 3 degrees: the one whose boundary lies closest to the ring. *fit: its mean distance.
+// every 3 degrees: the one whose boundary lies closest to the ring, its sides then moved onto
+// the walls as moment_rectangle's are. *fit: its mean distance (mean_distance_to_boundary).
 Ring best_rectangle(const Ring& ring, const std::vector<Vec2>& normals, double* fit);
 
 }  // namespace lodforge
