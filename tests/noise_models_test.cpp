@@ -1406,6 +1406,19 @@ TEST(Squaring, AShortConnectorBecomesAStepOrACorner) {
   // connector is squared as the outer ring's.
   const PolygonWithHoles skew{{{0, 0}, {8, 0}, {9, 0.6}, {20, 0.6 + 11 * std::tan(M_PI / 6)}, {20, 10}, {0, 10}}, {}};
   EXPECT_FALSE(square_connectors(skew, lattice, 2.0, 0.3, 1.0, 2.0));
+  // Walls 1.5 degrees off the lattice either way (within 2 degrees of it, 3 degrees apart): the
+  // step still lies along the lattice, so it is not squared again.
+  const double up = 8 * std::tan(1.5 * M_PI / 180), down = 11 * std::tan(1.5 * M_PI / 180);
+  const PolygonWithHoles tilted{{{0, 0}, {8, up}, {9, up + 0.6}, {20, up + 0.6 - down}, {20, 10}, {0, 10}}, {}};
+  const std::optional<PolygonWithHoles> tilted_step = square_connectors(tilted, lattice, 2.0, 0.3, 1.0, 2.0);
+  ASSERT_TRUE(tilted_step);
+  ASSERT_EQ(tilted_step->outer.size(), 6u);
+  int along_lattice = 0;
+  for (std::size_t i = 0; i < 6; ++i) {
+    const Vec2 e = tilted_step->outer[(i + 1) % 6] - tilted_step->outer[i];
+    along_lattice += std::abs(e.x()) < 1e-9 * e.norm() && e.norm() > 0.5 && e.norm() < 1;  // the step, 0.6 m and some
+  }
+  EXPECT_EQ(along_lattice, 1);
   const Ring hole(stepped.outer.rbegin(), stepped.outer.rend());
   const PolygonWithHoles holed{{{-10, -10}, {30, -10}, {30, 30}, {-10, 30}}, {hole}};
   const std::optional<PolygonWithHoles> in_hole = square_connectors(holed, lattice, 2.0, 0.3, 1.0, 2.0);

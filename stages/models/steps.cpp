@@ -89,15 +89,17 @@ Ring& ring_at(PolygonWithHoles& polygon, int r) { return r == 0 ? polygon.outer 
 // square_connectors on one ring; true when a wall was squared.
 bool square_ring(Ring& ring, const Vec2& lattice, double on_deg, double noise, double correlation, double k) {
   const Vec2 axis = lattice.normalized(), quarter(-axis.y(), axis.x());
-  const double on_sin = std::sin(on_deg * M_PI / 180.0), on_cos = std::cos(on_deg * M_PI / 180.0);
+  const double on_sin = std::sin(on_deg * M_PI / 180.0);
   // The sine of the angle between a wall and the nearest axis of the lattice.
   const auto off_sin = [&](const Vec2& e) {
     const double length = e.norm();
     return length > 0 ? std::min(std::abs(e.dot(axis)), std::abs(e.dot(quarter))) / length : 0.0;
   };
   bool any = false;
-  for (bool changed = true; changed && ring.size() >= 5;) {
-    changed = false;
+  // (Each change leaves one wall off the lattice fewer: a step's new wall lies on it, a corner
+  // drops the wall. The bound on the passes is a guard.)
+  for (std::size_t pass = 0, passes = ring.size(); pass < passes && ring.size() >= 5; ++pass) {
+    bool changed = false;
     const std::size_t n = ring.size();
     for (std::size_t i = 0; i < n && !changed; ++i) {
       // Walls a = (i-1, i), b = (i, i+1), c = (i+1, i+2).
@@ -109,24 +111,31 @@ bool square_ring(Ring& ring, const Vec2& lattice, double on_deg, double noise, d
       if (sin_turn <= on_sin) continue;
       const double uncertainty = noise * std::sqrt(3 * correlation / std::max(lb, correlation));
       if (sin_turn * 0.5 * lb > k * uncertainty) continue;
-      const Vec2 ua = a / la, uc = c / lc;
-      if (ua.dot(uc) >= on_cos) {
-        // A step at b's middle, square to a and c: the two triangles it swaps are equal.
+      // The axes a and c lie along (each within on_deg of one).
+      const Vec2 along_a = nearest_lattice_axis(a / la, axis), along_c = nearest_lattice_axis(c / lc, axis);
+      const double same = along_a.dot(along_c);
+      if (same > 0.5) {
+        // A step along the lattice, square to a's axis, at b's middle (between walls on the
+        // lattice the two triangles it swaps are equal).
+        Vec2 across(-along_a.y(), along_a.x());
+        if (across.dot(b) < 0) across = -across;
         const Vec2 middle = 0.5 * (p1 + p2);
-        const Vec2 from = p0 + (middle - p0).dot(ua) * ua, to = p3 - (p3 - middle).dot(uc) * uc;
-        if ((from - p0).dot(ua) <= 0 || (p3 - to).dot(uc) <= 0) continue;
-        ring[i] = from;
-        ring[(i + 1) % n] = to;
-      } else if (std::abs(ua.dot(uc)) <= on_sin) {
+        const std::optional<Vec2> from = meet(p0, a, middle, across), to = meet(middle, across, p3, c);
+        if (!from || !to || !from->allFinite() || !to->allFinite() || (*from - p0).dot(a) <= 0 || (p3 - *to).dot(c) <= 0) continue;
+        ring[i] = *from;
+        ring[(i + 1) % n] = *to;
+      } else if (std::abs(same) < 0.5) {
+        // The corner where a and c meet (square to each other).
         const std::optional<Vec2> corner = meet(p0, a, p3, c);
-        if (!corner || !corner->allFinite() || (*corner - p0).dot(ua) <= 0 || (p3 - *corner).dot(uc) <= 0) continue;
+        if (!corner || !corner->allFinite() || (*corner - p0).dot(a) <= 0 || (p3 - *corner).dot(c) <= 0) continue;
         ring[i] = *corner;
         ring.erase(ring.begin() + long((i + 1) % n));
       } else {
-        continue;
+        continue;  // (a and c facing each other: the end of a spike, no connector)
       }
       changed = any = true;
     }
+    if (!changed) break;
   }
   return any;
 }
@@ -136,17 +145,23 @@ bool square_ring(Ring& ring, const Vec2& lattice, double on_deg, double noise, d
 std::optional<PolygonWithHoles> square_connectors(const PolygonWithHoles& polygon, const Vec2& lattice, double on_deg,
                                                   double noise, double correlation, double k) {
   if (lattice.squaredNorm() <= 0 || !(noise > 0) || !(k > 0)) return std::nullopt;
-  PolygonWithHoles out = polygon;
-  bool any = square_ring(out.outer, lattice, on_deg, noise, correlation, k);
-  for (Ring& hole : out.holes) any |= square_ring(hole, lattice, on_deg, noise, correlation, k);
-  if (!any) return std::nullopt;
-  // (A step between two walls on one line has no width: its vertices go.)
   double extent = 0;
-  for (const Vec2& p : out.outer) extent = std::max(extent, p.cwiseAbs().maxCoeff());
+  for (const Vec2& p : polygon.outer) extent = std::max(extent, p.cwiseAbs().maxCoeff());
   const double eps = 1e-9 * std::max(1.0, extent);
-  out.outer = remove_degenerate_vertices(out.outer, eps);
-  for (Ring& hole : out.holes) hole = remove_degenerate_vertices(hole, eps);
-  if (!polygon_problem(out).empty()) return std::nullopt;
+  // Ring by ring, each kept where the polygon stays valid with it: a squaring that would cross
+  // another wall costs its own ring's, not the others'.
+  PolygonWithHoles out = polygon;
+  bool any = false;
+  for (std::size_t r = 0; r <= polygon.holes.size(); ++r) {
+    PolygonWithHoles candidate = out;
+    Ring& ring = r == 0 ? candidate.outer : candidate.holes[r - 1];
+    if (!square_ring(ring, lattice, on_deg, noise, correlation, k)) continue;
+    ring = remove_degenerate_vertices(ring, eps);  // (a step between walls on one line has no width)
+    if (!polygon_problem(candidate).empty()) continue;
+    out = std::move(candidate);
+    any = true;
+  }
+  if (!any) return std::nullopt;
   return out;
 }
 

@@ -28,14 +28,16 @@ std::optional<PolygonWithHoles> merge_cheapest_step(const PolygonWithHoles& poly
 std::optional<PolygonWithHoles> staircases_as_lines(const PolygonWithHoles& polygon, int min_corners, double square_deg);
 
 // The outline with its short oblique walls squared: a wall off the lattice (farther than on_deg
-// from its main direction and quarter turns) between two walls on it is drawn as a square step
-// at its middle where those two are parallel and face the same way, or dropped for the corner
-// where they meet where they are square to each other, when its direction is not told apart from
-// the lattice's under the boundary noise: turning it onto the nearest axis moves its ends by at
-// most k times the uncertainty a noise of standard deviation `noise`, correlated over
-// `correlation`, leaves at the ends of a fitted line of its length L, noise sqrt(3 correlation /
-// L) (the rule corners.snap_* applies to the runs). None when no wall is squared, or the result
-// is no valid polygon.
+// from its main direction and quarter turns) between two walls on it is drawn as a step along
+// the lattice at its middle where those two lie along the same axis and face the same way (the
+// area kept), or dropped for the corner where they meet where they lie along square axes, when
+// its direction is not told apart from the lattice's under the boundary noise: turning it about
+// its middle onto the nearest axis moves its ends by at most k times the uncertainty a noise of
+// standard deviation `noise`, correlated over `correlation`, leaves at the ends of a fitted line
+// of its length L, noise sqrt(3 correlation / max(L, correlation)) (the rule corners.snap_*
+// applies to the runs). (A corner moves the outline farther than that turn, up to L sin cos of
+// the wall's angle off the lattice.) Ring by ring, each kept where the polygon stays valid with
+// it; none when no wall is squared.
 std::optional<PolygonWithHoles> square_connectors(const PolygonWithHoles& polygon, const Vec2& lattice, double on_deg,
                                                   double noise, double correlation, double k);
 
