@@ -185,22 +185,22 @@ std::vector<NeighbourLattice> neighbour_lattices(const std::vector<Vec2>& centre
   std::vector<std::size_t> near;
   for (std::size_t i = 0; i < n; ++i) {
     double sx = 0, sy = 0, total = 0;
-    bool by_box = false;  // (the pass that found lenders)
-    for (const bool boxes : {false, true}) {
-      if (total > 0) break;
-      by_box = boxes;
-      if (!boxes) {
-        within.near(centres[i], near);  // (ascending: the sums in order of id)
-      } else {
-        if (!beside) beside.emplace(lender_centres, radius / 2 + std::sqrt(2.0) * largest);
-        beside->near(centres[i], near);
-      }
+    // The lenders found (ascending: the sums in order of id), those by box only within half the radius.
+    const auto add = [&](bool by_box) {
       for (std::size_t j : near) {
-        if (lenders[j].id == ids[i] || (boxes && distance_to_box(lenders[j], centres[i]) > radius / 2)) continue;
+        if (lenders[j].id == ids[i] || (by_box && distance_to_box(lenders[j], centres[i]) > radius / 2)) continue;
         sx += weights[j] * quadrupled[j].x();
         sy += weights[j] * quadrupled[j].y();
         total += weights[j];
       }
+    };
+    within.near(centres[i], near);
+    add(false);
+    const bool by_box = total <= 0;
+    if (by_box) {
+      if (!beside) beside.emplace(lender_centres, radius / 2 + std::sqrt(2.0) * largest);
+      beside->near(centres[i], near);
+      add(true);
     }
     if (total <= 0 || std::hypot(sx, sy) < o.neighbour_agreement * total) continue;
     const double a = std::atan2(sy, sx) / 4.0;

@@ -88,12 +88,12 @@ Ring& ring_at(PolygonWithHoles& polygon, int r) { return r == 0 ? polygon.outer 
 
 // square_connectors on one ring; true when a wall was squared.
 bool square_ring(Ring& ring, const Vec2& lattice, double on_deg, double noise, double correlation, double k) {
-  const Vec2 axis = lattice.normalized(), quarter(-axis.y(), axis.x());
+  const Vec2 axis = lattice.normalized();
   const double on_sin = std::sin(on_deg * M_PI / 180.0);
   // The sine of the angle between a wall and the nearest axis of the lattice.
   const auto off_sin = [&](const Vec2& e) {
     const double length = e.norm();
-    return length > 0 ? std::min(std::abs(e.dot(axis)), std::abs(e.dot(quarter))) / length : 0.0;
+    return length > 0 ? std::abs(cross(e / length, nearest_lattice_axis(e / length, axis))) : 0.0;
   };
   bool any = false;
   // (Each change leaves one wall off the lattice fewer: a step's new wall lies on it, a corner

@@ -311,12 +311,6 @@ double fit_tolerance(const std::vector<Ring>& rings, double pixel_size, const Bu
   return o.models.lattice_tolerance * model_noise(result, pixel_size, o.models) * std::sqrt(correlation / std::max(perimeter_m, correlation));
 }
 
-// Replaces the chain's outline by the building's moment rectangle when that explains the contour
-// (a high percentile, models.rectangle_quantile, of the contour's distances to each) no worse than the outline plus the allowed noise,
-// and leaves out no stretch of it that the outline explains (a wing, a notch, an arc's bow)
-// unless the outline leaves one the rectangle explains:
-// the simplest outline that explains the contour within its noise. (lattice: the rectangle is held
-// to it, a building whose own lattice is undetermined; else the best fitting one.)
 // Whether an outline leaves a stretch of the contour that a reference outline explains:
 // leaves_a_stretch on each ring, the reference's distances computed once.
 class StretchGuard {
@@ -337,6 +331,12 @@ class StretchGuard {
   std::vector<std::vector<std::pair<double, double>>> reference_;
 };
 
+// Replaces the chain's outline by the building's moment rectangle when that explains the contour
+// (a high percentile, models.rectangle_quantile, of the contour's distances to each) no worse than the outline plus the allowed noise,
+// and leaves out no stretch of it that the outline explains (a wing, a notch, an arc's bow)
+// unless the outline leaves one the rectangle explains:
+// the simplest outline that explains the contour within its noise. (lattice: the rectangle is held
+// to it, a building whose own lattice is undetermined; else the best fitting one.)
 void choose_rectangle(const std::vector<Ring>& rings, double pixel_size, const CoreOptions& co, BuildingResult& result,
                       const Vec2* lattice = nullptr) {
   const ModelOptions& o = co.models;
