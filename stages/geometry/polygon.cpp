@@ -205,14 +205,6 @@ Ring remove_degenerate_vertices(const Ring& ring, double eps) {
   return out;
 }
 
-double distance_to_segment(const Vec2& p, const Vec2& a, const Vec2& b) {
-  const Vec2 ab = b - a;
-  const double len2 = ab.squaredNorm();
-  if (len2 == 0) return (p - a).norm();
-  const double t = std::clamp((p - a).dot(ab) / len2, 0.0, 1.0);
-  return (p - (a + t * ab)).norm();
-}
-
 namespace {
 
 // Marks the vertices to keep in the open chain pts[first..last] (inclusive).

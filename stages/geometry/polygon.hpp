@@ -1,5 +1,7 @@
 // Polygon measures, validity checks and Douglas–Peucker simplification.
 #pragma once
+#include <algorithm>
+#include <cmath>
 #include <cstddef>
 #include <string>
 
@@ -14,8 +16,16 @@ std::size_t vertex_count(const PolygonWithHoles& polygon);  // of its outer ring
 std::vector<const Ring*> rings_of(const PolygonWithHoles& polygon);  // the outer ring, then the holes
 bool point_in_ring(const Vec2& p, const Ring& ring);  // even-odd rule, boundary undefined
 
-// The distance from p to the segment [a, b].
-double distance_to_segment(const Vec2& p, const Vec2& a, const Vec2& b);
+// The squared distance from p to the segment [a, b], and the distance (its square root). Inline:
+// the models measure every contour edge against an outline's walls several times a building.
+inline double squared_distance_to_segment(const Vec2& p, const Vec2& a, const Vec2& b) {
+  const Vec2 ab = b - a;
+  const double len2 = ab.squaredNorm();
+  if (len2 == 0) return (p - a).squaredNorm();
+  const double t = std::clamp((p - a).dot(ab) / len2, 0.0, 1.0);
+  return (p - (a + t * ab)).squaredNorm();
+}
+inline double distance_to_segment(const Vec2& p, const Vec2& a, const Vec2& b) { return std::sqrt(squared_distance_to_segment(p, a, b)); }
 
 // True when segments [a,b] and [c,d] share any point.
 bool segments_intersect(const Vec2& a, const Vec2& b, const Vec2& c, const Vec2& d);

@@ -142,8 +142,11 @@ std::vector<std::pair<double, double>> boundary_distances(const Ring& ring, cons
       // every segment at the best distance: the square of a rounded distance may fall just short
       // of the squared gap to a vertex it ties at, and the tie rule must see them all.)
       const Vec2 gap = (segments[k].low - mid).cwiseMax(mid - segments[k].high).cwiseMax(0.0);
-      if (gap.squaredNorm() > best * best * (1 + 1e-9)) return;
-      const double d = distance_to_segment(mid, segments[k].a, segments[k].b);
+      const double bound = best * best * (1 + 1e-9);
+      if (gap.squaredNorm() > bound) return;
+      const double squared = squared_distance_to_segment(mid, segments[k].a, segments[k].b);
+      if (squared > bound) return;  // (farther: its root cannot reach the best)
+      const double d = std::sqrt(squared);
       if (d < best || (d == best && nearest != previous && k < nearest)) best = d, nearest = k;
     };
     if (!grid || !mid.allFinite()) {
