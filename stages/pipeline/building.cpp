@@ -617,8 +617,21 @@ void run_chain(const std::vector<Ring>& rings, double pixel_size, const CoreOpti
   const double min_run_px = regular_min_run_px(o.corners, noise, pixel_size);
   const StageProblem regular_problem =
       outline(fit_rings, labels, input.directions, o.corners, origin, pixel_size, context, min_run_px, regular);
+  // "Within the noise": the noise, or the spread of the runs along the fitted lattice where more
+  // (the noise's runs, cut where a wobble's flank turns past 45 degrees, are shorter than the walls
+  // at fine pixels, and their lines follow part of the wobble), bounded as the noise is by the
+  // spread about parabolas (an arc's spread is no noise).
+  const double within_noise =
+      std::max(model_noise(result, pixel_size, o.models),
+               o.models.arc_noise_ratio > 0 ? std::min(fit_spread, o.models.arc_noise_ratio * arc_noise) : fit_spread);
+  // A regular outline that explains the contour within the noise is kept whatever the plain one
+  // is: that one is drawn only where it may be chosen (it is a good part of the time).
+  const double regular_fit = regular_problem.second.empty() ? contour_fit(rings, regular) : -1.0;
+  const bool regular_within_noise = regular_fit >= 0 && regular_fit <= o.models.regular_fit_noise * within_noise;
   const StageProblem plain_problem =
-      outline(fit_rings, labels, input.directions, o.corners, origin, pixel_size, CornerContext{}, o.corners.min_run_px, plain);
+      regular_within_noise
+          ? StageProblem{}
+          : outline(fit_rings, labels, input.directions, o.corners, origin, pixel_size, CornerContext{}, o.corners.min_run_px, plain);
   // The lattice outline: every wall on the building's lattice (its main direction and quarter
   // turns), labeled by the MRF among those four alone. The most regular outline the building can
   // have short of a rectangle; it replaces the chain's when it has no more vertices and explains
@@ -647,17 +660,12 @@ void run_chain(const std::vector<Ring>& rings, double pixel_size, const CoreOpti
     result.footprint = std::move(lattice_outline);
     result.model = "lattice";
   } else {
-    bool regular_wins = !plain_problem.second.empty();
-    if (!regular_wins && regular_problem.second.empty()) {
-      const double regular_fit = contour_fit(rings, regular), plain_fit = contour_fit(rings, plain);
-      // "Within the noise": the noise, or the spread of the runs along the fitted lattice where
-      // more (the noise's runs, cut where a wobble's flank turns past 45 degrees, are shorter than
-      // the walls at fine pixels, and their lines follow part of the wobble), bounded as the noise
-      // is by the spread about parabolas (an arc's spread is no noise).
-      const double within_noise =
-          std::max(model_noise(result, pixel_size, o.models),
-                   o.models.arc_noise_ratio > 0 ? std::min(fit_spread, o.models.arc_noise_ratio * arc_noise) : fit_spread);
-      regular_wins = regular_fit <= plain_fit + allowed || regular_fit <= o.models.regular_fit_noise * within_noise;
+    bool regular_wins = regular_within_noise || !plain_problem.second.empty();
+    if (regular_within_noise) {
+      chosen_fit = regular_fit;
+    } else if (!regular_wins && regular_problem.second.empty()) {
+      const double plain_fit = contour_fit(rings, plain);
+      regular_wins = regular_fit <= plain_fit + allowed;
       chosen_fit = regular_wins ? regular_fit : plain_fit;
     }
     result.footprint = std::move(regular_wins ? regular : plain);
