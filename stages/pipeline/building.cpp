@@ -505,13 +505,14 @@ void run_chain(const std::vector<Ring>& rings, double pixel_size, const CoreOpti
   // direction stays the lattice where it is near the chords'.
   const ChordLattice& chord = start.chord;
   const Vec2 first_main = main_direction(labels, input.lengths, input.directions);
-  double arc_noise = 0;
-  double noise = lattice_noise(rings, input.normals, first_main, pixel_size, o.noise, &arc_noise);
-  bool follow_chords = false;
-  if (chord.share >= o.lattice.min_share && angle_between_lattices_deg(first_main, chord.direction) > o.lattice.max_gap_deg) {
-    follow_chords = chord.share_at(first_main, o.lattice.window_deg) < o.lattice.main_share_ratio * chord.share;
-    if (follow_chords) noise = lattice_noise(rings, input.normals, chord.direction, pixel_size, o.noise, &arc_noise);
-  }
+  const bool follow_chords = chord.share >= o.lattice.min_share &&
+                             angle_between_lattices_deg(first_main, chord.direction) > o.lattice.max_gap_deg &&
+                             chord.share_at(first_main, o.lattice.window_deg) < o.lattice.main_share_ratio * chord.share;
+  // (About the chords' lattice, the start measured it for its sample, on the same normals.)
+  double arc_noise = start.chord_arc_noise_m;
+  double noise = follow_chords && start.chord_noise_m >= 0
+                     ? start.chord_noise_m
+                     : lattice_noise(rings, input.normals, follow_chords ? chord.direction : first_main, pixel_size, o.noise, &arc_noise);
   // At least the noise pooled over the buildings regularized with this one (a segmentation's
   // noise is its mask's): walls shorter than a wobble's wavelength, or runs cut short by its
   // flanks at fine pixels, measure too little of it.
@@ -837,6 +838,7 @@ void run_chain(const std::vector<Ring>& rings, double pixel_size, const CoreOpti
 void measure_sample(const std::vector<Ring>& rings, double pixel_size, const CoreOptions& o, BuildingStart& start) {
   double arc_noise = 0, measured = 0;
   double noise = lattice_noise(rings, start.normals, start.chord.direction, pixel_size, o.noise, &arc_noise, &measured);
+  start.chord_noise_m = noise, start.chord_arc_noise_m = arc_noise;
   if (o.models.arc_noise_ratio > 0) noise = std::min(noise, o.models.arc_noise_ratio * arc_noise);
   start.sample = measured > 0 ? NoiseSample{noise, perimeter(rings[0])} : NoiseSample{};  // (a clean contour may measure 0, and says so)
 }

@@ -55,6 +55,9 @@ struct BuildingStart {
   std::vector<std::vector<Vec2>> normals;  // per ring, per edge: the smoothed outward normals (empty: not started)
   ChordLattice chord;                      // the lattice of the contour's chords
   NoiseSample sample;
+  // The noise about the chords' lattice as lattice_noise measures it for the sample, and its arc
+  // noise (the chain's own, where it follows the chords: not measured again); negative: unknown.
+  double chord_noise_m = -1, chord_arc_noise_m = 0;
   double smoothing_noise_m = 0;  // the noise its normals are smoothed for; of an empty start, the noise the chain smooths for
   NeighbourLattice neighbour_lattice;  // the lattice of the buildings around it (neighbour_lattices)
 };
