@@ -325,7 +325,7 @@ TEST(Corners, ABowOnAStraightWallIsItsOwnCurve) {
   EXPECT_FALSE(has_vertex_near(without, {12, -2.5}, 1.0));
   PolygonWithHoles truth{{{0, 0}}, {}};
   for (int k = 0; k <= 32; ++k) truth.outer.push_back({4 + 0.5 * k, bow(4 + 0.5 * k)});
-  for (const Vec2 p : {Vec2(60, 0), Vec2(60, 20), Vec2(0, 20)}) truth.outer.push_back(p);
+  for (const Vec2& p : {Vec2(60, 0), Vec2(60, 20), Vec2(0, 20)}) truth.outer.push_back(p);
   const double iou_with = test::iou({with, {}}, truth), iou_without = test::iou({without, {}}, truth);
   EXPECT_GT(iou_with, 0.99);
   EXPECT_GT(iou_with, iou_without + 0.02) << iou_without;

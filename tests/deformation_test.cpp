@@ -32,7 +32,7 @@ TEST(Amips, GradientAndHessianMatchFiniteDifferences) {
         e[k] = step;
         const double fd = (amips::energy(j + e, alpha) - amips::energy(j - e, alpha)) / (2 * step);
         EXPECT_NEAR(g[k], fd, 1e-5 * (1 + std::abs(fd)));
-        amips::Vec4 gp, gm;
+        amips::Vec4 gp = amips::Vec4::Zero(), gm = amips::Vec4::Zero();
         amips::energy(j + e, alpha, &gp);
         amips::energy(j - e, alpha, &gm);
         const amips::Vec4 column = (gp - gm) / (2 * step);

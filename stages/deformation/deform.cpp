@@ -103,7 +103,7 @@ double DeformationEnergy::value(const Eigen::VectorXd& x, Eigen::VectorXd* gradi
   gradient->setZero(x.size());
   double e = 0;
   for (std::size_t t = 0; t < mesh_.triangles.size(); ++t) {
-    amips::Vec4 g;
+    amips::Vec4 g = amips::Vec4::Zero();  // (set by energy where it is finite; zero keeps the compiler sure of it)
     const auto& tri = mesh_.triangles[t];
     e += amips::energy(jacobian(corners(x, tri), rest_inverse_[t]), options_.alpha, &g);
     if (!std::isfinite(e)) return e;
