@@ -299,6 +299,27 @@ TEST_F(SynthRun, RerunResumesAndAStageOptionRecomputesOnlyWhatDependsOnIt) {
   EXPECT_EQ(report.at("checkpoints_reused"), nlohmann::json({{"contours", 16}, {"buildings", 0}})) << report;
 }
 
+// Checkpoints and done tiles are keyed by the program too: the same job rerun by another build
+// (here the same binary with a byte appended, which runs alike) resumes nothing, its outlines may
+// differ; rerun by the first build again, it resumes its own tiles.
+TEST_F(SynthRun, AnotherBuildOfLodforgeResumesNothing) {
+  const fs::path other = dir / "lodforge_other_build";
+  fs::copy_file(LODFORGE_BINARY, other);
+  std::ofstream(other, std::ios::binary | std::ios::app) << '\n';
+  fs::permissions(other, fs::perms::owner_exec, fs::perm_options::add);
+  const fs::path j = job("j", seg, 100);
+  ASSERT_EQ(lodforge("run " + j.string()).code, 0);
+  Result r = test::shell(other.string() + " run " + j.string());
+  ASSERT_EQ(r.code, 0) << r.output;
+  nlohmann::json report = report_of(dir / "j_out" / "report.json");
+  EXPECT_EQ(report.at("tiles_resumed"), 0) << report;
+  EXPECT_EQ(report.at("tiles_processed"), 16) << report;
+  EXPECT_EQ(report.at("checkpoints_reused"), nlohmann::json({{"contours", 0}, {"buildings", 0}})) << report;
+  ASSERT_EQ(test::shell(other.string() + " run " + j.string()).code, 0);
+  report = report_of(dir / "j_out" / "report.json");
+  EXPECT_EQ(report.at("tiles_resumed"), 16) << report;
+}
+
 // The boundary noise every building allows for is pooled over a survey of the raster, not over
 // its tile: the same for every tiling. Surveyed in one window, the whole raster, it is the noise
 // `regularize` pools over the same buildings.

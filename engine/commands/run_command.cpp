@@ -116,6 +116,19 @@ std::string file_identity(const std::string& path) {
   return path + "|" + std::to_string(st.st_size) + "|" + std::to_string(st.st_mtim.tv_sec) + "." + std::to_string(st.st_mtim.tv_nsec);
 }
 
+// The running program's own bytes, hashed, as a line for the checkpoint and run keys: a rerun with
+// another build of lodforge, whose outlines may differ, computes every tile again rather than mix
+// them with an earlier build's (and merge refuses shards of two builds, their run keys differing).
+// Empty where /proc/self/exe cannot be read: the keys are then the inputs' and options' alone.
+std::string program_identity() {
+  std::ifstream in("/proc/self/exe", std::ios::binary);
+  if (!in) return "";
+  std::uint64_t h = fnv1a("lodforge");
+  std::vector<char> buffer(std::size_t(1) << 16);
+  while (in.read(buffer.data(), std::streamsize(buffer.size())) || in.gcount() > 0) h = fnv1a(buffer.data(), std::size_t(in.gcount()), h);
+  return "\nprogram " + hex(h);
+}
+
 }  // namespace
 
 int run_job(int argc, char** argv) {
@@ -276,16 +289,17 @@ int run_job(int argc, char** argv) {
   // The footprints decide which tile owns a building and how buildings are split: each tile's
   // contour key has those in its window (find_tile_window), the run's key all of them.
   const std::string cadastre_text = cadastre ? "\nfootprints " + hex(cadastre->hash()) : "";
-  const std::string contour_options = options_text(key_job.stages.contour) + (cadastre ? "\nfootprints" : "");
+  const std::string program = program_identity();
+  const std::string contour_options = options_text(key_job.stages.contour) + (cadastre ? "\nfootprints" : "") + program;
   const std::string heights_options = options_text(key_job.stages.heights) + file_identity(job.inputs.dsm.path) + file_identity(job.inputs.dtm.path) +
-                                      (cadastre ? options_text(key_job.stages.footprints) : "") + options_text(key_job.stages.parts);
+                                      (cadastre ? options_text(key_job.stages.footprints) : "") + options_text(key_job.stages.parts) + program;
   // Building ids are first-pixel indices, so the footprints also depend on the raster's width.
   char floor_text[80];
   std::snprintf(floor_text, sizeof floor_text, "\nnoise floor %.17g smoothed for %.17g", survey.noise.floor_m, survey.noise.smoothing_m);
-  const std::string core_options = job.regularizer + "\n" + options_text(key_job.stages.core) + "\nwidth " + std::to_string(seg.size.width) + floor_text;
+  const std::string core_options = job.regularizer + "\n" + options_text(key_job.stages.core) + "\nwidth " + std::to_string(seg.size.width) + floor_text + program;
   const std::uint64_t job_key = fnv1a(gpkg_time + "\n" + file_identity(job.inputs.segmentation.path) + "\n" + file_identity(job.inputs.dsm.path) + "\n" +
                                       file_identity(job.inputs.dtm.path) + "\n" + file_identity(job.inputs.orthophoto.path) + "\n" + options_text(key_job) + cadastre_text + "\n" +
-                                      std::to_string(grid.tile_px) + "/" + std::to_string(halo_px) + "/" + std::to_string(max_window_px));
+                                      std::to_string(grid.tile_px) + "/" + std::to_string(halo_px) + "/" + std::to_string(max_window_px) + program);
   std::string transform_text;
   for (double c : seg.transform.c) transform_text += std::to_string(c) + ",";
   // The tile indexes an earlier run left list lodforge's own files (which this run may replace).
