@@ -320,6 +320,52 @@ TEST_F(SynthRun, AnotherBuildOfLodforgeResumesNothing) {
   EXPECT_EQ(report.at("tiles_resumed"), 16) << report;
 }
 
+// Each modeled building's outline model (docs/models.md) is in the tile files, as `regularize`
+// writes it, and the report counts them: as many as the buildings regularized, again when resumed.
+TEST_F(SynthRun, TheFilesAndTheReportTellEachBuildingsModel) {
+  const fs::path j = job("j", seg, 100);
+  ASSERT_EQ(lodforge("run " + j.string()).code, 0);
+  const std::set<std::string> known{"regular", "lines", "lattice", "rectangle", "coarse_lattice", "staircase_lines", "merged_steps"};
+  std::map<std::string, long long> in_files;
+  std::size_t ok = 0, fallback = 0;
+  GDALAllRegister();
+  for (const auto& e : fs::directory_iterator(dir / "j_out" / "tiles")) {
+    if (e.path().extension() != ".gpkg") continue;
+    GDALDataset* d = static_cast<GDALDataset*>(GDALOpenEx(e.path().c_str(), GDAL_OF_VECTOR, nullptr, nullptr, nullptr));
+    ASSERT_NE(d, nullptr) << e.path();
+    OGRLayer* layer = d->GetLayerByName("footprints");
+    ASSERT_NE(layer, nullptr) << e.path();
+    const int field = layer->GetLayerDefn()->GetFieldIndex("model");
+    ASSERT_GE(field, 0) << e.path();
+    for (auto& f : *layer) {
+      if (std::string(f->GetFieldAsString("status")) == "fallback") {
+        ++fallback;
+        EXPECT_TRUE(f->IsFieldNull(field)) << e.path();
+        continue;
+      }
+      ++ok;
+      ASSERT_FALSE(f->IsFieldNull(field)) << e.path();
+      const std::string model = f->GetFieldAsString(field);
+      EXPECT_TRUE(known.count(model)) << model;
+      ++in_files[model];
+    }
+    GDALClose(d);
+  }
+  EXPECT_GT(ok, 10u);
+  nlohmann::json report = report_of(dir / "j_out" / "report.json");
+  std::map<std::string, long long> counted;
+  for (const auto& [model, count] : report.at("models").items()) counted[model] = count.get<long long>();
+  EXPECT_EQ(counted, in_files) << report;
+  EXPECT_EQ(report.at("ok").get<std::size_t>(), ok) << report;
+  EXPECT_EQ(report.at("fallback").get<std::size_t>(), fallback) << report;
+  ASSERT_EQ(lodforge("run " + j.string()).code, 0);
+  report = report_of(dir / "j_out" / "report.json");
+  EXPECT_EQ(report.at("tiles_resumed"), 16) << report;
+  EXPECT_EQ(report.at("models"), nlohmann::json(counted)) << report;
+  ASSERT_EQ(lodforge("merge " + (dir / "j_out").string()).code, 0);
+  EXPECT_NE(slurp(dir / "j_out" / "merged" / "report.html").find("model " + in_files.begin()->first), std::string::npos);
+}
+
 // The boundary noise every building allows for is pooled over a survey of the raster, not over
 // its tile: the same for every tiling. Surveyed in one window, the whole raster, it is the noise
 // `regularize` pools over the same buildings.

@@ -478,6 +478,7 @@ class FootprintModelWriter : public ModelWriter {
     r.failed_stage = m.stage;
     r.reason = m.reason;
     r.regularizer = m.regularizer;
+    r.model = m.model;
     r.kind = m.tile;
     r.has_heights = m.has_lod1;
     r.roof_height = m.roof;
@@ -497,6 +498,7 @@ class FootprintModelWriter : public ModelWriter {
     FootprintLayer layer;
     layer.crs_wkt = c.crs_wkt;
     layer.write_heights = true;
+    layer.write_model = true;
     layer.kind_field = "tile";
     layer.write_lod1 = true;  // (GeoPackage only)
     layer.rfc7946 = true;     // (GeoJSON only)

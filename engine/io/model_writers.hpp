@@ -29,6 +29,7 @@ struct BuildingModel {
   std::vector<double> height_statistics;  // when has_lod1: named by height_statistic_fields() (io/footprint_writer.hpp)
   Solid solid;                  // when has_lod1
   std::string status, stage, reason, regularizer;
+  std::string model;  // the outline the chain chose (docs/models.md); empty: none (a fallback, the cadastre's polygon, a peer)
   // With inputs.footprints: the cadastre's ID (empty for a building it lacks), how the building
   // relates to it (confirmed, not_in_footprints, not_in_mask) and the footprint's mask coverage.
   std::string cadastre_id, cadastre;

@@ -19,7 +19,7 @@ namespace fs = std::filesystem;
 namespace {
 
 constexpr std::uint32_t kMagic = 0x4c4f4446;  // "LODF"
-constexpr std::uint32_t kVersion = 4;  // 2: a checksum of the payload in the header; 3: each building's regularization seconds; 4: the heights' statistics
+constexpr std::uint32_t kVersion = 5;  // 2: a checksum of the payload in the header; 3: each building's regularization seconds; 4: the heights' statistics; 5: each building's model
 
 class Writer {
  public:
@@ -108,18 +108,22 @@ std::optional<Reader> read_checked(const fs::path& path, std::optional<std::uint
   if (!in) return std::nullopt;
   std::ostringstream buffer;
   buffer << in.rdbuf();
-  try {
-    Reader r(buffer.str());
-    if (r.pod<std::uint32_t>() != kMagic || r.pod<std::uint32_t>() != kVersion) return std::nullopt;
-    if (const auto found = r.pod<std::uint64_t>(); key && found != *key) return std::nullopt;
-    const auto size = r.pod<std::uint64_t>();
-    const auto checksum = r.pod<std::uint64_t>();
-    std::string rest = buffer.str().substr(4 + 4 + 8 + 8 + 8);
-    if (rest.size() != size || fnv1a(rest) != checksum) return std::nullopt;  // changed since written: recomputed
-    return Reader(rest);
-  } catch (const std::exception&) {
-    return std::nullopt;
+  const std::string data = buffer.str();
+  // The header: magic, version, key, the payload's size and its checksum.
+  std::uint32_t magic = 0, version = 0;
+  std::uint64_t found = 0, size = 0, checksum = 0;
+  constexpr std::size_t kHeader = sizeof magic + sizeof version + sizeof found + sizeof size + sizeof checksum;
+  if (data.size() < kHeader) return std::nullopt;
+  const char* at = data.data();
+  for (const auto& [field, bytes] : {std::pair<void*, std::size_t>{&magic, sizeof magic}, {&version, sizeof version}, {&found, sizeof found},
+                                     {&size, sizeof size}, {&checksum, sizeof checksum}}) {
+    std::memcpy(field, at, bytes);
+    at += bytes;
   }
+  if (magic != kMagic || version != kVersion || (key && found != *key)) return std::nullopt;
+  std::string rest = data.substr(kHeader);
+  if (rest.size() != size || fnv1a(rest) != checksum) return std::nullopt;  // changed since written: recomputed
+  return Reader(std::move(rest));
 }
 
 }  // namespace
@@ -237,6 +241,7 @@ void CheckpointStore::save_buildings(const std::string& tile, std::uint64_t key,
     w.pod<std::uint8_t>(b.ok);
     w.text(b.stage);
     w.text(b.reason);
+    w.text(b.model);
     w.pod<double>(b.seconds);  // (for the report's slowest buildings after a resumed run)
   }
   write_atomically(path("buildings", tile), w.str(), key);
@@ -256,6 +261,7 @@ std::optional<std::vector<BuildingOutput>> CheckpointStore::load_buildings(const
       b.ok = r->pod<std::uint8_t>() != 0;
       b.stage = r->text();
       b.reason = r->text();
+      b.model = r->text();
       b.seconds = r->pod<double>();
     }
     if (!r->at_end()) return std::nullopt;

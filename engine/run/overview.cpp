@@ -284,6 +284,13 @@ void write_page(const nlohmann::json& r, const Overview& overview, const fs::pat
   row("tiles without buildings", number("tiles_empty"));
   row("buildings", number("buildings"));
   row("&nbsp;&nbsp;regularized (ok)", number("ok"));
+  // By the outline the chain chose (docs/models.md), most first.
+  std::vector<std::pair<long long, std::string>> models;
+  const nlohmann::json model_counts = r.value("models", nlohmann::json::object());  // (a copy: items() of a temporary would dangle)
+  for (const auto& [model, count] : model_counts.items())
+    if (count.is_number_integer()) models.emplace_back(-count.get<long long>(), model);
+  std::sort(models.begin(), models.end());
+  for (const auto& [count, model] : models) row("&nbsp;&nbsp;&nbsp;&nbsp;model " + xml_escape(model), std::to_string(-count));
   row("&nbsp;&nbsp;fallback footprint", number("fallback"));
   row("&nbsp;&nbsp;with LOD1", number("lod1"));
   row("&nbsp;&nbsp;without LOD1 (no heights)", std::to_string(buildings - lod1));

@@ -49,6 +49,11 @@ void account(const std::string& summary, const std::string& tile, int tile_index
       t.confirmed += confirmed;
       t.not_in_footprints += not_in_footprints;
       t.not_in_mask += not_in_mask;
+    } else if (kind == "model") {
+      std::size_t count = 0;
+      std::getline(fields, a, '\t');
+      fields >> count;
+      t.models[a] += count;
     } else if (kind == "too_large") {
       std::getline(fields, a);
       t.too_large.emplace_back(tile_index, a);
@@ -231,6 +236,7 @@ void write_index_and_report(const Totals& totals, const RunPlan& plan, const std
                     {"ok", totals.ok},
                     {"fallback", totals.fallback},
                     {"lod1", totals.lod1},
+                    {"models", totals.models},
                     {"dropped_small", totals.dropped_small},
                     {"too_large", totals.too_large.size()},
                     {"cadastre", {{"confirmed", totals.confirmed}, {"not_in_footprints", totals.not_in_footprints}, {"not_in_mask", totals.not_in_mask}}},
@@ -320,6 +326,11 @@ void merge_run_reports(const std::vector<fs::path>& parts, const fs::path& targe
           throw std::runtime_error(std::string("its ") + noise + " differs from the other shards': a run with other inputs or options");
       if (merged.is_null()) merged = report;
       else add_numbers(merged, report);
+      // (The models a shard has: those another lacks are added, not passed over.)
+      if (!merged.contains("models") || !merged.at("models").is_object()) merged["models"] = Json::object();
+      const Json models = report.value("models", Json::object());  // (a copy: items() of a temporary would dangle)
+      for (const auto& [model, count] : models.items())
+        if (!merged.at("models").contains(model)) merged["models"][model] = count;
       for (const char* noise : {"noise_floor_m", "noise_smoothing_m"})
         if (report.contains(noise)) merged[noise] = report.at(noise);
       for (const Json& f : report.at("failed_buildings")) failed.emplace_back(f.at("tile").get<std::string>(), f);

@@ -1,6 +1,7 @@
 // The run's accounting: totals over tiles, the tile index and the report (JSON and a summary).
 #pragma once
 #include <array>
+#include <map>
 #include <cstddef>
 #include <cstdint>
 #include <filesystem>
@@ -22,6 +23,7 @@ struct Totals {
   std::size_t blocks_decoded = 0;  // raster blocks decoded by the shared cache (a block freed and read again counts again)
   // With inputs.footprints: footprints the mask confirms, the mask's buildings outside them, footprints it does not confirm.
   std::size_t confirmed = 0, not_in_footprints = 0, not_in_mask = 0;
+  std::map<std::string, std::size_t> models;  // the buildings modeled (ok) by the outline the chain chose (docs/models.md)
   // Each entry with its tile: tiles are recorded in the order they are processed, the files list
   // them in tile order.
   struct Failed {

@@ -70,6 +70,7 @@ std::vector<BuildingOutput> regularize_tile(const TileBuildings& tile, const Job
     o.ok = r.ok;
     o.stage = r.failed_stage;
     o.reason = r.ok ? r.note : r.reason;
+    o.model = r.ok ? r.model : "";
     o.seconds = r.seconds;
   }
   return out;
@@ -91,12 +92,13 @@ std::vector<BuildingOutput> split_among_footprints(const std::vector<TileGroup>&
     const TileGroup& t = groups[g];
     std::vector<BuildingOutput>& out = per_group[g];
     std::vector<PolygonWithHoles> outlines;
-    BuildingOutput block;  // what the block's outlines share: status and time
+    BuildingOutput block;  // what the block's outlines share: status, time, and their model where they have one
     block.id = t.id;
     block.first_row = int(t.id / plan.size.width);
     block.first_col = int(t.id % plan.size.width);
     for (int b : t.buildings) {
       const BuildingOutput& o = blobs[std::size_t(b)];
+      block.model = outlines.empty() || o.model == block.model ? o.model : "";
       outlines.push_back(o.footprint);
       block.seconds += o.seconds;
       if (!o.ok && block.ok) { block.ok = false; block.stage = o.stage; block.reason = o.reason; }
@@ -139,12 +141,14 @@ std::vector<BuildingOutput> split_among_footprints(const std::vector<TileGroup>&
         o.ok = block.ok;
         o.stage = block.stage;
         o.reason = block.reason;
+        o.model = block.ok && options.lod0 != "cadastre" ? block.model : "";  // (with lod0: cadastre, the cadastre's polygon)
         o.footprint = share.polygon;
         if (!share.note.empty()) o.reason += (o.reason.empty() ? "" : "; ") + share.note;
         if (share.polygon.outer.empty()) {
           // Nothing of its own (under earlier footprints), or the split failed: the cadastre's polygon, as a fallback.
           o.footprint = footprint.parts.front();
           o.ok = false;
+          o.model.clear();
           o.stage = "footprints";
           o.reason = split_failure.empty() ? "the footprint lies under earlier ones; its first part is its LOD0"
                                            : "splitting the block among its footprints failed (" + split_failure + "); the cadastre's polygon is its LOD0";
@@ -192,6 +196,10 @@ std::string make_summary(const TileResult& r, bool cadastre) {
   for (std::size_t i = 0; i < r.heights.size(); ++i)
     if (!r.heights[i].ok && r.buildings[i].cadastre != "not_in_mask") s << "failed\t" << r.buildings[i].display_id() << "\theights\t" << r.heights[i].reason << " (LOD0 only)\n";
   for (const std::string& t : r.too_large) s << "too_large\t" << t << '\n';
+  std::map<std::string, int> models;  // (of the buildings modeled: a footprint the mask does not confirm is none)
+  for (const BuildingOutput& b : r.buildings)
+    if (b.ok && !b.model.empty() && b.cadastre != "not_in_mask") ++models[b.model];
+  for (const auto& [model, count] : models) s << "model\t" << model << '\t' << count << '\n';
   return s.str();
 }
 
@@ -297,7 +305,11 @@ BuildingModel model_of(const BuildingOutput& b, const Heights* h, const std::vec
   m.cadastre_id = b.cadastre_id;
   m.cadastre = b.cadastre;
   m.coverage = b.coverage;
-  if (b.cadastre == "not_in_mask" || (b.cadastre == "confirmed" && job.stages.footprints.lod0 == "cadastre")) m.regularizer = "cadastre";
+  m.model = b.ok ? b.model : "";
+  if (b.cadastre == "not_in_mask" || (b.cadastre == "confirmed" && job.stages.footprints.lod0 == "cadastre")) {
+    m.regularizer = "cadastre";
+    m.model.clear();
+  }
   if (b.cadastre == "not_in_mask") {
     m.status = "not_in_mask";
     return m;
