@@ -315,7 +315,7 @@ int run_job(int argc, char** argv) {
     if (index->run_key == run_key) continue;
     fs::remove(out_dir / ("report" + suffix + ".json"), ec);  // the report first: once the index is gone, both are
     fs::remove(index_path, ec);
-    spdlog::info("{}: from a run with other inputs or options; removed with its report (this run writes new ones)", index_path.string());
+    spdlog::info("{}: from a run with other inputs, options or build of lodforge; removed with its report (this run writes new ones)", index_path.string());
   }
   // Nothing that is not lodforge's is replaced: a file at a tile's output name that no index or
   // done marker lists is the user's, and stops the run before any work.

@@ -102,8 +102,13 @@ void write_atomically(const fs::path& path, const std::string& payload, std::uin
   fs::rename(temp, path);
 }
 
-// key: the expected key, or none to take any.
-std::optional<Reader> read_checked(const fs::path& path, std::optional<std::uint64_t> key) {
+// A file's layout is that of its version; a done or writing marker's (a text) has not changed since
+// the checksum came (version 2): those an earlier build left are read, so that its files stay its
+// own after an upgrade (an interrupted run's, which no tile index lists yet).
+constexpr std::uint32_t kOldestMarkerVersion = 2;
+
+// key: the expected key, or none to take any. oldest: the oldest version whose layout is this one's.
+std::optional<Reader> read_checked(const fs::path& path, std::optional<std::uint64_t> key, std::uint32_t oldest = kVersion) {
   std::ifstream in(path, std::ios::binary);
   if (!in) return std::nullopt;
   std::ostringstream buffer;
@@ -120,7 +125,7 @@ std::optional<Reader> read_checked(const fs::path& path, std::optional<std::uint
     std::memcpy(field, at, bytes);
     at += bytes;
   }
-  if (magic != kMagic || version != kVersion || (key && found != *key)) return std::nullopt;
+  if (magic != kMagic || version < oldest || version > kVersion || (key && found != *key)) return std::nullopt;
   std::string rest = data.substr(kHeader);
   if (rest.size() != size || fnv1a(rest) != checksum) return std::nullopt;  // changed since written: recomputed
   return Reader(std::move(rest));
@@ -278,7 +283,7 @@ void CheckpointStore::save_blob(const std::string& stage, const std::string& til
 }
 
 std::optional<std::string> CheckpointStore::load_blob(const std::string& stage, const std::string& tile, std::uint64_t key) const {
-  auto r = read_checked(path(stage, tile), key);
+  auto r = read_checked(path(stage, tile), key, stage == "writing" ? kOldestMarkerVersion : kVersion);
   if (!r) return std::nullopt;
   try {
     std::string payload = r->text();
@@ -296,7 +301,7 @@ void CheckpointStore::mark_done(const std::string& tile, std::uint64_t key, cons
 }
 
 std::optional<std::string> CheckpointStore::last_done_summary(const std::string& tile) const {
-  auto r = read_checked(path("done", tile), std::nullopt);
+  auto r = read_checked(path("done", tile), std::nullopt, kOldestMarkerVersion);
   if (!r) return std::nullopt;
   try {
     return r->text();

@@ -297,7 +297,7 @@ void merge_tile_indexes(const std::vector<fs::path>& parts, const fs::path& targ
       const std::string run_key = index.at("run_key").get<std::string>();
       if (p == parts.front()) first_key = run_key;
       else if (run_key != first_key)
-        throw InputError("'" + p.string() + "': from a run with other inputs or options (run key " + run_key + ") than '" +
+        throw InputError("'" + p.string() + "': from a run with other inputs, options or build of lodforge (run key " + run_key + ") than '" +
                          parts.front().string() + "' (" + first_key + "); rerun the shards with one job");
       for (const Json& f : index.at("features")) features.emplace_back(f.at("properties").at("tile").get<std::string>(), f);
     } catch (const Json::exception& e) {

@@ -662,9 +662,9 @@ void run_chain(const std::vector<Ring>& rings, double pixel_size, const CoreOpti
     result.model = "lattice";
   } else {
     bool regular_wins = regular_within_noise || !plain_problem.second.empty();
-    if (regular_within_noise) {
-      chosen_fit = regular_fit;
-    } else if (!regular_wins && regular_problem.second.empty()) {
+    if (regular_wins) {
+      chosen_fit = regular_fit;  // (measured above: the regular outline was drawn, the case of both failing is the one before)
+    } else if (regular_problem.second.empty()) {
       const double plain_fit = contour_fit(rings, plain);
       regular_wins = regular_fit <= plain_fit + allowed;
       chosen_fit = regular_wins ? regular_fit : plain_fit;
@@ -678,10 +678,10 @@ void run_chain(const std::vector<Ring>& rings, double pixel_size, const CoreOpti
       // follow, is what the lattice outline leaves within the noise; a wing it leaves out would
       // cost more than lattice_fit_gap_noise over the chosen outline.)
       const double model_noise_m = model_noise(result, pixel_size, o.models);
-      const bool within_noise = follow_chords && vertex_count(lattice_outline) < vertex_count(result.footprint) &&
-                                lattice_fit <= o.models.lattice_fit_noise * model_noise_m &&
-                                lattice_fit <= chosen_fit + o.models.lattice_fit_gap_noise * model_noise_m;
-      if (within_noise || lattice_fit <= chosen_fit + fit_tolerance(rings, pixel_size, result, o)) {
+      const bool lattice_within_noise = follow_chords && vertex_count(lattice_outline) < vertex_count(result.footprint) &&
+                                        lattice_fit <= o.models.lattice_fit_noise * model_noise_m &&
+                                        lattice_fit <= chosen_fit + o.models.lattice_fit_gap_noise * model_noise_m;
+      if (lattice_within_noise || lattice_fit <= chosen_fit + fit_tolerance(rings, pixel_size, result, o)) {
         result.footprint = std::move(lattice_outline);
         result.model = "lattice";
       }
