@@ -23,6 +23,7 @@
 #include <unistd.h>
 
 #include "run/batch.hpp"
+#include "run/run_report.hpp"
 #include "support/process.hpp"
 #include "support/shapes.hpp"
 
@@ -380,6 +381,24 @@ TEST_F(SynthRun, TheFilesAndTheReportTellEachBuildingsModel) {
   EXPECT_EQ(report.at("models"), nlohmann::json(counted)) << report;
   ASSERT_EQ(lodforge("merge " + (dir / "j_out").string()).code, 0);
   EXPECT_NE(slurp(dir / "j_out" / "merged" / "report.html").find("model " + in_files.begin()->first), std::string::npos);
+}
+
+// Shards' reports merged: the counts by model are summed model by model, a model only a later
+// shard kept included (a member the first report lacks is not passed over).
+TEST(RunReports, ModelCountsOfShardsAreSummedModelByModel) {
+  const fs::path dir = test::fresh_test_directory("lodforge_report_merge");
+  const auto shard = [&](const std::string& name, const nlohmann::json& models) {
+    const nlohmann::json report{{"shard", name}, {"ok", 5}, {"models", models}, {"seconds", 1.0}, {"noise_floor_m", 0.1},
+                                {"noise_smoothing_m", 0.0}, {"failed_buildings", nlohmann::json::array()},
+                                {"too_large_buildings", nlohmann::json::array()}, {"per_tile", nlohmann::json::array()}};
+    std::ofstream(dir / name) << report.dump();
+    return dir / name;
+  };
+  const std::vector<fs::path> parts{shard("a.json", {{"lattice", 2}, {"regular", 3}}), shard("b.json", {{"lattice", 1}, {"rectangle", 4}})};
+  merge_run_reports(parts, dir / "merged.json");
+  const nlohmann::json merged = nlohmann::json::parse(slurp(dir / "merged.json"));
+  EXPECT_EQ(merged.at("models"), nlohmann::json({{"lattice", 3}, {"rectangle", 4}, {"regular", 3}})) << merged;
+  EXPECT_EQ(merged.at("ok"), 10) << merged;
 }
 
 // The boundary noise every building allows for is pooled over a survey of the raster, not over

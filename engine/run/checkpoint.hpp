@@ -20,7 +20,7 @@ struct BuildingOutput {
   PolygonWithHoles footprint;
   bool ok = true;
   std::string stage, reason;
-  std::string model;    // the outline the chain chose (BuildingResult::model; docs/models.md); empty for a fallback
+  std::string model;    // the outline the chain chose (BuildingResult::model; docs/models.md); empty for a fallback and the cadastre's polygon
   double seconds = 0;  // regularization time (checkpointed: the report lists the slowest buildings of a resumed run too)
   // With inputs.footprints (set after the checkpoint, by the split among the footprints): as in BuildingModel.
   std::string cadastre_id, cadastre;

@@ -272,11 +272,16 @@ void write_index_and_report(const Totals& totals, const RunPlan& plan, const std
 namespace {
 
 // Adds the numbers of `from` into `into`, member by member (integers stay integers), nested objects
-// too; "seconds" (a run's wall time: shards run side by side) keeps the larger.
+// too; a member `into` lacks is taken as it is (a model only this shard kept); "seconds" (a run's
+// wall time: shards run side by side) keeps the larger.
 void add_numbers(Json& into, const Json& from) {
-  for (auto& [key, value] : into.items()) {
-    if (!from.contains(key)) continue;
-    const Json& other = from.at(key);
+  for (const auto& [key, other] : from.items()) {
+    if (!into.contains(key)) {
+      into[key] = other;
+      continue;
+    }
+    Json& value = into[key];
+    if (value.is_object() && !other.is_object()) throw std::runtime_error("'" + key + "' is not an object");
     if (value.is_object()) add_numbers(value, other);
     else if (value.is_number() && !other.is_number()) throw std::runtime_error("'" + key + "' is not a number");
     else if (key == "seconds") value = std::max(value.get<double>(), other.get<double>());
@@ -326,11 +331,6 @@ void merge_run_reports(const std::vector<fs::path>& parts, const fs::path& targe
           throw std::runtime_error(std::string("its ") + noise + " differs from the other shards': a run with other inputs or options");
       if (merged.is_null()) merged = report;
       else add_numbers(merged, report);
-      // (The models a shard has: those another lacks are added, not passed over.)
-      if (!merged.contains("models") || !merged.at("models").is_object()) merged["models"] = Json::object();
-      const Json models = report.value("models", Json::object());  // (a copy: items() of a temporary would dangle)
-      for (const auto& [model, count] : models.items())
-        if (!merged.at("models").contains(model)) merged["models"][model] = count;
       for (const char* noise : {"noise_floor_m", "noise_smoothing_m"})
         if (report.contains(noise)) merged[noise] = report.at(noise);
       for (const Json& f : report.at("failed_buildings")) failed.emplace_back(f.at("tile").get<std::string>(), f);

@@ -92,7 +92,7 @@ std::vector<BuildingOutput> split_among_footprints(const std::vector<TileGroup>&
     const TileGroup& t = groups[g];
     std::vector<BuildingOutput>& out = per_group[g];
     std::vector<PolygonWithHoles> outlines;
-    BuildingOutput block;  // what the block's outlines share: status, time, and their model where they have one
+    BuildingOutput block;  // what the block's outlines share: status, time, and their model where they have one (none if one failed)
     block.id = t.id;
     block.first_row = int(t.id / plan.size.width);
     block.first_col = int(t.id % plan.size.width);
@@ -141,7 +141,7 @@ std::vector<BuildingOutput> split_among_footprints(const std::vector<TileGroup>&
         o.ok = block.ok;
         o.stage = block.stage;
         o.reason = block.reason;
-        o.model = block.ok && options.lod0 != "cadastre" ? block.model : "";  // (with lod0: cadastre, the cadastre's polygon)
+        o.model = options.lod0 != "cadastre" ? block.model : "";  // (with lod0: cadastre, the cadastre's polygon)
         o.footprint = share.polygon;
         if (!share.note.empty()) o.reason += (o.reason.empty() ? "" : "; ") + share.note;
         if (share.polygon.outer.empty()) {
@@ -305,11 +305,8 @@ BuildingModel model_of(const BuildingOutput& b, const Heights* h, const std::vec
   m.cadastre_id = b.cadastre_id;
   m.cadastre = b.cadastre;
   m.coverage = b.coverage;
-  m.model = b.ok ? b.model : "";
-  if (b.cadastre == "not_in_mask" || (b.cadastre == "confirmed" && job.stages.footprints.lod0 == "cadastre")) {
-    m.regularizer = "cadastre";
-    m.model.clear();
-  }
+  m.model = b.model;
+  if (b.cadastre == "not_in_mask" || (b.cadastre == "confirmed" && job.stages.footprints.lod0 == "cadastre")) m.regularizer = "cadastre";
   if (b.cadastre == "not_in_mask") {
     m.status = "not_in_mask";
     return m;

@@ -154,7 +154,7 @@ std::optional<PolygonWithHoles> square_connectors(const PolygonWithHoles& polygo
   bool any = false;
   for (std::size_t r = 0; r <= polygon.holes.size(); ++r) {
     PolygonWithHoles candidate = out;
-    Ring& ring = r == 0 ? candidate.outer : candidate.holes[r - 1];
+    Ring& ring = ring_at(candidate, int(r));
     if (!square_ring(ring, lattice, on_deg, noise, correlation, k)) continue;
     ring = remove_degenerate_vertices(ring, eps);  // (a step between walls on one line has no width)
     if (!polygon_problem(candidate).empty()) continue;
