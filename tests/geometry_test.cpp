@@ -62,6 +62,48 @@ TEST(Geometry, UntangleCutsOffAThinLoopOnly) {
   EXPECT_EQ(ring, bowtie);
 }
 
+// A needle (a vertex where the ring turns back at 3 degrees, 0.2 m wide at its base, 0.4 m^2) is
+// dropped; a wedge as sharp but large, or a needle with another vertex inside it, stays.
+TEST(Geometry, RemoveSpikesDropsNeedlesOnly) {
+  const Vec2 tip(5.1, 14);
+  const PolygonWithHoles needle{{{0, 0}, {10, 0}, {10, 10}, {5.2, 10}, tip, {5.0, 10}, {0, 10}}, {}};
+  ASSERT_EQ(polygon_problem(needle), "");
+  PolygonWithHoles p = needle;
+  EXPECT_EQ(remove_spikes(p, 20, 0.5), 0u);  // more than a square of 0.5 m
+  EXPECT_EQ(p.outer, needle.outer);
+  EXPECT_EQ(remove_spikes(p, 2, 1.0), 0u);  // sharper than 2 degrees only
+  EXPECT_EQ(remove_spikes(p, 20, 1.0), 1u);
+  ASSERT_EQ(p.outer.size(), 6u);
+  EXPECT_TRUE(std::none_of(p.outer.begin(), p.outer.end(), [&](const Vec2& q) { return (q - tip).norm() < 1e-12; }));
+  EXPECT_EQ(polygon_problem(p), "");
+  EXPECT_NEAR(signed_area(p.outer), 100.0, 1e-9);
+  // A short wall turning back at the end of a long one (1.5 m at 14.7 degrees): the long wall and
+  // the roof line beyond the short one meet.
+  const Vec2 back(19.62, 10.55);
+  PolygonWithHoles hook{{{0, 0}, {20, 0}, {20, 12}, back, {0, 13}}, {}};
+  ASSERT_EQ(polygon_problem(hook), "");
+  EXPECT_EQ(remove_spikes(hook, 20, 2.0), 1u);
+  ASSERT_EQ(hook.outer.size(), 4u);
+  const double roof_at_wall = back.y() + (20 - back.x()) * (13 - back.y()) / (0 - back.x());
+  EXPECT_NEAR((hook.outer[2] - Vec2(20, roof_at_wall)).norm(), 0, 1e-9);
+  EXPECT_EQ(hook.outer[3], Vec2(0, 13));
+  // A wedge of 15 degrees with 30 m arms is a building's sharp corner, not a needle.
+  PolygonWithHoles wedge{{{0, 0}, {30, 0}, {35, 4}, {30, 30 * std::tan(M_PI / 12)}}, {}};
+  ASSERT_EQ(polygon_problem(wedge), "");
+  EXPECT_EQ(remove_spikes(wedge, 20, 1.0), 0u);
+  // A hole inside the needle keeps it (dropping the tip would leave the hole outside).
+  PolygonWithHoles holed = needle;
+  holed.holes.push_back({{5.08, 10.5}, {5.1, 11}, {5.12, 10.5}});
+  ASSERT_EQ(polygon_problem(holed), "");
+  EXPECT_EQ(remove_spikes(holed, 20, 1.0), 0u);
+  // A needle of a hole is dropped as the outer ring's.
+  PolygonWithHoles in_hole{{{-10, -10}, {30, -10}, {30, 30}, {-10, 30}}, {Ring(needle.outer.rbegin(), needle.outer.rend())}};
+  ASSERT_EQ(polygon_problem(in_hole), "");
+  EXPECT_EQ(remove_spikes(in_hole, 20, 1.0), 1u);
+  EXPECT_EQ(in_hole.holes.at(0).size(), 6u);
+  EXPECT_EQ(polygon_problem(in_hole), "");
+}
+
 TEST(Geometry, RemoveDegenerateVertices) {
   const Ring ring = {{0, 0}, {1, 0}, {2, 0}, {2, 0}, {2, 2}, {0, 2}, {0, 1}};
   const Ring clean = remove_degenerate_vertices(ring, 1e-9);

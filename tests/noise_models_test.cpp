@@ -137,6 +137,49 @@ TEST(CoarseMasks, AUAndATAt2mKeepTheirEightSquareCorners) {
   }
 }
 
+// The sharpest corner of a polygon's rings (degrees between its two edges).
+double sharpest_corner_deg(const PolygonWithHoles& polygon) {
+  double sharpest = 180;
+  for (const Ring* ring : rings_of(polygon))
+    for (std::size_t i = 0; i < ring->size(); ++i) {
+      const Vec2 u = (*ring)[(i + ring->size() - 1) % ring->size()] - (*ring)[i];
+      const Vec2 v = (*ring)[(i + 1) % ring->size()] - (*ring)[i];
+      sharpest = std::min(sharpest, std::acos(std::clamp(u.dot(v) / (u.norm() * v.norm()), -1.0, 1.0)) * 180 / M_PI);
+    }
+  return sharpest;
+}
+
+// A row of five houses 6-7 m wide and 9.5-12 m deep at 2 m pixels (one of the synthetic city's,
+// where it lies on the grid): the corner lines of its stepped front meet past the end of one, a
+// needle of 14.5 degrees 1.5 m long, which models.spike_deg drops. No building has such a corner.
+TEST(CoarseMasks, ARowOfHousesAt2mHasNoNeedle) {
+  const double y0 = 446635.530651201;
+  const std::vector<std::pair<double, double>> houses = {{85391.0021327821, 446647.09026408}, {85397.9049582377, 446645.668681035},
+                                                         {85405.270717096, 446644.992685088}, {85411.6869001782, 446647.454964109},
+                                                         {85417.8049493382, 446647.165565031}};
+  const double x_end = 85424.5543510383;
+  PolygonWithHoles truth{{{houses.front().first, y0}, {x_end, y0}}, {}};
+  for (std::size_t k = houses.size(); k-- > 0;) {
+    truth.outer.emplace_back(k + 1 < houses.size() ? houses[k + 1].first : x_end, houses[k].second);
+    truth.outer.emplace_back(houses[k].first, houses[k].second);
+  }
+  ASSERT_EQ(polygon_problem(truth), "");
+  const test::RasterizedShape shape = test::rasterize_shape(truth, 2.0, 0.0, 0.0, 1);
+  ASSERT_EQ(shape.buildings.size(), 1u);
+  CoreOptions without;
+  without.models.spike_deg = 0;
+  // (Regularized with the noise its mask's other buildings have, as in a batch: 0.3-0.6 m give
+  // the needle.)
+  const BuildingResult before = regularize_building(shape.buildings[0].rings, 2.0, without, 0.5);
+  const BuildingResult r = regularize_building(shape.buildings[0].rings, 2.0, CoreOptions{}, 0.5);
+  ASSERT_TRUE(before.ok && r.ok) << before.reason << r.reason;
+  ASSERT_LT(sharpest_corner_deg(before.footprint), 20.0);  // the case this test is about
+  EXPECT_GE(sharpest_corner_deg(r.footprint), 20.0);
+  EXPECT_LT(r.footprint.outer.size(), before.footprint.outer.size());
+  EXPECT_EQ(polygon_problem(r.footprint), "");
+  EXPECT_GE(test::iou(r.footprint, truth), test::iou(before.footprint, truth) - 0.01);
+}
+
 // A T under a wobble of a quarter metre: the wobble tilts its walls' own fitted directions, the
 // lattice outline (every wall on the building's main direction or a quarter turn of it, taken
 // when it explains the contour about as well) squares the corners. Over 3 pixel sizes x 3 seeds,

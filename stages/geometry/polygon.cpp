@@ -1,6 +1,7 @@
 #include "geometry/polygon.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <optional>
 #include <vector>
@@ -178,6 +179,75 @@ std::string polygon_problem(const PolygonWithHoles& polygon) {
     }
   }
   return {};
+}
+
+namespace {
+
+Ring& ring_of(PolygonWithHoles& polygon, std::size_t r) { return r == 0 ? polygon.outer : polygon.holes[r - 1]; }
+
+// Whether vertex i is a needle's tip: its corner sharper than the angle whose cosine is min_cos.
+bool is_needle(const Ring& ring, std::size_t i, double min_cos) {
+  const std::size_t n = ring.size();
+  const Vec2 u = ring[(i + n - 1) % n] - ring[i], v = ring[(i + 1) % n] - ring[i];
+  const double lu = u.norm(), lv = v.norm();
+  return lu > 0 && lv > 0 && u.dot(v) > min_cos * lu * lv;
+}
+
+// The ring with needle tip i and its shorter arm replaced by the point where the lines of the
+// longer arm and of the edge beyond the shorter one meet: a short wall turning back at the end
+// of a long one. Empty when the ring has fewer than 5 vertices, the shorter arm is more than half
+// the longer, the lines are parallel, or they meet farther than twice the shorter arm from the tip.
+Ring join_past_short_arm(const Ring& ring, std::size_t i) {
+  const std::size_t n = ring.size();
+  if (n < 5) return {};
+  const std::size_t before = (i + n - 1) % n, after = (i + 1) % n;
+  const double arm_before = (ring[before] - ring[i]).norm(), arm_after = (ring[after] - ring[i]).norm();
+  if (2 * std::min(arm_before, arm_after) > std::max(arm_before, arm_after)) return {};  // a needle of two long arms
+  const bool short_after = arm_after <= arm_before;
+  // The longer arm's line (p0, p1), the line beyond the shorter arm (q0, q1), the vertices replaced.
+  const Vec2 p0 = short_after ? ring[before] : ring[after], p1 = ring[i];
+  const Vec2 q0 = short_after ? ring[after] : ring[before];
+  const Vec2 q1 = short_after ? ring[(i + 2) % n] : ring[(i + n - 2) % n];
+  const Vec2 dp = p1 - p0, dq = q1 - q0;
+  const double det = cross(dp, dq);
+  if (std::abs(det) <= 1e-12 * dp.norm() * dq.norm()) return {};
+  const Vec2 x = p0 + (cross(q0 - p0, dq) / det) * dp;
+  if ((x - ring[i]).norm() > 2 * (q0 - ring[i]).norm()) return {};
+  Ring out = ring;
+  out[i] = x;
+  out.erase(out.begin() + std::ptrdiff_t(short_after ? after : before));
+  return out;
+}
+
+}  // namespace
+
+std::size_t remove_spikes(PolygonWithHoles& polygon, double max_angle_deg, double max_side) {
+  const double min_cos = std::cos(max_angle_deg * M_PI / 180.0);
+  const double max_area_change = max_side * max_side;
+  std::size_t changes = 0;
+  for (std::size_t r = 0; r <= polygon.holes.size(); ++r) {
+    for (bool changed = true; changed;) {  // each change makes new corners: again until none
+      changed = false;
+      const Ring& ring = ring_of(polygon, r);
+      for (std::size_t i = 0; i < ring.size() && ring.size() > 3 && !changed; ++i) {
+        if (!is_needle(ring, i, min_cos)) continue;
+        std::array<Ring, 2> candidates{join_past_short_arm(ring, i), ring};
+        candidates[1].erase(candidates[1].begin() + std::ptrdiff_t(i));
+        for (Ring& candidate : candidates) {
+          if (candidate.size() < 3) continue;
+          PolygonWithHoles trial = polygon;
+          ring_of(trial, r) = std::move(candidate);
+          if (std::abs(area(trial) - area(polygon)) <= max_area_change && polygon_problem(trial).empty()) {
+            polygon = std::move(trial);
+            changed = true;
+            ++changes;
+            break;
+          }
+        }
+      }
+    }
+  }
+  return changes;
 }
 
 Ring remove_degenerate_vertices(const Ring& ring, double eps) {

@@ -44,6 +44,15 @@ std::string polygon_problem(const PolygonWithHoles& polygon);
 // that leaves a simple ring; false, with the ring as it was, otherwise.
 bool untangle(Ring& ring, double max_width);
 
+// Takes away the needles of a polygon: a vertex where a ring turns back on itself, its corner
+// sharper than max_angle_deg. Where its shorter arm (at most half the other) is a short wall
+// turning back at the end of a long one, the long one's line and the line of the edge beyond the
+// short one meet at their intersection (when within twice the short arm of the tip); else, or
+// where that is not taken, the tip alone is dropped. A change is taken only where the polygon
+// stays valid and its area changes by no more than a square of side max_side. Again at the new
+// corners, until none is left. The number of changes.
+std::size_t remove_spikes(PolygonWithHoles& polygon, double max_angle_deg, double max_side);
+
 // Removes consecutive duplicates (closer than eps) and vertices whose two edges are collinear
 // (deviation below eps from the line through their neighbours).
 Ring remove_degenerate_vertices(const Ring& ring, double eps);

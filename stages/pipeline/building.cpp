@@ -832,6 +832,12 @@ void run_chain(const std::vector<Ring>& rings, double pixel_size, const CoreOpti
             square_connectors(result.footprint, context.lattice, o.models.merge_parallel_deg, noise,
                               noise_correlation_m(o.corners, pixel_size), o.models.square_noise))
       result.footprint = std::move(*squared);
+  // Last of all, the needles where two walls' lines met past the end of one (models.spike_deg).
+  if (o.models.spike_deg > 0 &&
+      remove_spikes(result.footprint, o.models.spike_deg, std::max(pixel_size, o.models.spike_noise * noise)) > 0) {
+    result.footprint.outer = remove_degenerate_vertices(result.footprint.outer, 1e-3 * pixel_size);
+    for (Ring& hole : result.footprint.holes) hole = remove_degenerate_vertices(hole, 1e-3 * pixel_size);
+  }
 }
 
 // The start's noise sample, from its normals and chords.
