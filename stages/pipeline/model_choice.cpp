@@ -1,0 +1,509 @@
+#include "pipeline/model_choice.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <optional>
+#include <string>
+#include <utility>
+
+#include "geometry/polygon.hpp"
+#include "models/rectangle.hpp"
+#include "models/statistics.hpp"
+#include "models/steps.hpp"
+#include "pipeline/outlines.hpp"
+
+namespace lodforge::chain {
+
+namespace {
+
+// The boundary noise the model choice allows for (m): as measured, and at least a staircase's;
+// at most models.arc_noise_ratio times the noise about parabolas along the same runs (a round
+// building's contour lies metres off lattice lines, and that is no noise).
+double model_noise(const BuildingResult& result, double pixel_size, const ModelOptions& o) {
+  double noise = result.noise_m;
+  if (o.arc_noise_ratio > 0 && result.arc_noise_m >= 0) noise = std::min(noise, o.arc_noise_ratio * result.arc_noise_m);
+  return std::max(noise, o.min_noise_px * pixel_size);
+}
+
+// How much worse a simpler outline may explain the contour (mean distance) and still be taken:
+// models.lattice_tolerance standard errors of that mean, the noise over the square root of the
+// number of independent stretches of contour (of the noise's correlation length) along the rings.
+double fit_tolerance(const std::vector<Ring>& rings, double pixel_size, const BuildingResult& result, const CoreOptions& o) {
+  const double perimeter_m = total_perimeter(rings);
+  const double correlation = noise_correlation_m(o.corners, pixel_size);
+  return o.models.lattice_tolerance * model_noise(result, pixel_size, o.models) * std::sqrt(correlation / std::max(perimeter_m, correlation));
+}
+
+// Whether an outline leaves a stretch of the contour that a reference outline explains:
+// leaves_a_stretch on each ring, the reference's distances computed once.
+class StretchGuard {
+ public:
+  StretchGuard(const std::vector<Ring>& rings, const PolygonWithHoles& reference, double noise, double correlation, double k)
+      : rings_(rings), noise_(noise), correlation_(correlation), k_(k) {
+    for (const Ring& ring : rings) reference_.push_back(boundary_distances(ring, reference));
+  }
+  bool leaves_stretch(const PolygonWithHoles& outline) const {
+    for (std::size_t r = 0; r < rings_.size(); ++r)
+      if (leaves_a_stretch(boundary_distances(rings_[r], outline), reference_[r], noise_, correlation_, k_)) return true;
+    return false;
+  }
+
+ private:
+  const std::vector<Ring>& rings_;
+  double noise_, correlation_, k_;
+  std::vector<std::vector<std::pair<double, double>>> reference_;
+};
+
+// Replaces the chain's outline by the building's moment rectangle when that explains the contour
+// (a high percentile, models.rectangle_quantile, of the contour's distances to each) no worse than the outline plus the allowed noise,
+// and leaves out no stretch of it that the outline explains (a wing, a notch, an arc's bow)
+// unless the outline leaves one the rectangle explains:
+// the simplest outline that explains the contour within its noise. (lattice: the rectangle is held
+// to it, a building whose own lattice is undetermined; else the best fitting one.)
+void choose_rectangle(const std::vector<Ring>& rings, double pixel_size, const CoreOptions& co, BuildingResult& result,
+                      const Vec2* lattice = nullptr) {
+  const ModelOptions& o = co.models;
+  if (o.rectangle_tolerance <= 0 || rings.size() != 1 || result.footprint.outer.size() <= 4) return;
+  double mean_fit = 0;  // the best rectangle's mean distance, which chose it
+  Ring rectangle = lattice ? moment_rectangle(rings[0], *lattice) : best_rectangle(rings[0], result.directions, &mean_fit);
+  if (rectangle.empty()) return;
+  PolygonWithHoles candidate{std::move(rectangle), {}};
+  const auto outline_distances = boundary_distances(rings[0], result.footprint);
+  const auto rectangle_distances = boundary_distances(rings[0], candidate);
+  const double outline_fit = weighted_quantile(outline_distances, o.rectangle_quantile);
+  const double rectangle_fit = weighted_quantile(rectangle_distances, o.rectangle_quantile);
+  const double noise = model_noise(result, pixel_size, o);
+  if (rectangle_fit > outline_fit + o.rectangle_tolerance * noise) return;
+  // (Unless the outline itself leaves a stretch the rectangle explains: then it is no better an
+  // explanation, only a more intricate one, as where a chain's outline went astray.)
+  const double correlation = noise_correlation_m(co.corners, pixel_size);
+  if (o.rectangle_stretch_noise > 0 &&
+      leaves_a_stretch(rectangle_distances, outline_distances, noise, correlation, o.rectangle_stretch_noise) &&
+      !leaves_a_stretch(outline_distances, rectangle_distances, noise, correlation, o.rectangle_stretch_noise))
+    return;
+  if (!polygon_problem(candidate).empty()) return;
+  result.footprint = std::move(candidate);
+  result.model = "rectangle";
+}
+
+// A stretch of contour: edges [first, first + count) of a ring, cyclically.
+struct Stretch {
+  std::size_t ring;
+  int first, count;
+};
+
+// The regular outline's walls off the lattice that the lattice outline explains as well: the
+// stretches of contour (maximal runs of edges) whose nearest wall of the regular outline lies more
+// than near_deg off the lattice, where the lattice outline explains the stretch no worse than the
+// regular outline plus `tolerance` (mean distances of its edges) and the lattice labeling draws
+// at most two walls along it (its runs within the stretch at least min_run long: an estimate of
+// the walls the lattice outline draws there), or, drawing more, no worse than the regular outline.
+std::vector<Stretch> lattice_stretches(const std::vector<Ring>& rings, const EdgeLabels& axis_labels, const Vec2& lattice,
+                                       const PolygonWithHoles& regular, const PolygonWithHoles& lattice_outline,
+                                       double min_run, double near_deg, double tolerance) {
+  const double near_cos = std::cos(near_deg * M_PI / 180.0);
+  std::vector<int> oblique_wall;  // per edge of the regular outline, numbered as boundary_distances does
+  for (const Ring* ring : rings_of(regular))
+    for (std::size_t k = 0; k < ring->size(); ++k) {
+      const Vec2 e = edge_vector(*ring, k);
+      const Vec2 n = e.norm() > 0 ? outward_normal(e) : lattice;
+      oblique_wall.push_back(nearest_lattice_axis(n, lattice).dot(n) < near_cos);
+    }
+  std::vector<Stretch> stretches;
+  for (std::size_t r = 0; r < rings.size(); ++r) {
+    const Ring& ring = rings[r];
+    const int n = int(ring.size());
+    std::vector<std::size_t> nearest;
+    const auto off_regular = boundary_distances(ring, regular, &nearest);
+    if (int(nearest.size()) != n) continue;
+    std::vector<int> oblique(n);
+    for (int i = 0; i < n; ++i) oblique[i] = oblique_wall[nearest[i]];
+    const auto runs = label_runs(oblique);
+    if (runs.size() < 2) continue;  // the ring all on the lattice, or all off it: nothing to hold a stretch
+    std::vector<std::pair<double, double>> off_lattice;  // computed when a stretch needs them
+    for (const auto& [first, count] : runs) {
+      if (!oblique[first]) continue;
+      if (off_lattice.empty()) off_lattice = boundary_distances(ring, lattice_outline);
+      double sum_regular = 0, sum_lattice = 0, length = 0, wall = 0;
+      int walls = 0;
+      for (int j = 0; j < count; ++j) {
+        const int i = (first + j) % n;
+        sum_regular += off_regular[i].second * off_regular[i].first;
+        sum_lattice += off_lattice[i].second * off_lattice[i].first;
+        length += off_regular[i].second;
+        wall += off_regular[i].second;
+        if (j + 1 == count || axis_labels[r][(i + 1) % n] != axis_labels[r][i]) {
+          walls += wall >= min_run;
+          wall = 0;
+        }
+      }
+      if (length > 0 && sum_lattice <= sum_regular + (walls <= 2 ? tolerance : 0.0) * length)
+        stretches.push_back({r, first, count});
+    }
+  }
+  return stretches;
+}
+
+// How far the polygon's boundary reaches from the contour (its rings as one polygon): the largest
+// distance to it of the points a quarter and three quarters along each of the polygon's edges
+// (the midpoints of the edges halved). Not of its vertices: a square corner lies beyond a contour
+// the segmentation rounded, and should.
+double outline_reach(const PolygonWithHoles& polygon, const PolygonWithHoles& contour) {
+  double reach = 0;
+  for (const Ring* ring : rings_of(polygon)) {
+    Ring halved;
+    for (std::size_t i = 0; i < ring->size(); ++i) {
+      halved.push_back((*ring)[i]);
+      halved.push_back((*ring)[i] + 0.5 * edge_vector(*ring, i));
+    }
+    for (const auto& [d, length] : boundary_distances(halved, contour)) reach = std::max(reach, d);
+  }
+  return reach;
+}
+
+// True when a ring of the polygon turns by 0.5 to 20 degrees at three vertices in a row (vertices
+// that turn less, collinear ones, are passed over): an arc drawn by its chords, whose vertices are
+// samples of one curved wall, not corners a criterion should count.
+bool has_arc(const PolygonWithHoles& polygon) {
+  for (const Ring* r : rings_of(polygon)) {
+    const Ring& ring = *r;
+    const std::size_t n = ring.size();
+    if (n < 3) continue;
+    int run = 0;
+    for (std::size_t i = 0; i < n + 2; ++i) {
+      const Vec2 a = ring[(i + n - 1) % n], b = ring[i % n], c = ring[(i + 1) % n];
+      const double turn = turn_deg(b - a, c - b);
+      if (turn <= 0.5) continue;
+      run = turn < 20.0 ? run + 1 : 0;
+      if (run >= 3) return true;
+    }
+  }
+  return false;
+}
+
+// The Bayesian information criterion simpler outlines compete by, against the chosen one, and
+// the outlines it takes in turn, each the least so far.
+class Criterion {
+ public:
+  // samples: the contour's length over the length of one independent sample of it.
+  Criterion(const std::vector<Ring>& rings, double pixel_size, double samples, bool guarded, BuildingResult& result)
+      : rings_(rings), pixel_size_(pixel_size), samples_(samples), guarded_(guarded), result_(result) {}
+  // n ln(d^2) + k ln(n): d the mean distance (at least a tenth of a pixel) for the standard
+  // deviation, two parameters a vertex.
+  double of(double fit, std::size_t vertices) const {
+    fit = std::max(0.1 * pixel_size_, fit);
+    return samples_ * std::log(fit * fit) + 2.0 * std::log(samples_) * double(vertices);
+  }
+  double of(const PolygonWithHoles& p) const { return of(contour_fit(rings_, p), vertex_count(p)); }
+  void start(double chosen) { best_ = chosen; }
+  // Whether criterion c is below the least so far; then the outline is taken, with its model's name.
+  bool offer(double c) const { return c < best_; }
+  void take(PolygonWithHoles p, double c, const char* model) {
+    best_ = c;
+    if (guarded_) {
+      if (!chosen_) chosen_.emplace(result_.footprint, result_.model);
+      taken_.emplace_back(p, model);
+    }
+    result_.footprint = std::move(p);
+    result_.model = model;
+  }
+  // A simpler outline that explains the contour as well on the whole may still leave a stretch
+  // of it that the outline chosen before explains (a block's real setbacks drawn as one oblique
+  // wall): the last one taken that leaves none stands, else the one chosen before
+  // (models.criterion_stretch_noise, as leaves_a_stretch judges a rectangle).
+  void settle(double noise, double correlation, double k) {
+    if (!chosen_) return;
+    const StretchGuard guard(rings_, chosen_->first, noise, correlation, k);
+    while (!taken_.empty() && guard.leaves_stretch(taken_.back().first)) taken_.pop_back();
+    auto& stands = taken_.empty() ? *chosen_ : taken_.back();
+    result_.footprint = std::move(stands.first);
+    result_.model = std::move(stands.second);
+  }
+
+ private:
+  const std::vector<Ring>& rings_;
+  double pixel_size_, samples_;
+  bool guarded_;  // the outlines taken are held to the one chosen before them (settle)
+  BuildingResult& result_;
+  double best_ = 0;
+  std::optional<std::pair<PolygonWithHoles, std::string>> chosen_;  // the outline chosen before these
+  std::vector<std::pair<PolygonWithHoles, std::string>> taken_;
+};
+
+// The model choice's state: what the chain hands it, and what its first step leaves the others.
+struct ModelChoice {
+  const std::vector<Ring>& rings;
+  const std::vector<Ring>& fit_rings;
+  const Vec2 origin;
+  const double pixel_size;
+  const CoreOptions& o;
+  const EdgeLabels& labels;
+  LabelingInput& input;
+  const CornerContext& context;
+  const bool on_lattice, follow_chords;
+  const double noise, arc_noise, fit_spread;
+  const std::function<bool()>& over_budget;
+  BuildingResult& result;
+
+  ModelChoice(const LabeledBuilding& b, const CoreOptions& options, const std::function<bool()>& budget, BuildingResult& r)
+      : rings(b.rings), fit_rings(b.fit_rings), origin(b.origin), pixel_size(b.pixel_size), o(options), labels(b.labels),
+        input(b.input), context(b.context), on_lattice(b.on_lattice), follow_chords(b.follow_chords), noise(b.context.noise),
+        arc_noise(r.arc_noise_m), fit_spread(b.fit_spread), over_budget(budget), result(r) {}
+
+  // Left by the first outline for the steps after it.
+  double min_run_px = 0;  // of the regular outline's runs
+  double chosen_fit = -1;  // the chosen outline's contour_fit, -1 while unknown
+  PolygonWithHoles lattice_outline;
+  bool lattice_ok = false;  // lattice_outline was drawn
+  EdgeLabels axis_labels;   // the contour labeled among the lattice's four directions (input.directions now)
+
+  void first_outline();
+  void draw_lattice_outline();
+  void take_lattice_outline_if_as_good();
+  void redraw_stretches();
+  void simplify_by_criterion();
+  bool offer_coarse_lattices(Criterion& criterion);
+  bool offer_staircase_lines(Criterion& criterion);
+  void walk_merged_steps(StepPath& path, bool outline_replaced, Criterion& criterion);
+  void square_and_clean();
+};
+
+// Two outlines from the same labels: the regular one (runs shorter than min_run_noise times the
+// noise absorbed, walls held to the lattice, steps, curves and cuts judged against the noise) and
+// the plain one (the paper's corners with pixel thresholds), and the regular one kept unless it
+// explains the contour worse than the plain one by more than the noise allows. (It is also kept
+// when it explains the contour within the noise itself: at a few centimetres a pixel, the plain
+// outline's thresholds of a few pixels let it follow a wobble of a metre.) Then the lattice
+// outline, where it explains the contour about as well with no more vertices, or stands in for a
+// chain whose outlines failed.
+void ModelChoice::first_outline() {
+  const double allowed = o.models.outline_tolerance * model_noise(result, pixel_size, o.models);
+  PolygonWithHoles regular, plain;
+  min_run_px = regular_min_run_px(o.corners, noise, pixel_size);
+  const StageProblem regular_problem =
+      outline(fit_rings, labels, input.directions, o.corners, origin, pixel_size, context, min_run_px, regular);
+  // "Within the noise": the noise, or the spread of the runs along the fitted lattice where more
+  // (the noise's runs, cut where a wobble's flank turns past 45 degrees, are shorter than the walls
+  // at fine pixels, and their lines follow part of the wobble), bounded as the noise is by the
+  // spread about parabolas (an arc's spread is no noise).
+  const double within_noise =
+      std::max(model_noise(result, pixel_size, o.models),
+               o.models.arc_noise_ratio > 0 ? std::min(fit_spread, o.models.arc_noise_ratio * arc_noise) : fit_spread);
+  // A regular outline that explains the contour within the noise is kept whatever the plain one
+  // is: that one is drawn only where it may be chosen (it is a good part of the time).
+  const double regular_fit = regular_problem.second.empty() ? contour_fit(rings, regular) : -1.0;
+  const bool regular_within_noise = regular_fit >= 0 && regular_fit <= o.models.regular_fit_noise * within_noise;
+  const StageProblem plain_problem =
+      regular_within_noise
+          ? StageProblem{}
+          : outline(fit_rings, labels, input.directions, o.corners, origin, pixel_size, CornerContext{}, o.corners.min_run_px, plain);
+  draw_lattice_outline();
+  // (Each contour fit computed once, when it is needed: they are a good part of the time.)
+  if (!regular_problem.second.empty() && !plain_problem.second.empty()) {
+    // As a stand-in for a failed chain, the lattice outline must explain the contour within the
+    // noise, or as well as the fallback does.
+    const double lattice_fit = lattice_ok ? contour_fit(rings, lattice_outline) : 0.0;
+    const bool rescues = lattice_ok && (lattice_fit <= o.models.rescue_fit_noise * model_noise(result, pixel_size, o.models) ||
+                                        lattice_fit <= contour_fit(rings, fallback_footprint(rings, o.fallback.tolerance_m)) + allowed);
+    if (!rescues) throw StageError(regular_problem.first, regular_problem.second);
+    result.footprint = std::move(lattice_outline);
+    result.model = "lattice";
+  } else {
+    bool regular_wins = regular_within_noise || !plain_problem.second.empty();
+    if (regular_wins) {
+      chosen_fit = regular_fit;  // (measured above: the regular outline was drawn, the case of both failing is the one before)
+    } else if (regular_problem.second.empty()) {
+      const double plain_fit = contour_fit(rings, plain);
+      regular_wins = regular_fit <= plain_fit + allowed;
+      chosen_fit = regular_wins ? regular_fit : plain_fit;
+    }
+    result.footprint = std::move(regular_wins ? regular : plain);
+    result.model = regular_wins ? "regular" : "lines";
+    take_lattice_outline_if_as_good();
+  }
+}
+
+// The lattice outline: every wall on the building's lattice (its main direction and quarter
+// turns), labeled by the MRF among those four alone. The most regular outline the building can
+// have short of a rectangle; it replaces the chain's when it has no more vertices and explains
+// the contour about as well (fit_tolerance), and stands in for a chain that failed.
+void ModelChoice::draw_lattice_outline() {
+  if (!on_lattice || o.models.lattice_tolerance <= 0) return;
+  // (The labeling input's last use: its directions become the lattice's, its normals stay.)
+  const Vec2 l = context.lattice;
+  input.directions = {l, Vec2(-l.y(), l.x()), -l, Vec2(l.y(), -l.x())};
+  input.support.assign(4, 1.0);
+  axis_labels = label_edges(input, o.labeling);
+  lattice_ok = lattice_outline_of(fit_rings, axis_labels, input.directions, o.corners, origin, pixel_size, context, lattice_outline)
+                   .second.empty();
+}
+
+// The lattice outline in place of the chosen one where it has no more vertices and explains the
+// contour about as well (fit_tolerance), or, its lattice from the chords, within the noise.
+void ModelChoice::take_lattice_outline_if_as_good() {
+  if (!lattice_ok || vertex_count(lattice_outline) > vertex_count(result.footprint)) return;
+  if (chosen_fit < 0) chosen_fit = contour_fit(rings, result.footprint);
+  const double lattice_fit = contour_fit(rings, lattice_outline);
+  // (A building whose lattice came from its chords: its wobble, which the chosen outline may
+  // follow, is what the lattice outline leaves within the noise; a wing it leaves out would
+  // cost more than lattice_fit_gap_noise over the chosen outline.)
+  const double model_noise_m = model_noise(result, pixel_size, o.models);
+  const bool lattice_within_noise = follow_chords && vertex_count(lattice_outline) < vertex_count(result.footprint) &&
+                                    lattice_fit <= o.models.lattice_fit_noise * model_noise_m &&
+                                    lattice_fit <= chosen_fit + o.models.lattice_fit_gap_noise * model_noise_m;
+  if (lattice_within_noise || lattice_fit <= chosen_fit + fit_tolerance(rings, pixel_size, result, o)) {
+    result.footprint = std::move(lattice_outline);
+    result.model = "lattice";
+  }
+}
+
+// Per stretch of contour, the simpler model where it explains the stretch as well: the regular
+// outline's walls off the lattice redrawn with the lattice outline's walls where those explain
+// their contour within stretch_fit_noise noises (an oblique cut across a wobble or a notch).
+// (Skipped past the time budget: the regular outline stands.)
+void ModelChoice::redraw_stretches() {
+  if (result.model != "regular" || !lattice_ok || o.models.stretch_fit_noise <= 0 || over_budget()) return;
+  const PolygonWithHoles& chosen = result.footprint;
+  if (chosen_fit < 0) chosen_fit = contour_fit(rings, chosen);
+  // The noise, as the regular outline leaves it where that is less: a shape off any lattice
+  // (a hexagon, a disc) measures a large noise about lattice lines.
+  const double noise_m = std::max(o.models.min_noise_px * pixel_size, std::min(model_noise(result, pixel_size, o.models), chosen_fit));
+  const double tolerance = o.models.stretch_fit_noise * noise_m;
+  const std::vector<Stretch> stretches = lattice_stretches(rings, axis_labels, context.lattice, chosen, lattice_outline,
+                                                           min_run_px * pixel_size, o.corners.snap_max_deg, tolerance);
+  if (stretches.empty()) return;
+  // The chain's labels with the stretches' edges labeled as the lattice labeling has them
+  // (the chain's directions, then the lattice's four).
+  EdgeLabels mixed = labels;
+  for (const Stretch& s : stretches)
+    for (int j = 0; j < s.count; ++j) {
+      const std::size_t i = (s.first + j) % rings[s.ring].size();
+      mixed[s.ring][i] = int(result.directions.size()) + axis_labels[s.ring][i];
+    }
+  std::vector<Vec2> mixed_directions = result.directions;
+  mixed_directions.insert(mixed_directions.end(), input.directions.begin(), input.directions.end());
+  // Taken when it is a valid polygon that explains the contour within the tolerance of the
+  // regular outline and reaches no farther from it than that plus the noise (lines of the
+  // lattice meeting beyond the contour). It keeps the name "regular".
+  PolygonWithHoles candidate;
+  if (!outline(fit_rings, mixed, mixed_directions, o.corners, origin, pixel_size, context, min_run_px, candidate).second.empty() ||
+      contour_fit(rings, candidate) > chosen_fit + tolerance)
+    return;
+  const PolygonWithHoles contour{rings[0], {rings.begin() + 1, rings.end()}};
+  if (outline_reach(candidate, contour) <= outline_reach(chosen, contour) + noise_m) result.footprint = std::move(candidate);
+}
+
+// Simpler outlines against the chosen one, by a Bayesian information criterion: the lattice
+// outline drawn as if the noise were coarse_scale and its square times as large
+// (models.coarse_scale), the outline with its staircases drawn as oblique walls
+// (models.staircase_corners), and the path of its steps merged one at a time
+// (models.merge_patience). A wobble whose wavelength is a few times its amplitude cuts the
+// contour into a run at each flank, the noise measured about those runs is too low, and the
+// outline keeps the wobble's crests as notches; the criterion weighs the fit against the
+// vertices rather than against that noise (which only sets how long a sample of contour is), and
+// finds that the coarser square outline, or the outline with its smaller steps merged, explains
+// the contour about as well. The chain's own outline drawn coarser does not compete (it also
+// dropped real steps of a metre between row houses under a noise that large), nor does anything
+// against an arc. (Skipped past the time budget, as the stretches above.)
+void ModelChoice::simplify_by_criterion() {
+  if (!(o.models.coarse_scale > 1 || o.models.merge_patience > 0 || o.models.staircase_corners > 0) || !lattice_ok ||
+      vertex_count(result.footprint) <= 4 || has_arc(result.footprint) || over_budget())
+    return;
+  const double correlation = std::max(pixel_size, o.models.coarse_correlation_noise * noise);
+  Criterion criterion(rings, pixel_size, std::max(2.0, total_perimeter(rings) / correlation), o.models.criterion_stretch_noise > 0,
+                      result);
+  // (The merge path measures the chosen outline's fit, as contour_fit does, for the walk below:
+  // made first, it gives the criterion's start, and is made again only if another outline wins.)
+  std::optional<StepPath> path;
+  if (o.models.merge_patience > 0) path.emplace(rings, result.footprint, o.models.merge_parallel_deg);
+  criterion.start(path ? criterion.of(path->fit(), vertex_count(result.footprint)) : criterion.of(result.footprint));
+  const bool coarse = offer_coarse_lattices(criterion);
+  const bool lines = offer_staircase_lines(criterion);
+  if (path) walk_merged_steps(*path, coarse || lines, criterion);
+  criterion.settle(model_noise(result, pixel_size, o.models), noise_correlation_m(o.corners, pixel_size), o.models.criterion_stretch_noise);
+}
+
+// The lattice outline drawn as if the noise were coarse_scale and its square times as large, each
+// with fewer vertices than the chosen outline offered to the criterion. Whether one was taken.
+bool ModelChoice::offer_coarse_lattices(Criterion& criterion) {
+  bool taken = false;
+  double scale = 1;
+  for (int k = 0; k < 2 && o.models.coarse_scale > 1; ++k) {
+    scale *= o.models.coarse_scale;
+    CornerContext coarse = context;
+    coarse.noise = scale * noise;
+    coarse.mask_noise = scale * context.mask_noise;
+    PolygonWithHoles candidate;
+    if (!lattice_outline_of(fit_rings, axis_labels, input.directions, o.corners, origin, pixel_size, coarse, candidate).second.empty() ||
+        vertex_count(candidate) >= vertex_count(result.footprint))
+      continue;
+    const double c = criterion.of(candidate);
+    if (criterion.offer(c)) {
+      criterion.take(std::move(candidate), c, "coarse_lattice");
+      taken = true;
+    }
+  }
+  return taken;
+}
+
+// A staircase drawn as the oblique wall it follows (a corner cut at an angle to the lattice,
+// which the lattice outlines draw in steps, and the merges below would make a square notch).
+// Whether it was taken.
+bool ModelChoice::offer_staircase_lines(Criterion& criterion) {
+  if (o.models.staircase_corners <= 0) return false;
+  std::optional<PolygonWithHoles> lines = staircases_as_lines(result.footprint, o.models.staircase_corners, o.models.staircase_square_deg);
+  if (!lines) return false;
+  const double c = criterion.of(*lines);
+  if (!criterion.offer(c) || !polygon_problem(*lines).empty()) return false;
+  criterion.take(std::move(*lines), c, "staircase_lines");
+  return true;
+}
+
+// The path of ever simpler outlines, the cheapest step merged at each (made again from the outline
+// taken, where one was): its criterion is not monotone (a merge moves a wall to the mean of two),
+// so the walk goes on until merge_patience merges have passed without a new least, and keeps the
+// least among its valid polygons.
+void ModelChoice::walk_merged_steps(StepPath& path, bool outline_replaced, Criterion& criterion) {
+  if (outline_replaced) path = StepPath(rings, result.footprint, o.models.merge_parallel_deg);
+  for (int since_best = 0; since_best < o.models.merge_patience && !over_budget() && path.merge_next();) {
+    const double c = criterion.of(path.fit(), vertex_count(path.outline()));
+    if (criterion.offer(c) && polygon_problem(path.outline()).empty()) {
+      criterion.take(path.outline(), c, "merged_steps");
+      since_best = 0;
+    } else {
+      ++since_best;
+    }
+  }
+}
+
+// Last, the short connectors squared and the needles taken away.
+void ModelChoice::square_and_clean() {
+  // The short oblique walls between two walls on the lattice that the noise does not tell from it:
+  // square steps and corners (models.square_noise).
+  if (on_lattice && o.models.square_noise > 0 && !has_arc(result.footprint))
+    if (std::optional<PolygonWithHoles> squared =
+            square_connectors(result.footprint, context.lattice, o.models.merge_parallel_deg, noise,
+                              noise_correlation_m(o.corners, pixel_size), o.models.square_noise))
+      result.footprint = std::move(*squared);
+  // Last of all, the needles where two walls' lines met past the end of one (models.spike_deg).
+  if (o.models.spike_deg > 0 &&
+      remove_spikes(result.footprint, o.models.spike_deg, std::max(pixel_size, o.models.spike_noise * noise)) > 0) {
+    result.footprint.outer = remove_degenerate_vertices(result.footprint.outer, 1e-3 * pixel_size);
+    for (Ring& hole : result.footprint.holes) hole = remove_degenerate_vertices(hole, 1e-3 * pixel_size);
+  }
+}
+
+}  // namespace
+
+void choose_outline(const LabeledBuilding& b, const CoreOptions& o, const std::function<bool()>& over_budget,
+                    BuildingResult& result) {
+  ModelChoice choice(b, o, over_budget, result);
+  choice.first_outline();
+  if (b.on_lattice)  // (a round shape is no rectangle)
+    choose_rectangle(b.rings, b.pixel_size, o, result, result.lattice_lent ? &b.context.lattice : nullptr);
+  choice.redraw_stretches();
+  choice.simplify_by_criterion();
+  choice.square_and_clean();
+}
+
+}  // namespace lodforge::chain

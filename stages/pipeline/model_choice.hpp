@@ -1,0 +1,40 @@
+// The chain's model choice (after its labeling, docs/models.md and docs/paper-reading.md): the
+// regular outline (walls held to the building's lattice, steps and curves judged against the
+// noise) or the plain one (the paper's corners with pixel thresholds), the lattice outline (every
+// wall on the lattice), the moment rectangle, the regular outline's oblique stretches redrawn on
+// the lattice, simpler outlines by an information criterion (the coarse lattice outline, the
+// staircases drawn as lines, the steps merged); last the short connectors squared and the needles
+// taken away. Not a public interface: pipeline/building.cpp's chain calls it.
+#pragma once
+#include <functional>
+#include <vector>
+
+#include "corners/corners.hpp"
+#include "directions/refine.hpp"
+#include "geometry/types.hpp"
+#include "labeling/mrf.hpp"
+#include "pipeline/building.hpp"
+
+namespace lodforge::chain {
+
+// What the chain's labeling hands the model choice.
+struct LabeledBuilding {
+  const std::vector<Ring>& rings;      // the contour (map units)
+  const std::vector<Ring>& fit_rings;  // the rings the outlines are fitted to: less origin (deformed on that route)
+  Vec2 origin;
+  double pixel_size;
+  const EdgeLabels& labels;  // per ring, per edge, into input.directions
+  LabelingInput& input;      // the normals, lengths and directions labeled; the lattice outline's labeling takes it over
+  CornerContext context;     // the building's lattice (zero: none) and noise, its mask's noise
+  bool on_lattice;           // its walls are held to a lattice (not a round or oblique shape)
+  bool follow_chords;        // that lattice is its contour's chords' (a wobble took the labeled one off the walls)
+  double fit_spread;         // the runs' spread about the lattice fitted to them (lattice.fit_*; 0: none)
+};
+
+// The building's outline and its model into result.footprint and result.model (result.noise_m,
+// arc_noise_m, directions and lattice_lent as the chain set them). Throws StageError where no
+// outline can be drawn.
+void choose_outline(const LabeledBuilding& building, const CoreOptions& o, const std::function<bool()>& over_budget,
+                    BuildingResult& result);
+
+}  // namespace lodforge::chain

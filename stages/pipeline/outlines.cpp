@@ -1,0 +1,80 @@
+#include "pipeline/outlines.hpp"
+
+#include <algorithm>
+
+#include "geometry/polygon.hpp"
+#include "models/rectangle.hpp"
+
+namespace lodforge::chain {
+
+namespace {
+
+// rings: in a local frame (metres, less origin). Lengths of the options are in metres or pixels.
+PolygonWithHoles corner_polygon(const std::vector<Ring>& rings, const EdgeLabels& labels,
+                                const std::vector<Vec2>& directions, const CornerOptions& options, const Vec2& origin,
+                                double pixel_size, const CornerContext& context) {
+  PolygonWithHoles footprint;
+  for (std::size_t r = 0; r < rings.size(); ++r) {
+    std::string problem;
+    Ring ring = extract_corners(rings[r], labels[r], directions, pixel_size, options, &problem, context);
+    if (ring.empty()) throw StageError("corners", (r == 0 ? "outer ring: " : "hole " + std::to_string(r - 1) + ": ") + problem);
+    // Where two corner lines overshoot past each other, the ring crosses itself in a thin loop.
+    if (options.untangle_noise > 0 && !ring_problem(ring).empty())
+      untangle(ring, options.untangle_noise * std::max(pixel_size, context.noise));
+    for (Vec2& p : ring) p += origin;
+    if (r == 0) footprint.outer = std::move(ring);
+    else footprint.holes.push_back(std::move(ring));
+  }
+  return footprint;
+}
+
+}  // namespace
+
+StageProblem outline(const std::vector<Ring>& rings, const EdgeLabels& labels, const std::vector<Vec2>& directions,
+                     const CornerOptions& o, const Vec2& origin, double pixel_size, const CornerContext& context,
+                     double min_run_px, PolygonWithHoles& footprint) {
+  CornerOptions corner_options = o;
+  std::string problem;
+  try {
+    for (const double split_px : {o.split_px, 0.0}) {
+      corner_options.split_px = split_px;
+      corner_options.min_run_px = min_run_px;
+      for (int attempt = 0; attempt <= o.repair_attempts; ++attempt) {
+        footprint = corner_polygon(rings, labels, directions, corner_options, origin, pixel_size, context);
+        problem = polygon_problem(footprint);
+        if (problem.empty()) return {};
+        corner_options.min_run_px = std::max(2.0, 2 * corner_options.min_run_px);
+      }
+    }
+  } catch (const StageError& e) {
+    return {e.stage, e.what()};
+  }
+  return {"validation", problem};
+}
+
+StageProblem lattice_outline_of(const std::vector<Ring>& fit_rings, const EdgeLabels& axis_labels, const std::vector<Vec2>& axes,
+                                const CornerOptions& o, const Vec2& origin, double pixel_size, const CornerContext& context,
+                                PolygonWithHoles& footprint) {
+  CornerOptions straight = o;
+  straight.curve_px = 0;
+  return outline(fit_rings, axis_labels, axes, straight, origin, pixel_size, context, regular_min_run_px(o, context.noise, pixel_size),
+                 footprint);
+}
+
+double contour_fit(const std::vector<Ring>& rings, const PolygonWithHoles& polygon) {
+  double sum = 0, total = 0;
+  for (const Ring& ring : rings) {
+    const double length = perimeter(ring);
+    sum += length * mean_distance_to_boundary(ring, polygon);
+    total += length;
+  }
+  return total > 0 ? sum / total : 0.0;
+}
+
+double total_perimeter(const std::vector<Ring>& rings) {
+  double length = 0;
+  for (const Ring& ring : rings) length += perimeter(ring);
+  return length;
+}
+
+}  // namespace lodforge::chain
