@@ -63,7 +63,8 @@ TEST(Geometry, UntangleCutsOffAThinLoopOnly) {
 }
 
 // A needle (a vertex where the ring turns back at 3 degrees, 0.2 m wide at its base, 0.4 m^2) is
-// dropped; a wedge as sharp but large, or a needle with another vertex inside it, stays.
+// dropped, a short wall turning back at the end of a long one joins the next wall's line; a wedge
+// as sharp but large, or a needle with a hole inside it, stays.
 TEST(Geometry, RemoveSpikesDropsNeedlesOnly) {
   const Vec2 tip(5.1, 14);
   const PolygonWithHoles needle{{{0, 0}, {10, 0}, {10, 10}, {5.2, 10}, tip, {5.0, 10}, {0, 10}}, {}};
@@ -87,6 +88,13 @@ TEST(Geometry, RemoveSpikesDropsNeedlesOnly) {
   const double roof_at_wall = back.y() + (20 - back.x()) * (13 - back.y()) / (0 - back.x());
   EXPECT_NEAR((hook.outer[2] - Vec2(20, roof_at_wall)).norm(), 0, 1e-9);
   EXPECT_EQ(hook.outer[3], Vec2(0, 13));
+  // The same hook as a hole (clockwise: the short arm before the tip), the tip its first vertex.
+  PolygonWithHoles hooked{{{-10, -10}, {30, -10}, {30, 30}, {-10, 30}}, {{{20, 12}, {20, 0}, {0, 0}, {0, 13}, back}}};
+  ASSERT_EQ(polygon_problem(hooked), "");
+  EXPECT_EQ(remove_spikes(hooked, 20, 2.0), 1u);
+  ASSERT_EQ(hooked.holes.at(0).size(), 4u);
+  EXPECT_NEAR((hooked.holes[0][0] - Vec2(20, roof_at_wall)).norm(), 0, 1e-9);
+  EXPECT_EQ(polygon_problem(hooked), "");
   // A wedge of 15 degrees with 30 m arms is a building's sharp corner, not a needle.
   PolygonWithHoles wedge{{{0, 0}, {30, 0}, {35, 4}, {30, 30 * std::tan(M_PI / 12)}}, {}};
   ASSERT_EQ(polygon_problem(wedge), "");

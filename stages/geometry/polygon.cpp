@@ -225,11 +225,13 @@ std::size_t remove_spikes(PolygonWithHoles& polygon, double max_angle_deg, doubl
   const double min_cos = std::cos(max_angle_deg * M_PI / 180.0);
   const double max_area_change = max_side * max_side;
   std::size_t changes = 0;
+  // (The area a change moves is its net change: a drop takes the needle's triangle off, a join
+  // the triangle between the tip, the short arm's end and the new corner, each on one side.)
   for (std::size_t r = 0; r <= polygon.holes.size(); ++r) {
-    for (bool changed = true; changed;) {  // each change makes new corners: again until none
+    for (bool changed = true; changed;) {  // each change makes new corners: again until none is taken
       changed = false;
-      const Ring& ring = ring_of(polygon, r);
-      for (std::size_t i = 0; i < ring.size() && ring.size() > 3 && !changed; ++i) {
+      for (std::size_t i = 0; !changed && ring_of(polygon, r).size() > 3 && i < ring_of(polygon, r).size(); ++i) {
+        const Ring& ring = ring_of(polygon, r);  // (looked up again: a change replaces the polygon's holes)
         if (!is_needle(ring, i, min_cos)) continue;
         std::array<Ring, 2> candidates{join_past_short_arm(ring, i), ring};
         candidates[1].erase(candidates[1].begin() + std::ptrdiff_t(i));

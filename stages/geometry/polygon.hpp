@@ -50,7 +50,8 @@ bool untangle(Ring& ring, double max_width);
 // short one meet at their intersection (when within twice the short arm of the tip); else, or
 // where that is not taken, the tip alone is dropped. A change is taken only where the polygon
 // stays valid and its area changes by no more than a square of side max_side. Again at the new
-// corners, until none is left. The number of changes.
+// corners, until no change is taken (a needle whose changes are refused stays). The number of
+// changes.
 std::size_t remove_spikes(PolygonWithHoles& polygon, double max_angle_deg, double max_side);
 
 // Removes consecutive duplicates (closer than eps) and vertices whose two edges are collinear

@@ -486,10 +486,14 @@ void ModelChoice::square_and_clean() {
                               noise_correlation_m(o.corners, pixel_size), o.models.square_noise))
       result.footprint = std::move(*squared);
   // Last of all, the needles where two walls' lines met past the end of one (models.spike_deg).
+  // (remove_spikes keeps the outline valid; the collinear vertices it may leave are dropped where
+  // that keeps it valid too.)
   if (o.models.spike_deg > 0 &&
       remove_spikes(result.footprint, o.models.spike_deg, std::max(pixel_size, o.models.spike_noise * noise)) > 0) {
-    result.footprint.outer = remove_degenerate_vertices(result.footprint.outer, 1e-3 * pixel_size);
-    for (Ring& hole : result.footprint.holes) hole = remove_degenerate_vertices(hole, 1e-3 * pixel_size);
+    PolygonWithHoles cleaned = result.footprint;
+    cleaned.outer = remove_degenerate_vertices(cleaned.outer, 1e-3 * pixel_size);
+    for (Ring& hole : cleaned.holes) hole = remove_degenerate_vertices(hole, 1e-3 * pixel_size);
+    if (polygon_problem(cleaned).empty()) result.footprint = std::move(cleaned);
   }
 }
 
