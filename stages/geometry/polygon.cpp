@@ -28,6 +28,8 @@ std::vector<const Ring*> rings_of(const PolygonWithHoles& polygon) {
   return out;
 }
 
+Ring& ring_at(PolygonWithHoles& polygon, std::size_t r) { return r == 0 ? polygon.outer : polygon.holes[r - 1]; }
+
 std::size_t vertex_count(const PolygonWithHoles& polygon) {
   std::size_t n = polygon.outer.size();
   for (const Ring& hole : polygon.holes) n += hole.size();
@@ -183,8 +185,6 @@ std::string polygon_problem(const PolygonWithHoles& polygon) {
 
 namespace {
 
-Ring& ring_of(PolygonWithHoles& polygon, std::size_t r) { return r == 0 ? polygon.outer : polygon.holes[r - 1]; }
-
 // Whether vertex i is a needle's tip: its corner sharper than the angle whose cosine is min_cos.
 bool is_needle(const Ring& ring, std::size_t i, double min_cos) {
   const std::size_t n = ring.size();
@@ -230,16 +230,17 @@ std::size_t remove_spikes(PolygonWithHoles& polygon, double max_angle_deg, doubl
   for (std::size_t r = 0; r <= polygon.holes.size(); ++r) {
     for (bool changed = true; changed;) {  // each change makes new corners: again until none is taken
       changed = false;
-      for (std::size_t i = 0; !changed && ring_of(polygon, r).size() > 3 && i < ring_of(polygon, r).size(); ++i) {
-        const Ring& ring = ring_of(polygon, r);  // (looked up again: a change replaces the polygon's holes)
+      for (std::size_t i = 0; !changed && ring_at(polygon, r).size() > 3 && i < ring_at(polygon, r).size(); ++i) {
+        const Ring& ring = ring_at(polygon, r);  // (looked up again: a change replaces the polygon's holes)
         if (!is_needle(ring, i, min_cos)) continue;
         std::array<Ring, 2> candidates{join_past_short_arm(ring, i), ring};
         candidates[1].erase(candidates[1].begin() + std::ptrdiff_t(i));
+        const double area_before = area(polygon);
         for (Ring& candidate : candidates) {
           if (candidate.size() < 3) continue;
           PolygonWithHoles trial = polygon;
-          ring_of(trial, r) = std::move(candidate);
-          if (std::abs(area(trial) - area(polygon)) <= max_area_change && polygon_problem(trial).empty()) {
+          ring_at(trial, r) = std::move(candidate);
+          if (std::abs(area(trial) - area_before) <= max_area_change && polygon_problem(trial).empty()) {
             polygon = std::move(trial);
             changed = true;
             ++changes;

@@ -14,6 +14,7 @@ double area(const PolygonWithHoles& polygon);
 double perimeter(const Ring& ring);
 std::size_t vertex_count(const PolygonWithHoles& polygon);  // of its outer ring and holes
 std::vector<const Ring*> rings_of(const PolygonWithHoles& polygon);  // the outer ring, then the holes
+Ring& ring_at(PolygonWithHoles& polygon, std::size_t r);  // ring r: 0 the outer ring, r the hole r - 1
 bool point_in_ring(const Vec2& p, const Ring& ring);  // even-odd rule, boundary undefined
 
 // The squared distance from p to the segment [a, b], and the distance (its square root). Inline:

@@ -84,8 +84,6 @@ std::pair<int, Step> cheapest_of(const PolygonWithHoles& polygon, double cos_par
   return best;
 }
 
-Ring& ring_at(PolygonWithHoles& polygon, int r) { return r == 0 ? polygon.outer : polygon.holes[std::size_t(r) - 1]; }
-
 // square_connectors on one ring; true when a wall was squared.
 bool square_ring(Ring& ring, const Vec2& lattice, double on_deg, double noise, double correlation, double k) {
   const Vec2 axis = lattice.normalized();
@@ -154,7 +152,7 @@ std::optional<PolygonWithHoles> square_connectors(const PolygonWithHoles& polygo
   bool any = false;
   for (std::size_t r = 0; r <= polygon.holes.size(); ++r) {
     PolygonWithHoles candidate = out;
-    Ring& ring = ring_at(candidate, int(r));
+    Ring& ring = ring_at(candidate, r);
     if (!square_ring(ring, lattice, on_deg, noise, correlation, k)) continue;
     ring = remove_degenerate_vertices(ring, eps);  // (a step between walls on one line has no width)
     if (!polygon_problem(candidate).empty()) continue;

@@ -230,25 +230,15 @@ class Criterion {
   std::vector<std::pair<PolygonWithHoles, std::string>> taken_;
 };
 
-// The model choice's state: what the chain hands it, and what its first step leaves the others.
-struct ModelChoice {
-  const std::vector<Ring>& rings;
-  const std::vector<Ring>& fit_rings;
-  const Vec2 origin;
-  const double pixel_size;
+// The model choice's state: what the chain hands it (the building, labeled), and what its first
+// step leaves the others.
+struct ModelChoice : LabeledBuilding {
   const CoreOptions& o;
-  const EdgeLabels& labels;
-  LabelingInput& input;
-  const CornerContext& context;
-  const bool on_lattice, follow_chords;
-  const double noise, arc_noise, fit_spread;
   const std::function<bool()>& over_budget;
   BuildingResult& result;
 
   ModelChoice(const LabeledBuilding& b, const CoreOptions& options, const std::function<bool()>& budget, BuildingResult& r)
-      : rings(b.rings), fit_rings(b.fit_rings), origin(b.origin), pixel_size(b.pixel_size), o(options), labels(b.labels),
-        input(b.input), context(b.context), on_lattice(b.on_lattice), follow_chords(b.follow_chords), noise(b.context.noise),
-        arc_noise(r.arc_noise_m), fit_spread(b.fit_spread), over_budget(budget), result(r) {}
+      : LabeledBuilding(b), o(options), over_budget(budget), result(r) {}
 
   // Left by the first outline for the steps after it.
   double min_run_px = 0;  // of the regular outline's runs
@@ -279,7 +269,7 @@ struct ModelChoice {
 void ModelChoice::first_outline() {
   const double allowed = o.models.outline_tolerance * model_noise(result, pixel_size, o.models);
   PolygonWithHoles regular, plain;
-  min_run_px = regular_min_run_px(o.corners, noise, pixel_size);
+  min_run_px = regular_min_run_px(o.corners, context.noise, pixel_size);
   const StageProblem regular_problem =
       outline(fit_rings, labels, input.directions, o.corners, origin, pixel_size, context, min_run_px, regular);
   // "Within the noise": the noise, or the spread of the runs along the fitted lattice where more
@@ -288,7 +278,7 @@ void ModelChoice::first_outline() {
   // spread about parabolas (an arc's spread is no noise).
   const double within_noise =
       std::max(model_noise(result, pixel_size, o.models),
-               o.models.arc_noise_ratio > 0 ? std::min(fit_spread, o.models.arc_noise_ratio * arc_noise) : fit_spread);
+               o.models.arc_noise_ratio > 0 ? std::min(fit_spread, o.models.arc_noise_ratio * result.arc_noise_m) : fit_spread);
   // A regular outline that explains the contour within the noise is kept whatever the plain one
   // is: that one is drawn only where it may be chosen (it is a good part of the time).
   const double regular_fit = regular_problem.second.empty() ? contour_fit(rings, regular) : -1.0;
@@ -409,7 +399,7 @@ void ModelChoice::simplify_by_criterion() {
   if (!(o.models.coarse_scale > 1 || o.models.merge_patience > 0 || o.models.staircase_corners > 0) || !lattice_ok ||
       vertex_count(result.footprint) <= 4 || has_arc(result.footprint) || over_budget())
     return;
-  const double correlation = std::max(pixel_size, o.models.coarse_correlation_noise * noise);
+  const double correlation = std::max(pixel_size, o.models.coarse_correlation_noise * context.noise);
   Criterion criterion(rings, pixel_size, std::max(2.0, total_perimeter(rings) / correlation), o.models.criterion_stretch_noise > 0,
                       result);
   // (The merge path measures the chosen outline's fit, as contour_fit does, for the walk below:
@@ -431,7 +421,7 @@ bool ModelChoice::offer_coarse_lattices(Criterion& criterion) {
   for (int k = 0; k < 2 && o.models.coarse_scale > 1; ++k) {
     scale *= o.models.coarse_scale;
     CornerContext coarse = context;
-    coarse.noise = scale * noise;
+    coarse.noise = scale * context.noise;
     coarse.mask_noise = scale * context.mask_noise;
     PolygonWithHoles candidate;
     if (!lattice_outline_of(fit_rings, axis_labels, input.directions, o.corners, origin, pixel_size, coarse, candidate).second.empty() ||
@@ -482,14 +472,14 @@ void ModelChoice::square_and_clean() {
   // square steps and corners (models.square_noise).
   if (on_lattice && o.models.square_noise > 0 && !has_arc(result.footprint))
     if (std::optional<PolygonWithHoles> squared =
-            square_connectors(result.footprint, context.lattice, o.models.merge_parallel_deg, noise,
+            square_connectors(result.footprint, context.lattice, o.models.merge_parallel_deg, context.noise,
                               noise_correlation_m(o.corners, pixel_size), o.models.square_noise))
       result.footprint = std::move(*squared);
   // Last of all, the needles where two walls' lines met past the end of one (models.spike_deg).
   // (remove_spikes keeps the outline valid; the collinear vertices it may leave are dropped where
   // that keeps it valid too.)
   if (o.models.spike_deg > 0 &&
-      remove_spikes(result.footprint, o.models.spike_deg, std::max(pixel_size, o.models.spike_noise * noise)) > 0) {
+      remove_spikes(result.footprint, o.models.spike_deg, std::max(pixel_size, o.models.spike_noise * context.noise)) > 0) {
     PolygonWithHoles cleaned = result.footprint;
     cleaned.outer = remove_degenerate_vertices(cleaned.outer, 1e-3 * pixel_size);
     for (Ring& hole : cleaned.holes) hole = remove_degenerate_vertices(hole, 1e-3 * pixel_size);
