@@ -1159,13 +1159,24 @@ TEST(NoiseSmoothing, AFastMetreWobbleIsSmoothedForItsNoise) {
   EXPECT_GT(b.noise_floor_m, 1.3 * a.noise_floor_m);
   EXPECT_LE(double(vertices_b), 0.6 * double(vertices_a));
   EXPECT_GE(iou_b, iou_a + 0.01);
-  // The gain judged on two of the six buildings: the same rounds kept, the others smoothed after.
+  // The rounds judged on two of the six buildings, the noise a round smooths for after the first
+  // pooled over them: the others smoothed once, for the last round kept, with about the same result.
   CoreOptions sampled;
   sampled.smoothing.noise_gain_buildings = 2;
   const RegularizedBatch c = regularize_batch("deformation", mask.buildings, 0.1, sampled);
-  EXPECT_EQ(c.noise_floor_m, b.noise_floor_m);
-  EXPECT_EQ(c.noise_smoothing_m, b.noise_smoothing_m);
-  for (std::size_t k = 0; k < mask.buildings.size(); ++k) EXPECT_EQ(c.results[k].footprint.outer, b.results[k].footprint.outer) << k;
+  std::size_t vertices_c = 0;
+  double iou_c = 0;
+  for (std::size_t k = 0; k < mask.buildings.size(); ++k) {
+    ASSERT_TRUE(c.results[k].ok) << c.results[k].reason;
+    vertices_c += vertex_count(c.results[k].footprint);
+    iou_c += test::iou(c.results[k].footprint, mask.truths[k]) / double(mask.buildings.size());
+  }
+  std::cout << "judged on 2: noise floor " << c.noise_floor_m << " m (smoothed for " << c.noise_smoothing_m << " m), vertices "
+            << vertices_c << ", IoU " << iou_c << '\n';
+  EXPECT_NEAR(c.noise_smoothing_m, b.noise_smoothing_m, 0.2 * b.noise_smoothing_m);  // (a noise pooled over two)
+  EXPECT_NEAR(c.noise_floor_m, b.noise_floor_m, 0.1 * b.noise_floor_m);
+  EXPECT_LE(double(vertices_c), 0.6 * double(vertices_a));
+  EXPECT_NEAR(iou_c, iou_b, 0.005);
 }
 
 // A start smoothed again for another noise is the start made for that noise: the same normals,

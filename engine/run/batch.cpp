@@ -64,24 +64,35 @@ double pooled_at(const std::vector<NoiseSample>& samples, const std::vector<std:
 // than the last one's, in smoothing.noise_rounds at most. A wider round is kept only where it
 // pools more noise, by more than smoothing.noise_gain: a contour smoothed too little measures too
 // little noise where a fast wobble's flanks cut its runs short, but where the narrower smoothing
-// measured the noise whole the wider one only averages short walls away. That gain is judged on
-// the buildings at `judged` (spread_indices, smoothing.noise_gain_buildings), each pooled both
-// ways; only a round kept smooths the others. judge(noise_m): the judged buildings' samples, in
-// their order, smoothed for noise_m; keep(noise_m), called right after judge with the same noise
-// when its round is kept: every building's. `samples` ends as the kept round's.
-template <class Judge, class Keep>
+// measured the noise whole the wider one only averages short walls away. The rounds are judged
+// on the buildings at `judged` (spread_indices, smoothing.noise_gain_buildings), each pooled both
+// ways, and a kept round's noise, which the next round smooths for, is pooled over them: only the
+// last round kept smooths the others (the first round's width is pooled over every building).
+// judge(noise_m): the judged buildings' samples, in their order, smoothed for noise_m;
+// keep_judged(), called right after judge when its round is kept; finish(noise_m), once at the end
+// with the last kept round's noise when one was: every building's samples. `samples` ends as the
+// kept round's.
+template <class Judge, class KeepJudged, class Finish>
 MaskNoise pool_in_rounds(std::vector<NoiseSample>& samples, const std::vector<std::size_t>& judged, double pixel_size,
-                         const CoreOptions& options, const Judge& judge, const Keep& keep) {
+                         const CoreOptions& options, const Judge& judge, const KeepJudged& keep_judged, const Finish& finish) {
   MaskNoise noise{pooled_noise_floor(samples, options), 0.0};
   const auto neighbourhood = [&](double noise_m) { return smoothing_neighbourhood_m(pixel_size, options.smoothing, noise_m); };
   std::vector<std::size_t> order(judged.size());
   std::iota(order.begin(), order.end(), std::size_t(0));
+  double next_m = noise.floor_m;  // the noise the next round smooths for
   for (int round = 1; round < options.smoothing.noise_rounds; ++round) {
-    const double wider_m = noise.floor_m;
+    const double wider_m = next_m;
     if (neighbourhood(wider_m) <= 1.05 * neighbourhood(noise.smoothing_m)) break;
-    if (pooled_at(judge(wider_m), order, options) <= (1.0 + options.smoothing.noise_gain) * pooled_at(samples, judged, options)) break;
-    samples = keep(wider_m);
-    noise = {pooled_noise_floor(samples, options), wider_m};
+    const std::vector<NoiseSample> trial = judge(wider_m);
+    if (pooled_at(trial, order, options) <= (1.0 + options.smoothing.noise_gain) * pooled_at(samples, judged, options)) break;
+    keep_judged();
+    for (std::size_t k = 0; k < judged.size(); ++k) samples[judged[k]] = trial[k];
+    noise.smoothing_m = wider_m;
+    next_m = pooled_at(samples, judged, options);
+  }
+  if (noise.smoothing_m > 0) {
+    samples = finish(noise.smoothing_m);
+    noise.floor_m = pooled_noise_floor(samples, options);
   }
   return noise;
 }
@@ -116,17 +127,19 @@ PooledStarts pool_starts(const std::vector<BuildingContour>& buildings, double p
     for (std::size_t i : judged) judged_samples.push_back(trial[i].sample);
     return judged_samples;
   };
-  const auto keep = [&](double wider_m) {
+  const auto keep_judged = [&] {
     for (std::size_t i : judged) {
       pooled.starts[i] = std::move(trial[i]);
       if (seconds) (*seconds)[i] += trial_seconds[i];
     }
+  };
+  const auto finish = [&](double wider_m) {
     start_each(rest, wider_m,
                [&](std::size_t i) { return restart_building(buildings[i].rings, pixel_size, options, std::move(pooled.starts[i]), wider_m); },
                pooled.starts, seconds);
     return samples_of(pooled.starts);
   };
-  pooled.noise = pool_in_rounds(samples, judged, pixel_size, options, judge, keep);
+  pooled.noise = pool_in_rounds(samples, judged, pixel_size, options, judge, keep_judged, finish);
   pooled.samples = measured(samples);
   return pooled;
 }
@@ -358,7 +371,7 @@ NoiseSurvey survey_noise(const MaskWindowReader& mask, cv::Size raster, const Ge
                nullptr);
     return samples_of(trial);
   };
-  survey.noise = pool_in_rounds(samples, judged, pixel_size, options, judge, measure_all);
+  survey.noise = pool_in_rounds(samples, judged, pixel_size, options, judge, [] {}, measure_all);
   survey.buildings = measured(samples);
   return survey;
 }
