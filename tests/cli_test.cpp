@@ -54,6 +54,46 @@ TEST_F(Cli, NoGeoreference) {
   EXPECT_FALSE(fs::exists(path("out.gpkg")));
 }
 
+// A mask in degrees (WGS 84) or in US feet is refused with the reprojection that fixes it (the UTM
+// zone of its centre), by regularize and by a run, before any output is written; in metres it runs.
+TEST_F(Cli, AMaskNotInMetresIsRefusedWithItsReprojection) {
+  cv::Mat mask = cv::Mat::zeros(40, 40, CV_8U);
+  mask(cv::Rect(10, 10, 20, 14)).setTo(6);
+  RasterMeta degrees;  // Delft: UTM zone 31 north
+  degrees.transform.c = {4.35, 1e-5, 0, 52.01, 0, -1e-5};
+  degrees.crs_wkt = epsg_wkt(4326);
+  write_geotiff(path("degrees.tif"), {mask}, degrees);
+  RasterMeta feet;  // New York, Long Island: zone 18 north
+  feet.transform.c = {1000000, 2, 0, 200000, 0, -2};
+  feet.crs_wkt = epsg_wkt(2263);
+  write_geotiff(path("feet.tif"), {mask}, feet);
+  RasterMeta metres;
+  metres.transform.c = {85000, 0.5, 0, 447000, 0, -0.5};
+  metres.crs_wkt = epsg_wkt(28992);
+  write_geotiff(path("metres.tif"), {mask}, metres);
+
+  CommandRun r = lodforge("regularize --mask " + path("degrees.tif") + " --out " + path("d.gpkg"));
+  EXPECT_EQ(r.code, 1) << r.output;
+  EXPECT_NE(r.output.find("degrees.tif': is in WGS 84 (EPSG:4326), a geographic CRS, its coordinates in degrees"), std::string::npos)
+      << r.output;
+  EXPECT_NE(r.output.find("gdalwarp -t_srs EPSG:32631 -r near"), std::string::npos) << r.output;
+  EXPECT_FALSE(fs::exists(path("d.gpkg")));
+  r = lodforge("regularize --mask " + path("feet.tif") + " --out " + path("f.gpkg"));
+  EXPECT_EQ(r.code, 1) << r.output;
+  EXPECT_NE(r.output.find("(EPSG:2263), a CRS in US survey foot"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("gdalwarp -t_srs EPSG:32618 -r near"), std::string::npos) << r.output;
+  EXPECT_FALSE(fs::exists(path("f.gpkg")));
+  r = lodforge("regularize --mask " + path("metres.tif") + " --out " + path("m.gpkg"));
+  EXPECT_EQ(r.code, 0) << r.output;
+
+  std::ofstream(path("job.yaml")) << "inputs: {segmentation: {path: degrees.tif}}\n"
+                                  << "output: {dir: out, formats: [gpkg], quicklook: false}\nwork_dir: work\n";
+  r = lodforge("run " + path("job.yaml") + " --progress none");
+  EXPECT_EQ(r.code, 1) << r.output;
+  EXPECT_NE(r.output.find("inputs.segmentation.path: '" + path("degrees.tif") + "': is in WGS 84"), std::string::npos) << r.output;
+  EXPECT_FALSE(fs::exists(path("out/tiles")) && !fs::is_empty(path("out/tiles")));
+}
+
 TEST_F(Cli, EmptyMaskAndWrongBands) {
   RasterMeta meta;
   meta.transform.c = {1000, 0.5, 0, 2000, 0, -0.5};

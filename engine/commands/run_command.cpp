@@ -82,7 +82,7 @@ std::string options_text(S& options) {
 struct RasterInfo {
   cv::Size size;
   GeoTransform transform;
-  std::string crs_wkt;  // read only when the grids differ (InputCrs)
+  std::string crs_wkt;  // the segmentation's, read up front; a companion's only when the grids differ (InputCrs)
 };
 
 RasterInfo inspect_raster(const std::string& path, const std::string& key) {
@@ -152,10 +152,17 @@ int run_job(int argc, char** argv) {
   if (progress_mode != "auto" && progress_mode != "bar" && progress_mode != "json" && progress_mode != "none")
     throw UsageError("--progress '" + progress_mode + "': must be one of auto, bar, json, none");
 
-  // Validate the inputs and the output before any work. Rasters on the segmentation's very grid
-  // (the usual case) have their CRS read and compared while the first tiles start (InputCrs:
-  // reading the first CRS starts PROJ, ~12 ms); on other grids the CRS are needed now.
+  // Validate the inputs and the output before any work. The segmentation's CRS is read now (its
+  // unit must be the metre; reading the first CRS starts PROJ, ~12 ms); rasters on its very grid
+  // (the usual case) have theirs read and compared while the first tiles start (InputCrs); on
+  // other grids the CRS are needed now.
   RasterInfo seg = inspect_raster(job.inputs.segmentation.path, "inputs.segmentation.path");
+  seg.crs_wkt = raster_crs_wkt(job.inputs.segmentation.path, "inputs.segmentation.path");
+  {
+    const Vec2 centre = seg.transform.to_map(0.5 * seg.size.width, 0.5 * seg.size.height);
+    if (const std::string problem = metric_crs_problem(seg.crs_wkt, centre.x(), centre.y()); !problem.empty())
+      throw InputError("inputs.segmentation.path: '" + job.inputs.segmentation.path + "': " + problem);
+  }
   std::vector<InputCrs::Companion> companions;
   for (const auto& [key, path] : {std::pair{"inputs.dsm.path", job.inputs.dsm.path}, std::pair{"inputs.dtm.path", job.inputs.dtm.path},
                                   std::pair{"inputs.orthophoto.path", job.inputs.orthophoto.path}})
@@ -171,7 +178,6 @@ int run_job(int argc, char** argv) {
     input_crs = std::make_unique<InputCrs>(job.inputs.segmentation.path, "inputs.segmentation.path", companions,
                                            job.inputs.on_grid_mismatch == "error", job.output.crs);
   } else {
-    seg.crs_wkt = raster_crs_wkt(job.inputs.segmentation.path, "inputs.segmentation.path");
     for (std::size_t i = 0; i < companions.size(); ++i) {
       companion_grids[i].crs_wkt = raster_crs_wkt(companions[i].path, companions[i].key);
       check_companion(companions[i].key, companions[i].path, companion_grids[i], seg, job);
@@ -198,7 +204,6 @@ int run_job(int argc, char** argv) {
   // but go once their writer is gone. Another shard's files in progress stay.
   remove_stale_temporaries(out_dir / "tiles", 0);
 
-  // (Its CRS is read, and needed, only when some raster is on another grid and is resampled.)
   const GridSpec grid_spec{seg.size, seg.transform, seg.crs_wkt};
   const std::string dsm_source = job.inputs.dsm.path.empty() ? "" : aligned_source(job.inputs.dsm.path, grid_spec, (fs::path(job.work_dir) / "dsm.aligned.vrt").string(), true);
   const std::string dtm_source = job.inputs.dtm.path.empty() ? "" : aligned_source(job.inputs.dtm.path, grid_spec, (fs::path(job.work_dir) / "dtm.aligned.vrt").string(), true);
@@ -209,7 +214,6 @@ int run_job(int argc, char** argv) {
   std::unique_ptr<Cadastre> cadastre;
   if (!job.inputs.footprints.path.empty()) {
     const auto reading = Clock::now();
-    if (seg.crs_wkt.empty()) seg.crs_wkt = raster_crs_wkt(job.inputs.segmentation.path, "inputs.segmentation.path");
     cadastre = std::make_unique<Cadastre>(job.inputs.footprints.path, job.inputs.footprints.layer, job.inputs.footprints.id_field,
                                           seg.crs_wkt, seg.transform, seg.size);
     for (const std::string& note : cadastre->notes()) spdlog::warn("inputs.footprints: {}", note);

@@ -2,7 +2,9 @@
 
 #include <gdal_priv.h>
 #include <ogr_spatialref.h>
+#include <algorithm>
 #include <atomic>
+#include <cmath>
 #include <exception>
 #include <mutex>
 
@@ -76,6 +78,33 @@ std::vector<std::array<double, 2>> to_lon_lat(const std::string& wkt, const std:
   std::vector<std::array<double, 2>> out;
   for (std::size_t i = 0; i < points.size(); ++i) out.push_back({x[i], y[i]});
   return out;
+}
+
+std::string metric_crs_problem(const std::string& wkt, double centre_x, double centre_y) {
+  OGRSpatialReference srs;
+  if (wkt.empty() || srs.importFromWkt(wkt.c_str()) != OGRERR_NONE) return {};
+  if (srs.IsCompound()) srs.StripVertical();
+  std::string unit;
+  if (srs.IsGeographic()) {
+    unit = "a geographic CRS, its coordinates in degrees";
+  } else {
+    const char* name = nullptr;
+    const double metres = srs.GetLinearUnits(&name);
+    if (std::abs(metres - 1.0) <= 1e-9) return {};
+    unit = "a CRS in " + std::string(name && *name ? name : "an unknown unit") + " (" + std::to_string(metres) + " m)";
+  }
+  const std::string epsg = epsg_of(wkt);
+  std::string target = "a projected CRS in metres";
+  const std::vector<std::array<double, 2>> lon_lat = to_lon_lat(wkt, {{centre_x, centre_y}});
+  if (lon_lat.size() == 1 && std::isfinite(lon_lat[0][0]) && std::abs(lon_lat[0][1]) <= 84) {
+    const int zone = std::clamp(int(std::floor((lon_lat[0][0] + 180.0) / 6.0)) + 1, 1, 60);
+    target = "EPSG:" + std::to_string((lon_lat[0][1] >= 0 ? 32600 : 32700) + zone);
+  }
+  const bool utm = target.rfind("EPSG:", 0) == 0;
+  return "is in " + std::string(srs.GetName() ? srs.GetName() : "?") + (epsg.empty() ? "" : " (" + epsg + ")") + ", " + unit +
+         "; lodforge measures in metres: reproject it first, e.g. 'gdalwarp -t_srs " + (utm ? target : "<" + target + ">") +
+         " -r near IN OUT' (" + (utm ? target + ": the UTM zone of its centre, or take the national grid; " : "") +
+         "-r near keeps a mask's classes)";
 }
 
 bool same_crs(const std::string& a, const std::string& b) {

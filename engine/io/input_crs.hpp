@@ -23,6 +23,12 @@ std::string declared_output_crs(const std::string& output_crs, const std::string
 // the CRS is unknown or PROJ cannot transform them.
 std::vector<std::array<double, 2>> to_lon_lat(const std::string& wkt, const std::vector<std::array<double, 2>>& points);
 
+// Why a raster in the CRS of wkt cannot be measured in metres, as the text after its name: a
+// geographic CRS (degrees) or a projected one in another unit (US feet), with the gdalwarp that
+// reprojects it onto the UTM zone where (centre_x, centre_y) lies. Empty when the CRS is in
+// metres, or unknown (wkt empty: its coordinates taken as metres).
+std::string metric_crs_problem(const std::string& wkt, double centre_x, double centre_y);
+
 // Whether two CRS are the same; an empty one (unknown) matches any.
 bool same_crs(const std::string& wkt_a, const std::string& wkt_b);
 

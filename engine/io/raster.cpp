@@ -8,6 +8,7 @@
 #include <opencv2/core.hpp>
 
 #include "io/errors.hpp"
+#include "io/input_crs.hpp"
 
 namespace lodforge {
 
@@ -69,6 +70,9 @@ MaskRaster read_building_mask(const std::string& path, const BuildingSelector& s
     out.crs_wkt = wkt ? wkt : "";
     CPLFree(wkt);
   }
+  const Vec2 centre = out.transform.to_map(0.5 * d->GetRasterXSize(), 0.5 * d->GetRasterYSize());
+  if (const std::string problem = metric_crs_problem(out.crs_wkt, centre.x(), centre.y()); !problem.empty())
+    throw InputError("'" + path + "': " + problem);
   // The whole mask is held at once (a byte a pixel, and the labeling and tracing on it): a raster of a
   // region is run in tiles.
   constexpr double kMaxPixels = 1e9;
