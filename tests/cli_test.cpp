@@ -94,6 +94,35 @@ TEST_F(Cli, AMaskNotInMetresIsRefusedWithItsReprojection) {
   EXPECT_FALSE(fs::exists(path("out/tiles")) && !fs::is_empty(path("out/tiles")));
 }
 
+// eval measures in metres, every source in one CRS: footprints in degrees or in another CRS than
+// the prediction's are refused, naming the file, both CRS and the ogr2ogr that fixes it.
+TEST_F(Cli, EvalRefusesFootprintsInAnotherCrsOrInDegrees) {
+  const auto square = [&](const std::string& name, const std::string& crs, double x, double y, double side) {
+    std::ofstream(path(name)) << "{\"type\": \"FeatureCollection\", " << (crs.empty() ? "" : "\"crs\": {\"type\": \"name\", \"properties\": {\"name\": \"urn:ogc:def:crs:EPSG::" + crs + "\"}}, ")
+                              << "\"features\": [{\"type\": \"Feature\", \"properties\": {}, \"geometry\": {\"type\": \"Polygon\", \"coordinates\": [["
+                              << "[" << x << ", " << y << "], [" << x + side << ", " << y << "], [" << x + side << ", " << y + side << "], ["
+                              << x << ", " << y + side << "], [" << x << ", " << y << "]]]}}]}";
+  };
+  square("rd.geojson", "28992", 85000, 447000, 10);
+  square("rd_shifted.geojson", "28992", 85001, 447000, 10);
+  square("utm.geojson", "32631", 585000, 5763000, 10);
+  square("wgs84.geojson", "", 4.35, 52.01, 1e-4);
+  CommandRun r = lodforge("eval --pred " + path("rd.geojson") + " --gt " + path("rd_shifted.geojson"));
+  EXPECT_EQ(r.code, 0) << r.output;
+  EXPECT_NE(r.output.find("overall IoU              0.8182"), std::string::npos) << r.output;  // 90 / 110
+  r = lodforge("eval --pred " + path("rd.geojson") + " --gt " + path("utm.geojson") + " --json " + path("e.json"));
+  EXPECT_EQ(r.code, 1) << r.output;
+  EXPECT_NE(r.output.find("--gt '" + path("utm.geojson") + "': is in WGS 84 / UTM zone 31N (EPSG:32631), --pred in Amersfoort / RD New (EPSG:28992)"),
+            std::string::npos)
+      << r.output;
+  EXPECT_NE(r.output.find("ogr2ogr -t_srs EPSG:28992 OUT IN"), std::string::npos) << r.output;
+  r = lodforge("eval --pred " + path("rd.geojson") + " --gt " + path("rd.geojson") + " --aoi " + path("wgs84.geojson") + " --json " + path("e.json"));
+  EXPECT_EQ(r.code, 1) << r.output;
+  EXPECT_NE(r.output.find("--aoi '" + path("wgs84.geojson") + "': is in WGS 84 (EPSG:4326), a geographic CRS"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("ogr2ogr -t_srs EPSG:32631 OUT IN"), std::string::npos) << r.output;
+  EXPECT_FALSE(fs::exists(path("e.json")));
+}
+
 TEST_F(Cli, EmptyMaskAndWrongBands) {
   RasterMeta meta;
   meta.transform.c = {1000, 0.5, 0, 2000, 0, -0.5};

@@ -8,13 +8,15 @@
 #include "eval/metrics.hpp"
 #include "io/errors.hpp"
 #include "io/atomic_file.hpp"
+#include "io/input_crs.hpp"
 #include "io/ogr_polygon.hpp"
 
 namespace lodforge {
 
 int run_eval(int argc, char** argv) {
   Args args("eval", "Scores predicted footprints against ground truth: overall IoU, matching at IoU >= 0.5 (precision,\n"
-                    "recall, F1, mean IoU), C-IoU, N-ratio, PoLiS, Hausdorff, blob IoU. All in metres, same CRS expected.");
+                    "recall, F1, mean IoU), C-IoU, N-ratio, PoLiS, Hausdorff, blob IoU. All in metres: the files in one CRS\n"
+                    "in metres (checked; a CRS in degrees or another CRS than --pred's is refused, with the ogr2ogr to use).");
   args.value("pred", "FILE", "predicted footprints (any OGR polygon source: GeoPackage, GeoJSON, ...)")
       .value("gt", "FILE", "ground-truth footprints")
       .value("aoi", "FILE", "area of interest: only what lies inside counts")
@@ -22,10 +24,30 @@ int run_eval(int argc, char** argv) {
       .flag("help", "show this help");
   args.parse(argc, argv, 2);
   if (args.has("help")) { std::cout << args.help(); return 0; }
-  const auto predicted = read_polygons(args.require("pred"), "--pred");
-  const auto truth = read_polygons(args.require("gt"), "--gt");
+  // Every source in one CRS, in metres (PoLiS, Hausdorff and the areas are measured there).
+  std::string pred_crs;
+  const auto predicted = read_polygons(args.require("pred"), "--pred", &pred_crs);
+  const auto check = [&](const std::string& key, const std::string& path, const std::vector<PolygonWithHoles>& polygons,
+                         const std::string& crs) {
+    if (!polygons.empty() && !polygons.front().outer.empty())
+      if (const std::string problem = metric_crs_problem(crs, polygons.front().outer[0].x(), polygons.front().outer[0].y(), true);
+          !problem.empty())
+        throw InputError(key + " '" + path + "': " + problem);
+    if (!same_crs(crs, pred_crs))
+      throw InputError(key + " '" + path + "': is in " + crs_label(crs) + ", --pred in " + crs_label(pred_crs) +
+                       "; the footprints must share a CRS: reproject one, e.g. 'ogr2ogr -t_srs " +
+                       (epsg_of(pred_crs).empty() ? std::string("<the CRS of --pred>") : epsg_of(pred_crs)) + " OUT IN'");
+  };
+  check("--pred", args.require("pred"), predicted, pred_crs);
+  std::string gt_crs, aoi_crs;
+  const auto truth = read_polygons(args.require("gt"), "--gt", &gt_crs);
+  check("--gt", args.require("gt"), truth, gt_crs);
   std::optional<PolygonWithHoles> aoi;
-  if (auto a = args.get("aoi")) aoi = read_polygons(*a, "--aoi").front();
+  if (auto a = args.get("aoi")) {
+    const auto area = read_polygons(*a, "--aoi", &aoi_crs);
+    check("--aoi", *a, area, aoi_crs);
+    aoi = area.front();
+  }
   const EvalResult r = evaluate(predicted, truth, aoi);
   std::cout << eval_table(r);
   if (auto j = args.get("json")) write_text_atomically(*j, eval_json(r) + "\n");

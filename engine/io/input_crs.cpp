@@ -80,7 +80,14 @@ std::vector<std::array<double, 2>> to_lon_lat(const std::string& wkt, const std:
   return out;
 }
 
-std::string metric_crs_problem(const std::string& wkt, double centre_x, double centre_y) {
+std::string crs_label(const std::string& wkt) {
+  OGRSpatialReference srs;
+  if (wkt.empty() || srs.importFromWkt(wkt.c_str()) != OGRERR_NONE) return "no CRS";
+  const std::string epsg = epsg_of(wkt);
+  return std::string(srs.GetName() ? srs.GetName() : "?") + (epsg.empty() ? "" : " (" + epsg + ")");
+}
+
+std::string metric_crs_problem(const std::string& wkt, double centre_x, double centre_y, bool vector) {
   OGRSpatialReference srs;
   if (wkt.empty() || srs.importFromWkt(wkt.c_str()) != OGRERR_NONE) return {};
   if (srs.IsCompound()) srs.StripVertical();
@@ -93,7 +100,6 @@ std::string metric_crs_problem(const std::string& wkt, double centre_x, double c
     if (std::abs(metres - 1.0) <= 1e-9) return {};
     unit = "a CRS in " + std::string(name && *name ? name : "an unknown unit") + " (" + std::to_string(metres) + " m)";
   }
-  const std::string epsg = epsg_of(wkt);
   std::string target = "a projected CRS in metres";
   const std::vector<std::array<double, 2>> lon_lat = to_lon_lat(wkt, {{centre_x, centre_y}});
   if (lon_lat.size() == 1 && std::isfinite(lon_lat[0][0]) && std::abs(lon_lat[0][1]) <= 84) {
@@ -101,10 +107,11 @@ std::string metric_crs_problem(const std::string& wkt, double centre_x, double c
     target = "EPSG:" + std::to_string((lon_lat[0][1] >= 0 ? 32600 : 32700) + zone);
   }
   const bool utm = target.rfind("EPSG:", 0) == 0;
-  return "is in " + std::string(srs.GetName() ? srs.GetName() : "?") + (epsg.empty() ? "" : " (" + epsg + ")") + ", " + unit +
-         "; lodforge measures in metres: reproject it first, e.g. 'gdalwarp -t_srs " + (utm ? target : "<" + target + ">") +
-         " -r near IN OUT' (" + (utm ? target + ": the UTM zone of its centre, or take the national grid; " : "") +
-         "-r near keeps a mask's classes)";
+  const std::string to = utm ? target : "<" + target + ">";
+  return "is in " + crs_label(wkt) + ", " + unit + "; lodforge measures in metres: reproject it first, e.g. '" +
+         (vector ? "ogr2ogr -t_srs " + to + " OUT IN'" : "gdalwarp -t_srs " + to + " -r near IN OUT'") +
+         (utm ? " (" + target + ": the UTM zone of its centre, or take the national grid" + (vector ? ")" : "; -r near keeps a mask's classes)")
+              : (vector ? "" : " (-r near keeps a mask's classes)"));
 }
 
 bool same_crs(const std::string& a, const std::string& b) {

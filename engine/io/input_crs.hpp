@@ -27,7 +27,12 @@ std::vector<std::array<double, 2>> to_lon_lat(const std::string& wkt, const std:
 // geographic CRS (degrees) or a projected one in another unit (US feet), with the gdalwarp that
 // reprojects it onto the UTM zone where (centre_x, centre_y) lies. Empty when the CRS is in
 // metres, or unknown (wkt empty: its coordinates taken as metres).
-std::string metric_crs_problem(const std::string& wkt, double centre_x, double centre_y);
+// vector: the advice is for a vector source (ogr2ogr), not a raster (gdalwarp).
+std::string metric_crs_problem(const std::string& wkt, double centre_x, double centre_y, bool vector = false);
+
+// "Amersfoort / RD New (EPSG:28992)": a CRS's name, with its EPSG code when it has one; "no CRS"
+// when wkt is empty.
+std::string crs_label(const std::string& wkt);
 
 // Whether two CRS are the same; an empty one (unknown) matches any.
 bool same_crs(const std::string& wkt_a, const std::string& wkt_b);
