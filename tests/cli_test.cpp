@@ -129,7 +129,29 @@ TEST_F(Cli, EmptyMaskAndWrongBands) {
   write_geotiff(path("empty.tif"), {cv::Mat::zeros(20, 20, CV_8U)}, meta);
   CommandRun r = lodforge("regularize --mask " + path("empty.tif") + " --out " + path("out.gpkg"));
   EXPECT_EQ(r.code, 1);
-  EXPECT_NE(r.output.find("empty.tif': no building pixel (value 6)"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("empty.tif': no building pixel (value 6) in the raster; its band 1 holds 0 (100.0 %)"), std::string::npos) << r.output;
+  // A network's binary mask (255 = building), read with the default class: the values it holds.
+  cv::Mat binary = cv::Mat::zeros(20, 20, CV_8U);
+  binary(cv::Rect(0, 0, 20, 5)).setTo(255);
+  write_geotiff(path("binary.tif"), {binary}, meta);
+  r = lodforge("regularize --mask " + path("binary.tif") + " --out " + path("out.gpkg"));
+  EXPECT_EQ(r.code, 1);
+  EXPECT_NE(r.output.find("its band 1 holds 0 (75.0 %), 255 (25.0 %): select the buildings by their value (regularize --building-value V"),
+            std::string::npos)
+      << r.output;
+  // An ISPRS colour mask read with a class value, then with another colour than its buildings'.
+  cv::Mat red = cv::Mat::zeros(20, 20, CV_8U), blue = cv::Mat::zeros(20, 20, CV_8U);
+  blue(cv::Rect(0, 0, 20, 5)).setTo(255);
+  red(cv::Rect(0, 5, 20, 15)).setTo(255);
+  write_geotiff(path("colours.tif"), {red, cv::Mat::zeros(20, 20, CV_8U), blue}, meta);
+  r = lodforge("regularize --mask " + path("colours.tif") + " --out " + path("out.gpkg"));
+  EXPECT_EQ(r.code, 1);
+  EXPECT_NE(r.output.find("in 3 bands: a colour mask's buildings are selected by their colour (regularize --building-rgb 0,0,255"),
+            std::string::npos)
+      << r.output;
+  r = lodforge("regularize --mask " + path("colours.tif") + " --building-rgb 0,255,0 --out " + path("out.gpkg"));
+  EXPECT_EQ(r.code, 1);
+  EXPECT_NE(r.output.find("its colours are (255, 0, 0) (75.0 %), (0, 0, 255) (25.0 %)"), std::string::npos) << r.output;
   r = lodforge("regularize --mask " + path("empty.tif") + " --building-rgb 0,0,255 --out " + path("out.gpkg"));
   EXPECT_EQ(r.code, 1);
   EXPECT_NE(r.output.find("needs an RGB raster with 3 bands"), std::string::npos) << r.output;

@@ -968,7 +968,8 @@ TEST_F(Rerun, EmptyOrMisreadMasksAreToldNotSilent) {
   Result r = lodforge("run " + (dir / "zeros.yaml").string());
   EXPECT_EQ(r.code, 0) << r.output;
   EXPECT_NE(r.output.find("no building found in"), std::string::npos) << r.output;
-  EXPECT_NE(r.output.find("inputs.segmentation.building_values right for this raster"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("inputs.segmentation.building_values right for this raster? Its band 1 holds 0 (100.0 %)"), std::string::npos)
+      << r.output;
   // A three-band (colour) raster read with class values is refused, with the key to use.
   write_empty_vrt(dir / "rgb.vrt", 400, 400, 3);
   std::ofstream(dir / "rgb.yaml") << "inputs: {segmentation: {path: rgb.vrt, building_values: [6]}}\noutput: {dir: rgb_out}\nwork_dir: rgb_work\n";

@@ -1,8 +1,11 @@
 #include "io/raster.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cstdint>
+#include <cstdio>
 #include <filesystem>
+#include <map>
 #include <gdal_priv.h>
 #include <memory>
 #include <opencv2/core.hpp>
@@ -56,7 +59,64 @@ void read_band_strips(GDALDataset& d, int band, const std::string& path, Use use
   }
 }
 
+// What a raster holds where no building pixel was found, for the message: the values of its first
+// band and their shares (the eight most common), and, with three bands or more, the colour option.
+std::string held_values(GDALDataset& d, const std::string& path, const BuildingSelector& selector, bool is_rgb) {
+  // Per value (a colour: its three bands' values), the pixels holding it.
+  std::map<std::array<int, 3>, std::size_t> counts;
+  const int bands = is_rgb ? 3 : 1, cols = d.GetRasterXSize(), rows = d.GetRasterYSize();
+  constexpr int kStrip = 256;
+  std::vector<int> buffer(std::size_t(cols) * std::size_t(std::min(kStrip, rows)) * std::size_t(bands));
+  for (int y = 0; y < rows; y += kStrip) {
+    const int n = std::min(kStrip, rows - y);
+    if (d.RasterIO(GF_Read, 0, y, cols, n, buffer.data(), cols, n, GDT_Int32, bands, nullptr, int(sizeof(int)) * bands,
+                   int(sizeof(int)) * bands * cols, int(sizeof(int)), nullptr) != CE_None)
+      throw InputError("'" + path + "': cannot read it: " + CPLGetLastErrorMsg());
+    for (std::size_t k = 0; k < std::size_t(cols) * std::size_t(n); ++k) {
+      const int* v = &buffer[k * std::size_t(bands)];
+      ++counts[{v[0], bands == 3 ? v[1] : 0, bands == 3 ? v[2] : 0}];
+    }
+  }
+  std::vector<std::pair<std::size_t, std::array<int, 3>>> common;
+  std::size_t total = 0;
+  for (const auto& [value, count] : counts) {
+    common.push_back({count, value});
+    total += count;
+  }
+  std::sort(common.begin(), common.end(), [](const auto& a, const auto& b) { return a.first != b.first ? a.first > b.first : a.second < b.second; });
+  std::string text = is_rgb ? "its colours are " : "its band 1 holds ";
+  for (std::size_t k = 0; k < common.size() && k < 8; ++k) {
+    char share[32];
+    std::snprintf(share, sizeof share, "%.1f", 100.0 * double(common[k].first) / double(std::max<std::size_t>(1, total)));
+    const std::array<int, 3>& c = common[k].second;
+    if (k) text += ", ";
+    if (is_rgb) {
+      text += '(';
+      for (int b = 0; b < 3; ++b) text.append(b ? ", " : "").append(std::to_string(c[std::size_t(b)]));
+      text += ')';
+    } else {
+      text += std::to_string(c[0]);
+    }
+    text += std::string(" (") + share + " %)";
+  }
+  if (common.size() > 8) text += " and " + std::to_string(common.size() - 8) + (is_rgb ? " more colours" : " more values");
+  if (is_rgb)
+    text += ": select the buildings by their colour (regularize --building-rgb R,G,B; a job's inputs.segmentation.building_rgb)";
+  else if (d.GetRasterCount() >= 3)
+    text += ", in " + std::to_string(d.GetRasterCount()) + " bands: a colour mask's buildings are selected by their colour "
+            "(regularize --building-rgb 0,0,255, ISPRS's; a job's inputs.segmentation.building_rgb)";
+  else
+    text += ": select the buildings by their value (regularize --building-value V; a job's inputs.segmentation.building_values)";
+  return text;
+}
+
 }  // namespace
+
+std::string values_held(const std::string& path, const BuildingSelector& selector) {
+  GDALAllRegister();
+  Dataset d = open_raster(path);
+  return held_values(*d, path, selector, selector.rgb && d->GetRasterCount() >= 3);
+}
 
 MaskRaster read_building_mask(const std::string& path, const BuildingSelector& selector) {
   GDALAllRegister();
@@ -102,7 +162,7 @@ MaskRaster read_building_mask(const std::string& path, const BuildingSelector& s
       }
     });
   if (cv::countNonZero(out.mask) == 0)
-    throw InputError("'" + path + "': no building pixel (" + selector.describe() + ") in the raster");
+    throw InputError("'" + path + "': no building pixel (" + selector.describe() + ") in the raster; " + held_values(*d, path, selector, bool(selector.rgb)));
   return out;
 }
 
