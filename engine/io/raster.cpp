@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <array>
+#include <cmath>
 #include <cstdint>
 #include <cstdio>
 #include <filesystem>
@@ -62,21 +63,27 @@ void read_band_strips(GDALDataset& d, int band, const std::string& path, Use use
 // What a raster holds where no building pixel was found, for the message: the values of its first
 // band and their shares (the eight most common), and, with three bands or more, the colour option.
 std::string held_values(GDALDataset& d, const std::string& path, const BuildingSelector& selector, bool is_rgb) {
-  // Per value (a colour: its three bands' values), the pixels holding it.
+  // Per value (a colour: its three bands' values), the pixels holding it, counted on at most 4
+  // million pixels of it (a raster of a region read with every n-th pixel, as GDAL decimates).
   std::map<std::array<int, 3>, std::size_t> counts;
   const int bands = is_rgb ? 3 : 1, cols = d.GetRasterXSize(), rows = d.GetRasterYSize();
-  constexpr int kStrip = 256;
-  std::vector<int> buffer(std::size_t(cols) * std::size_t(std::min(kStrip, rows)) * std::size_t(bands));
-  for (int y = 0; y < rows; y += kStrip) {
-    const int n = std::min(kStrip, rows - y);
-    if (d.RasterIO(GF_Read, 0, y, cols, n, buffer.data(), cols, n, GDT_Int32, bands, nullptr, int(sizeof(int)) * bands,
-                   int(sizeof(int)) * bands * cols, int(sizeof(int)), nullptr) != CE_None)
-      throw InputError("'" + path + "': cannot read it: " + CPLGetLastErrorMsg());
-    for (std::size_t k = 0; k < std::size_t(cols) * std::size_t(n); ++k) {
-      const int* v = &buffer[k * std::size_t(bands)];
-      ++counts[{v[0], bands == 3 ? v[1] : 0, bands == 3 ? v[2] : 0}];
-    }
+  const double step = std::max(1.0, std::sqrt(double(cols) * double(rows) / 4e6));
+  const int w = std::max(1, int(cols / step)), h = std::max(1, int(rows / step));
+  std::vector<int> buffer(std::size_t(w) * std::size_t(h) * std::size_t(bands));
+  GDALRasterIOExtraArg extra;
+  INIT_RASTERIO_EXTRA_ARG(extra);
+  extra.eResampleAlg = GRIORA_NearestNeighbour;
+  if (d.RasterIO(GF_Read, 0, 0, cols, rows, buffer.data(), w, h, GDT_Int32, bands, nullptr, int(sizeof(int)) * bands,
+                 int(sizeof(int)) * bands * w, int(sizeof(int)), &extra) != CE_None)
+    throw InputError("'" + path + "': cannot read it: " + CPLGetLastErrorMsg());
+  std::array<std::size_t, 256> bytes{};  // (the usual values, counted without the map)
+  for (std::size_t k = 0; k < std::size_t(w) * std::size_t(h); ++k) {
+    const int* v = &buffer[k * std::size_t(bands)];
+    if (bands == 1 && v[0] >= 0 && v[0] < 256) ++bytes[std::size_t(v[0])];
+    else ++counts[{v[0], bands == 3 ? v[1] : 0, bands == 3 ? v[2] : 0}];
   }
+  for (int v = 0; v < 256; ++v)
+    if (bytes[std::size_t(v)]) counts[{v, 0, 0}] += bytes[std::size_t(v)];
   std::vector<std::pair<std::size_t, std::array<int, 3>>> common;
   std::size_t total = 0;
   for (const auto& [value, count] : counts) {
