@@ -85,6 +85,14 @@ TEST_F(Cli, AMaskNotInMetresIsRefusedWithItsReprojection) {
   EXPECT_FALSE(fs::exists(path("f.gpkg")));
   r = lodforge("regularize --mask " + path("metres.tif") + " --out " + path("m.gpkg"));
   EXPECT_EQ(r.code, 0) << r.output;
+  RasterMeta wrong = metres;  // metres, but labelled WGS 84
+  wrong.crs_wkt = epsg_wkt(4326);
+  write_geotiff(path("wrong.tif"), {mask}, wrong);
+  r = lodforge("regularize --mask " + path("wrong.tif") + " --out " + path("w.gpkg"));
+  EXPECT_EQ(r.code, 1) << r.output;
+  EXPECT_NE(r.output.find("wrong.tif': says it is in WGS 84 (EPSG:4326), in degrees, but its coordinates (85010.0, 446990.0) are not"),
+            std::string::npos)
+      << r.output;
 
   std::ofstream(path("job.yaml")) << "inputs: {segmentation: {path: degrees.tif}}\n"
                                   << "output: {dir: out, formats: [gpkg], quicklook: false}\nwork_dir: work\n";
@@ -119,8 +127,20 @@ TEST_F(Cli, EvalRefusesFootprintsInAnotherCrsOrInDegrees) {
   r = lodforge("eval --pred " + path("rd.geojson") + " --gt " + path("rd.geojson") + " --aoi " + path("wgs84.geojson") + " --json " + path("e.json"));
   EXPECT_EQ(r.code, 1) << r.output;
   EXPECT_NE(r.output.find("--aoi '" + path("wgs84.geojson") + "': is in WGS 84 (EPSG:4326), a geographic CRS"), std::string::npos) << r.output;
-  EXPECT_NE(r.output.find("ogr2ogr -t_srs EPSG:32631 OUT IN"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("ogr2ogr -t_srs EPSG:28992 OUT IN' (EPSG:28992: the CRS of the other inputs)"), std::string::npos) << r.output;
   EXPECT_FALSE(fs::exists(path("e.json")));
+  // The same horizontal CRS with heights (RD New + NAP, as 3DBAG ships), and a GeoJSON without a
+  // "crs" member holding RD coordinates (GDAL reads it as WGS 84): both scored, the latter with a word.
+  square("rd_nap.geojson", "7415", 85001, 447000, 10);
+  square("no_crs.geojson", "", 85001, 447000, 10);
+  for (const char* gt : {"rd_nap.geojson", "no_crs.geojson"}) {
+    r = lodforge("eval --pred " + path("rd.geojson") + " --gt " + path(gt));
+    EXPECT_EQ(r.code, 0) << gt << r.output;
+    EXPECT_NE(r.output.find("overall IoU              0.8182"), std::string::npos) << gt << r.output;
+  }
+  EXPECT_NE(r.output.find("its CRS, WGS 84 (EPSG:4326), is in degrees, but its coordinates (85001.0, 447000.0) are not: taken as in --pred's"),
+            std::string::npos)
+      << r.output;
 }
 
 TEST_F(Cli, EmptyMaskAndWrongBands) {

@@ -2,6 +2,7 @@
 #include <filesystem>
 #include <fstream>
 #include <iostream>
+#include <spdlog/spdlog.h>
 
 #include "cli/args.hpp"
 #include "commands/commands.hpp"
@@ -24,16 +25,24 @@ int run_eval(int argc, char** argv) {
       .flag("help", "show this help");
   args.parse(argc, argv, 2);
   if (args.has("help")) { std::cout << args.help(); return 0; }
-  // Every source in one CRS, in metres (PoLiS, Hausdorff and the areas are measured there).
+  // Every source in one CRS, in metres (PoLiS, Hausdorff and the areas are measured there). A
+  // source whose CRS says degrees but whose coordinates are not (a GeoJSON without a "crs" member,
+  // read as WGS 84) is taken as in an unknown CRS, which matches any.
   std::string pred_crs;
   const auto predicted = read_polygons(args.require("pred"), "--pred", &pred_crs);
-  const auto check = [&](const std::string& key, const std::string& path, const std::vector<PolygonWithHoles>& polygons,
-                         const std::string& crs) {
-    if (!polygons.empty() && !polygons.front().outer.empty())
-      if (const std::string problem = metric_crs_problem(crs, polygons.front().outer[0].x(), polygons.front().outer[0].y(), true);
-          !problem.empty())
-        throw InputError(key + " '" + path + "': " + problem);
-    if (!same_crs(crs, pred_crs))
+  const auto check = [&](const std::string& key, const std::string& path, const std::vector<PolygonWithHoles>& polygons, std::string& crs) {
+    if (polygons.empty() || polygons.front().outer.empty()) return;
+    const Vec2 at = polygons.front().outer[0];
+    if (degrees_out_of_range(crs, at.x(), at.y())) {
+      spdlog::warn("{} '{}': its CRS, {}, is in degrees, but its coordinates ({:.1f}, {:.1f}) are not: taken as in --pred's", key, path,
+                   crs_label(crs), at.x(), at.y());
+      crs.clear();
+      return;
+    }
+    const bool pred = key == "--pred";
+    if (const std::string problem = metric_crs_problem(crs, at.x(), at.y(), true, pred ? std::string() : epsg_of(pred_crs)); !problem.empty())
+      throw InputError(key + " '" + path + "': " + problem);
+    if (!pred && !same_horizontal_crs(crs, pred_crs))
       throw InputError(key + " '" + path + "': is in " + crs_label(crs) + ", --pred in " + crs_label(pred_crs) +
                        "; the footprints must share a CRS: reproject one, e.g. 'ogr2ogr -t_srs " +
                        (epsg_of(pred_crs).empty() ? std::string("<the CRS of --pred>") : epsg_of(pred_crs)) + " OUT IN'");

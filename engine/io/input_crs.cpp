@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <atomic>
 #include <cmath>
+#include <cstdio>
 #include <exception>
 #include <mutex>
 
@@ -87,11 +88,41 @@ std::string crs_label(const std::string& wkt) {
   return std::string(srs.GetName() ? srs.GetName() : "?") + (epsg.empty() ? "" : " (" + epsg + ")");
 }
 
-std::string metric_crs_problem(const std::string& wkt, double centre_x, double centre_y, bool vector) {
-  OGRSpatialReference srs;
-  if (wkt.empty() || srs.importFromWkt(wkt.c_str()) != OGRERR_NONE) return {};
+namespace {
+
+// The horizontal part of a CRS (a compound one less its vertical CRS); false when wkt is empty or
+// not a CRS.
+bool horizontal_of(const std::string& wkt, OGRSpatialReference& srs) {
+  if (wkt.empty() || srs.importFromWkt(wkt.c_str()) != OGRERR_NONE) return false;
   if (srs.IsCompound()) srs.StripVertical();
+  return true;
+}
+
+std::string wkt_of(const OGRSpatialReference& srs) {
+  char* text = nullptr;
+  srs.exportToWkt(&text);
+  std::string out = text ? text : "";
+  CPLFree(text);
+  return out;
+}
+
+}  // namespace
+
+bool degrees_out_of_range(const std::string& wkt, double x, double y) {
+  OGRSpatialReference srs;
+  return horizontal_of(wkt, srs) && srs.IsGeographic() && !(std::abs(x) <= 360 && std::abs(y) <= 90);
+}
+
+std::string metric_crs_problem(const std::string& wkt, double centre_x, double centre_y, bool vector, const std::string& target_epsg) {
+  OGRSpatialReference srs;
+  if (!horizontal_of(wkt, srs)) return {};
   std::string unit;
+  if (srs.IsGeographic() && degrees_out_of_range(wkt, centre_x, centre_y)) {
+    char at[96];
+    std::snprintf(at, sizeof at, "(%.1f, %.1f)", centre_x, centre_y);
+    return "says it is in " + crs_label(wkt) + ", in degrees, but its coordinates " + at + " are not: its CRS is missing or wrong; " +
+           "give it the right one first, e.g. '" + (vector ? "ogr2ogr -a_srs EPSG:NNNN OUT IN'" : "gdal_edit.py -a_srs EPSG:NNNN IN'");
+  }
   if (srs.IsGeographic()) {
     unit = "a geographic CRS, its coordinates in degrees";
   } else {
@@ -100,18 +131,35 @@ std::string metric_crs_problem(const std::string& wkt, double centre_x, double c
     if (std::abs(metres - 1.0) <= 1e-9) return {};
     unit = "a CRS in " + std::string(name && *name ? name : "an unknown unit") + " (" + std::to_string(metres) + " m)";
   }
-  std::string target = "a projected CRS in metres";
-  const std::vector<std::array<double, 2>> lon_lat = to_lon_lat(wkt, {{centre_x, centre_y}});
-  if (lon_lat.size() == 1 && std::isfinite(lon_lat[0][0]) && std::abs(lon_lat[0][1]) <= 84) {
-    const int zone = std::clamp(int(std::floor((lon_lat[0][0] + 180.0) / 6.0)) + 1, 1, 60);
-    target = "EPSG:" + std::to_string((lon_lat[0][1] >= 0 ? 32600 : 32700) + zone);
+  // The target: the one given, else the UTM zone of the centre (where UTM is defined).
+  std::string target = target_epsg, why = target_epsg.empty() ? "" : "the CRS of the other inputs";
+  if (target.empty()) {
+    CPLPushErrorHandler(CPLQuietErrorHandler);  // (a local CRS has no longitude: no advice, no PROJ message)
+    const std::vector<std::array<double, 2>> lon_lat = to_lon_lat(wkt_of(srs), {{centre_x, centre_y}});
+    CPLPopErrorHandler();
+    if (lon_lat.size() == 1 && std::isfinite(lon_lat[0][0]) && lon_lat[0][1] <= 84 && lon_lat[0][1] >= -80) {
+      const double lon = lon_lat[0][0] - 360.0 * std::floor((lon_lat[0][0] + 180.0) / 360.0);  // in [-180, 180)
+      const int zone = std::clamp(int(std::floor((lon + 180.0) / 6.0)) + 1, 1, 60);
+      target = "EPSG:" + std::to_string((lon_lat[0][1] >= 0 ? 32600 : 32700) + zone);
+      why = "the UTM zone of its centre, or take the national grid";
+    }
   }
-  const bool utm = target.rfind("EPSG:", 0) == 0;
-  const std::string to = utm ? target : "<" + target + ">";
+  const std::string to = target.empty() ? "<a projected CRS in metres>" : target;
+  std::string note = why.empty() ? "" : target + ": " + why;
+  if (!vector) note += std::string(note.empty() ? "" : "; ") + "-r near keeps a mask's classes";
   return "is in " + crs_label(wkt) + ", " + unit + "; lodforge measures in metres: reproject it first, e.g. '" +
          (vector ? "ogr2ogr -t_srs " + to + " OUT IN'" : "gdalwarp -t_srs " + to + " -r near IN OUT'") +
-         (utm ? " (" + target + ": the UTM zone of its centre, or take the national grid" + (vector ? ")" : "; -r near keeps a mask's classes)")
-              : (vector ? "" : " (-r near keeps a mask's classes)"));
+         (note.empty() ? "" : " (" + note + ")");
+}
+
+bool same_horizontal_crs(const std::string& a, const std::string& b) {
+  if (a.empty() || b.empty() || a == b) return true;
+  OGRSpatialReference sa, sb;
+  if (!horizontal_of(a, sa) || !horizontal_of(b, sb)) return true;  // (not a CRS: unknown)
+  const std::string ea = epsg_of(wkt_of(sa)), eb = epsg_of(wkt_of(sb));
+  if (!ea.empty() && !eb.empty()) return ea == eb;
+  const char* options[] = {"IGNORE_DATA_AXIS_TO_SRS_AXIS_MAPPING=YES", "CRITERION=EQUIVALENT_EXCEPT_AXIS_ORDER_GEOGCRS", nullptr};
+  return sa.IsSame(&sb, options) != 0;
 }
 
 bool same_crs(const std::string& a, const std::string& b) {

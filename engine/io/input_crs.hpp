@@ -24,11 +24,21 @@ std::string declared_output_crs(const std::string& output_crs, const std::string
 std::vector<std::array<double, 2>> to_lon_lat(const std::string& wkt, const std::vector<std::array<double, 2>>& points);
 
 // Why a raster in the CRS of wkt cannot be measured in metres, as the text after its name: a
-// geographic CRS (degrees) or a projected one in another unit (US feet), with the gdalwarp that
-// reprojects it onto the UTM zone where (centre_x, centre_y) lies. Empty when the CRS is in
-// metres, or unknown (wkt empty: its coordinates taken as metres).
-// vector: the advice is for a vector source (ogr2ogr), not a raster (gdalwarp).
-std::string metric_crs_problem(const std::string& wkt, double centre_x, double centre_y, bool vector = false);
+// geographic CRS (degrees) or a projected one in another unit (US feet), with the gdalwarp (for a
+// vector source, ogr2ogr) that reprojects it onto target_epsg when given (the other inputs' CRS),
+// else onto the UTM zone where (centre_x, centre_y) lies. Empty when the CRS is in metres, or
+// unknown (wkt empty: its coordinates taken as metres).
+std::string metric_crs_problem(const std::string& wkt, double centre_x, double centre_y, bool vector = false,
+                               const std::string& target_epsg = {});
+
+// Whether a source says its CRS is geographic while its point (x, y) is no longitude and latitude:
+// its CRS is missing or wrong (GDAL reads a GeoJSON without a "crs" member as WGS 84).
+bool degrees_out_of_range(const std::string& wkt, double x, double y);
+
+// Whether two CRS have the same horizontal part (a compound CRS less its vertical one: 7415 is
+// 28992 plus NAP heights): by their EPSG codes where both have one, else as equivalent
+// definitions; an empty one (unknown) matches any.
+bool same_horizontal_crs(const std::string& wkt_a, const std::string& wkt_b);
 
 // "Amersfoort / RD New (EPSG:28992)": a CRS's name, with its EPSG code when it has one; "no CRS"
 // when wkt is empty.

@@ -64,7 +64,8 @@ void read_band_strips(GDALDataset& d, int band, const std::string& path, Use use
 // band and their shares (the eight most common), and, with three bands or more, the colour option.
 std::string held_values(GDALDataset& d, const std::string& path, const BuildingSelector& selector, bool is_rgb) {
   // Per value (a colour: its three bands' values), the pixels holding it, counted on at most 4
-  // million pixels of it (a raster of a region read with every n-th pixel, as GDAL decimates).
+  // million pixels of it (a raster of a region read with every n-th pixel, as GDAL decimates: from
+  // its overviews where it has some, which hold other values where they were averaged).
   std::map<std::array<int, 3>, std::size_t> counts;
   const int bands = is_rgb ? 3 : 1, cols = d.GetRasterXSize(), rows = d.GetRasterYSize();
   const double step = std::max(1.0, std::sqrt(double(cols) * double(rows) / 4e6));
@@ -168,8 +169,14 @@ MaskRaster read_building_mask(const std::string& path, const BuildingSelector& s
         }
       }
     });
-  if (cv::countNonZero(out.mask) == 0)
-    throw InputError("'" + path + "': no building pixel (" + selector.describe() + ") in the raster; " + held_values(*d, path, selector, bool(selector.rgb)));
+  if (cv::countNonZero(out.mask) == 0) {
+    std::string held;  // (what it holds instead, unless that cannot be read)
+    try {
+      held = "; " + held_values(*d, path, selector, bool(selector.rgb));
+    } catch (const std::exception&) {
+    }
+    throw InputError("'" + path + "': no building pixel (" + selector.describe() + ") in the raster" + held);
+  }
   return out;
 }
 
