@@ -28,9 +28,9 @@ int run_eval(int argc, char** argv) {
   // Every source in one CRS, in metres (PoLiS, Hausdorff and the areas are measured there). A
   // source whose CRS says degrees but whose coordinates are not (a GeoJSON without a "crs" member,
   // read as WGS 84) is taken as in an unknown CRS, which matches any.
-  std::string pred_crs;
-  const auto predicted = read_polygons(args.require("pred"), "--pred", &pred_crs);
-  const auto check = [&](const std::string& key, const std::string& path, const std::vector<PolygonWithHoles>& polygons, std::string& crs) {
+  // reference: --pred's CRS, which the others must share (null: this is --pred).
+  const auto check = [](const std::string& key, const std::string& path, const std::vector<PolygonWithHoles>& polygons, std::string& crs,
+                        const std::string* reference) {
     if (polygons.empty() || polygons.front().outer.empty()) return;
     const Vec2 at = polygons.front().outer[0];
     if (degrees_out_of_range(crs, at.x(), at.y())) {
@@ -39,22 +39,23 @@ int run_eval(int argc, char** argv) {
       crs.clear();
       return;
     }
-    const bool pred = key == "--pred";
-    if (const std::string problem = metric_crs_problem(crs, at.x(), at.y(), true, pred ? std::string() : epsg_of(pred_crs)); !problem.empty())
+    const std::string reference_epsg = reference ? epsg_of(*reference) : std::string();
+    if (const std::string problem = metric_crs_problem(crs, at.x(), at.y(), true, reference_epsg); !problem.empty())
       throw InputError(key + " '" + path + "': " + problem);
-    if (!pred && !same_horizontal_crs(crs, pred_crs))
-      throw InputError(key + " '" + path + "': is in " + crs_label(crs) + ", --pred in " + crs_label(pred_crs) +
+    if (reference && !same_horizontal_crs(crs, *reference))
+      throw InputError(key + " '" + path + "': is in " + crs_label(crs) + ", --pred in " + crs_label(*reference) +
                        "; the footprints must share a CRS: reproject one, e.g. 'ogr2ogr -t_srs " +
-                       (epsg_of(pred_crs).empty() ? std::string("<the CRS of --pred>") : epsg_of(pred_crs)) + " OUT IN'");
+                       (reference_epsg.empty() ? std::string("<the CRS of --pred>") : reference_epsg) + " OUT IN'");
   };
-  check("--pred", args.require("pred"), predicted, pred_crs);
-  std::string gt_crs, aoi_crs;
+  std::string pred_crs, gt_crs, aoi_crs;
+  const auto predicted = read_polygons(args.require("pred"), "--pred", &pred_crs);
+  check("--pred", args.require("pred"), predicted, pred_crs, nullptr);
   const auto truth = read_polygons(args.require("gt"), "--gt", &gt_crs);
-  check("--gt", args.require("gt"), truth, gt_crs);
+  check("--gt", args.require("gt"), truth, gt_crs, &pred_crs);
   std::optional<PolygonWithHoles> aoi;
   if (auto a = args.get("aoi")) {
     const auto area = read_polygons(*a, "--aoi", &aoi_crs);
-    check("--aoi", *a, area, aoi_crs);
+    check("--aoi", *a, area, aoi_crs, &pred_crs);
     aoi = area.front();
   }
   const EvalResult r = evaluate(predicted, truth, aoi);

@@ -153,9 +153,8 @@ int run_job(int argc, char** argv) {
     throw UsageError("--progress '" + progress_mode + "': must be one of auto, bar, json, none");
 
   // Validate the inputs and the output before any work. The segmentation's CRS is read now (its
-  // unit must be the metre; reading the first CRS starts PROJ, ~12 ms); rasters on its very grid
-  // (the usual case) have theirs read and compared while the first tiles start (InputCrs); on
-  // other grids the CRS are needed now.
+  // unit must be the metre); rasters on its very grid (the usual case) have theirs read and
+  // compared while the first tiles start (InputCrs); on other grids the CRS are needed now.
   RasterInfo seg = inspect_raster(job.inputs.segmentation.path, "inputs.segmentation.path");
   seg.crs_wkt = raster_crs_wkt(job.inputs.segmentation.path, "inputs.segmentation.path");
   {
@@ -175,8 +174,7 @@ int run_job(int argc, char** argv) {
   }
   std::unique_ptr<InputCrs> input_crs;
   if (all_on_grid) {
-    input_crs = std::make_unique<InputCrs>(job.inputs.segmentation.path, "inputs.segmentation.path", companions,
-                                           job.inputs.on_grid_mismatch == "error", job.output.crs);
+    input_crs = std::make_unique<InputCrs>(seg.crs_wkt, companions, job.inputs.on_grid_mismatch == "error", job.output.crs);
   } else {
     for (std::size_t i = 0; i < companions.size(); ++i) {
       companion_grids[i].crs_wkt = raster_crs_wkt(companions[i].path, companions[i].key);

@@ -106,18 +106,21 @@ std::string wkt_of(const OGRSpatialReference& srs) {
   return out;
 }
 
+// Whether (x, y) can be no longitude and latitude.
+bool beyond_degrees(double x, double y) { return !(std::abs(x) <= 360 && std::abs(y) <= 90); }
+
 }  // namespace
 
 bool degrees_out_of_range(const std::string& wkt, double x, double y) {
   OGRSpatialReference srs;
-  return horizontal_of(wkt, srs) && srs.IsGeographic() && !(std::abs(x) <= 360 && std::abs(y) <= 90);
+  return horizontal_of(wkt, srs) && srs.IsGeographic() && beyond_degrees(x, y);
 }
 
 std::string metric_crs_problem(const std::string& wkt, double centre_x, double centre_y, bool vector, const std::string& target_epsg) {
   OGRSpatialReference srs;
   if (!horizontal_of(wkt, srs)) return {};
   std::string unit;
-  if (srs.IsGeographic() && degrees_out_of_range(wkt, centre_x, centre_y)) {
+  if (srs.IsGeographic() && beyond_degrees(centre_x, centre_y)) {
     char at[96];
     std::snprintf(at, sizeof at, "(%.1f, %.1f)", centre_x, centre_y);
     return "says it is in " + crs_label(wkt) + ", in degrees, but its coordinates " + at + " are not: its CRS is missing or wrong; " +
@@ -169,7 +172,6 @@ bool same_crs(const std::string& a, const std::string& b) {
 }
 
 struct InputCrs::Impl {
-  std::string segmentation_path, segmentation_key;
   std::vector<Companion> companions;
   bool strict = false;
   // Read once, by the first caller, outside TBB (no task of the run may cancel or skip it);
@@ -180,12 +182,10 @@ struct InputCrs::Impl {
   std::string wkt, epsg, output_crs;
 
   void read() {
-    std::string seg = raster_crs_wkt(segmentation_path, segmentation_key);
     for (const Companion& c : companions)
-      if (strict && !same_crs(seg, raster_crs_wkt(c.path, c.key)))
+      if (strict && !same_crs(wkt, raster_crs_wkt(c.path, c.key)))
         throw InputError(c.key + ": '" + c.path + "': is on another grid and CRS than the segmentation (inputs.on_grid_mismatch: error)");
-    epsg = output_crs.empty() ? epsg_of(seg) : declared_output_crs(output_crs, seg);
-    wkt = std::move(seg);
+    epsg = output_crs.empty() ? epsg_of(wkt) : declared_output_crs(output_crs, wkt);
   }
 };
 
@@ -195,12 +195,9 @@ InputCrs::InputCrs(std::string wkt, std::string output_crs) : impl_(new Impl) {
   impl_->done = true;
 }
 
-InputCrs::InputCrs(std::string segmentation_path, std::string segmentation_key, std::vector<Companion> companions, bool strict,
-                   std::string output_crs)
-    : impl_(new Impl) {
+InputCrs::InputCrs(std::string wkt, std::vector<Companion> companions, bool strict, std::string output_crs) : impl_(new Impl) {
   impl_->output_crs = std::move(output_crs);
-  impl_->segmentation_path = std::move(segmentation_path);
-  impl_->segmentation_key = std::move(segmentation_key);
+  impl_->wkt = std::move(wkt);
   impl_->companions = std::move(companions);
   impl_->strict = strict;
 }

@@ -48,9 +48,9 @@ std::string crs_label(const std::string& wkt);
 bool same_crs(const std::string& wkt_a, const std::string& wkt_b);
 
 // The segmentation raster's CRS, and the check that each companion raster (DSM, DTM, orthophoto)
-// on its very grid (same size and geotransform) is in the same CRS. Read when first asked for, so
-// that a run starts its first tiles meanwhile: the tiles need the CRS only to write their files,
-// so an input in another CRS still fails before any output is written. Thread-safe; a failure
+// on its very grid (same size and geotransform) is in the same CRS. The companions' read when
+// first asked for, so that a run starts its first tiles meanwhile: the tiles need the CRS only to
+// write their files, so an input in another CRS still fails before any output is written. Thread-safe; a failure
 // (InputError naming the companion's key and file) is thrown to every caller.
 class InputCrs {
  public:
@@ -59,9 +59,9 @@ class InputCrs {
   };
   // Already known (the inputs were checked before the run). output_crs: output.crs (see epsg()).
   explicit InputCrs(std::string wkt, std::string output_crs = {});
-  // Checked on first use; a companion in another CRS fails when `strict` (on_grid_mismatch: error).
-  InputCrs(std::string segmentation_path, std::string segmentation_key, std::vector<Companion> companions, bool strict,
-           std::string output_crs = {});
+  // The segmentation's CRS (wkt) known; the companions' checked on first use: one in another CRS
+  // fails when `strict` (on_grid_mismatch: error).
+  InputCrs(std::string wkt, std::vector<Companion> companions, bool strict, std::string output_crs = {});
   ~InputCrs();
   const std::string& wkt() const;
   // The CRS the 3D outputs declare, "EPSG:7415": output.crs when given (checked on first use:

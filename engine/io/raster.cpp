@@ -61,8 +61,9 @@ void read_band_strips(GDALDataset& d, int band, const std::string& path, Use use
 }
 
 // What a raster holds where no building pixel was found, for the message: the values of its first
-// band and their shares (the eight most common), and, with three bands or more, the colour option.
-std::string held_values(GDALDataset& d, const std::string& path, const BuildingSelector& selector, bool is_rgb) {
+// band (is_rgb: the colours of its first three) and their shares, the eight most common, and the
+// option that selects the buildings.
+std::string held_values(GDALDataset& d, const std::string& path, bool is_rgb) {
   // Per value (a colour: its three bands' values), the pixels holding it, counted on at most 4
   // million pixels of it (a raster of a region read with every n-th pixel, as GDAL decimates: from
   // its overviews where it has some, which hold other values where they were averaged).
@@ -92,7 +93,7 @@ std::string held_values(GDALDataset& d, const std::string& path, const BuildingS
     total += count;
   }
   std::sort(common.begin(), common.end(), [](const auto& a, const auto& b) { return a.first != b.first ? a.first > b.first : a.second < b.second; });
-  std::string text = is_rgb ? "its colours are " : "its band 1 holds ";
+  std::string text = is_rgb ? "colours are " : "band 1 holds ";
   for (std::size_t k = 0; k < common.size() && k < 8; ++k) {
     char share[32];
     std::snprintf(share, sizeof share, "%.1f", 100.0 * double(common[k].first) / double(std::max<std::size_t>(1, total)));
@@ -123,7 +124,7 @@ std::string held_values(GDALDataset& d, const std::string& path, const BuildingS
 std::string values_held(const std::string& path, const BuildingSelector& selector) {
   GDALAllRegister();
   Dataset d = open_raster(path);
-  return held_values(*d, path, selector, selector.rgb && d->GetRasterCount() >= 3);
+  return held_values(*d, path, selector.rgb && d->GetRasterCount() >= 3);
 }
 
 MaskRaster read_building_mask(const std::string& path, const BuildingSelector& selector) {
@@ -172,7 +173,7 @@ MaskRaster read_building_mask(const std::string& path, const BuildingSelector& s
   if (cv::countNonZero(out.mask) == 0) {
     std::string held;  // (what it holds instead, unless that cannot be read)
     try {
-      held = "; " + held_values(*d, path, selector, bool(selector.rgb));
+      held = "; its " + held_values(*d, path, bool(selector.rgb));
     } catch (const std::exception&) {
     }
     throw InputError("'" + path + "': no building pixel (" + selector.describe() + ") in the raster" + held);

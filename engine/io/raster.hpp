@@ -39,7 +39,7 @@ struct MaskRaster {
 // count for the selector, or no building pixel at all.
 MaskRaster read_building_mask(const std::string& path, const BuildingSelector& selector);
 
-// "its band 1 holds 0 (86.2 %), 255 (13.8 %): select the buildings by their value (...)": what
+// "band 1 holds 0 (86.2 %), 255 (13.8 %): select the buildings by their value (...)": what
 // a raster without a building pixel holds instead (the eight most common values, or colours
 // for an RGB selector; counted on at most 4 million of its pixels), and the option that selects
 // the buildings.

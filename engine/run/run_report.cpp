@@ -266,17 +266,10 @@ void write_index_and_report(const Totals& totals, const RunPlan& plan, const std
                  totals.contour_seconds, totals.core_seconds, totals.heights_seconds, totals.write_seconds);
   if (totals.buildings == 0 && totals.dropped_small == 0 && totals.too_large.empty()) {
     std::string held;  // (what the raster holds: read again, so for a whole raster only, not a shard)
-    if (shard_count <= 1) {
-      BuildingSelector selector;
-      selector.values = job.inputs.segmentation.building_values;
-      const auto& rgb = job.inputs.segmentation.building_rgb;
-      if (rgb.size() == 3) selector.rgb = std::array<int, 3>{rgb[0], rgb[1], rgb[2]};
-      try {
-        held = values_held(job.inputs.segmentation.path, selector);
-      } catch (const std::exception&) {
-      }
+    try {
+      if (shard_count <= 1) held = " Its " + values_held(job.inputs.segmentation.path, plan.selector);
+    } catch (const std::exception&) {
     }
-    if (!held.empty()) held = " I" + held.substr(1);  // "Its band 1 holds ..."
     spdlog::warn("no building found in {}{}: is inputs.segmentation.{} right for this raster?{}", job.inputs.segmentation.path,
                  shard_count > 1 ? " (in this shard)" : "", job.inputs.segmentation.building_rgb.empty() ? "building_values" : "building_rgb",
                  held);
