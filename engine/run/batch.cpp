@@ -115,23 +115,19 @@ PooledStarts pool_starts(const std::vector<BuildingContour>& buildings, double p
   const std::vector<std::size_t> judged = spread_indices(buildings.size(), std::size_t(std::max(1, options.smoothing.noise_gain_buildings)));
   std::vector<std::size_t> rest;
   std::set_difference(all.begin(), all.end(), judged.begin(), judged.end(), std::back_inserter(rest));
-  // The judged buildings' starts smoothed wider beside the kept ones (their time counts only if kept).
+  // The judged buildings' starts smoothed wider beside the kept ones (the round's time counts in
+  // each judged building's, whether the round is kept or not).
   std::vector<BuildingStart> trial;
-  std::vector<double> trial_seconds;
   const auto judge = [&](double wider_m) {
     trial.assign(buildings.size(), BuildingStart{});
-    trial_seconds.clear();
     start_each(judged, wider_m, [&](std::size_t i) { return restart_building(buildings[i].rings, pixel_size, options, pooled.starts[i], wider_m); },
-               trial, seconds ? &trial_seconds : nullptr);
+               trial, seconds);
     std::vector<NoiseSample> judged_samples;
     for (std::size_t i : judged) judged_samples.push_back(trial[i].sample);
     return judged_samples;
   };
   const auto keep_judged = [&] {
-    for (std::size_t i : judged) {
-      pooled.starts[i] = std::move(trial[i]);
-      if (seconds) (*seconds)[i] += trial_seconds[i];
-    }
+    for (std::size_t i : judged) pooled.starts[i] = std::move(trial[i]);
   };
   const auto finish = [&](double wider_m) {
     start_each(rest, wider_m,
