@@ -6,11 +6,13 @@
 #include <algorithm>
 #include <array>
 #include <chrono>
+#include <cmath>
 #include <csignal>
 #include <fcntl.h>
 #include <filesystem>
 #include <fstream>
 #include <gdal_priv.h>
+#include <limits>
 #include <map>
 #include <nlohmann/json.hpp>
 #include <ogrsf_frmts.h>
@@ -22,6 +24,7 @@
 #include <thread>
 #include <unistd.h>
 
+#include "io/raster_writer.hpp"
 #include "run/batch.hpp"
 #include "run/run_report.hpp"
 #include "support/process.hpp"
@@ -462,6 +465,93 @@ TEST_F(Run, AFastWobbleIsSmoothedAlikeInARunAndInRegularize) {
   EXPECT_TRUE(run == regularized) << run.size() << " against " << regularized.size();
 }
 
+// A network's probability raster, as 32-bit floats and as bytes 0-255, is read by a threshold
+// (regularize --building-min, a job's inputs.segmentation.building_min): the class mask's
+// buildings, never at the band's nodata value (a strip of it above the threshold). Read by a
+// class value it is told what it holds and the threshold to try.
+TEST_F(Run, AProbabilityMaskIsReadByAThreshold) {
+  const Result made = lodforge("synth --out " + (dir / "city").string() + " --size-m 150 --seed 3");
+  ASSERT_EQ(made.code, 0) << made.output;
+  GDALAllRegister();
+  GDALDataset* classes = static_cast<GDALDataset*>(GDALOpen((dir / "city" / "seg_class.tif").c_str(), GA_ReadOnly));
+  ASSERT_NE(classes, nullptr);
+  const int w = classes->GetRasterXSize(), h = classes->GetRasterYSize();
+  cv::Mat value(h, w, CV_8U);
+  ASSERT_EQ(classes->GetRasterBand(1)->RasterIO(GF_Read, 0, 0, w, h, value.data, w, h, GDT_Byte, 0, 0), CE_None);
+  RasterMeta meta;
+  classes->GetGeoTransform(meta.transform.c.data());
+  meta.crs_wkt = classes->GetProjectionRef();
+  GDALClose(classes);
+  cv::Mat probability(h, w, CV_32F), bytes(h, w, CV_8U);
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x) {
+      const float spread = 0.45f * float((7 * x + 13 * y) % 100) / 100.0f;
+      const bool building = value.at<uint8_t>(y, x) == 6;
+      probability.at<float>(y, x) = building ? 0.55f + spread : (y < 10 ? 2.0f : spread);
+      bytes.at<uint8_t>(y, x) = uint8_t(std::lround(255 * (building ? 0.55f + spread : spread)));
+    }
+  RasterMeta with_nodata = meta, nan_nodata = meta;
+  with_nodata.nodata = 2, with_nodata.has_nodata = true;
+  write_geotiff((dir / "probability.tif").string(), {probability}, with_nodata);
+  write_geotiff((dir / "bytes.tif").string(), {bytes}, meta);
+  cv::Mat with_nan = probability.clone();
+  with_nan.setTo(std::numeric_limits<float>::quiet_NaN(), probability == 2.0f);
+  nan_nodata.nodata = std::numeric_limits<double>::quiet_NaN(), nan_nodata.has_nodata = true;
+  write_geotiff((dir / "nan.tif").string(), {with_nan}, nan_nodata);
+  ASSERT_EQ(lodforge("regularize --mask " + (dir / "city" / "seg_class.tif").string() + " --out " + (dir / "c.gpkg").string()).code, 0);
+  Result r = lodforge("regularize --mask " + (dir / "probability.tif").string() + " --building-min 0.5 --out " + (dir / "p.gpkg").string());
+  ASSERT_EQ(r.code, 0) << r.output;
+  r = lodforge("regularize --mask " + (dir / "bytes.tif").string() + " --building-min 128 --out " + (dir / "b.gpkg").string());
+  ASSERT_EQ(r.code, 0) << r.output;
+  const std::multiset<std::string> expected = gpkg_outlines(dir / "c.gpkg");
+  EXPECT_GT(expected.size(), 5u);
+  EXPECT_TRUE(gpkg_outlines(dir / "p.gpkg") == expected);
+  EXPECT_TRUE(gpkg_outlines(dir / "b.gpkg") == expected);
+  // Read by a class value: what it holds (its nodata value, 2 or a NaN, not among them) and a
+  // threshold; a float of 0.85 is not class 1 (GDAL's conversion to integers would round it).
+  for (const char* name : {"probability.tif", "nan.tif"}) {
+    r = lodforge("regularize --mask " + (dir / name).string() + " --out " + (dir / "x.gpkg").string());
+    EXPECT_EQ(r.code, 1) << r.output;
+    EXPECT_NE(r.output.find("no building pixel (value 6) in the raster; its band 1 holds"), std::string::npos) << r.output;
+    EXPECT_NE(r.output.find("different values, from 0 to 0.9955 (a probability or a score?): select the buildings by a threshold "
+                            "(regularize --building-min V, e.g. 0.5; a job's inputs.segmentation.building_min)"),
+              std::string::npos)
+        << name << r.output;
+  }
+  r = lodforge("regularize --mask " + (dir / "probability.tif").string() + " --building-value 1 --out " + (dir / "x.gpkg").string());
+  EXPECT_EQ(r.code, 1) << r.output;
+  EXPECT_NE(r.output.find("no building pixel (value 1) in the raster"), std::string::npos) << r.output;
+  // Its bytes read by a class value: a few pixels each of many values, none a building, and a threshold besides.
+  r = lodforge("regularize --mask " + (dir / "bytes.tif").string() + " --out " + (dir / "x.gpkg").string());
+  EXPECT_EQ(r.code, 1) << r.output;
+  EXPECT_NE(r.output.find("no building of at least 4 m^2 and 2 pixels"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("more values: select the buildings by their value (regularize --building-value V; a job's "
+                          "inputs.segmentation.building_values) or, a probability or a score, by a threshold (regularize "
+                          "--building-min V, e.g. 127;"),
+            std::string::npos)
+      << r.output;
+  r = lodforge("regularize --mask " + (dir / "bytes.tif").string() + " --building-min 1 --building-value 6 --out " + (dir / "x.gpkg").string());
+  EXPECT_EQ(r.code, 1) << r.output;
+  EXPECT_NE(r.output.find("give one of --building-value, --building-rgb and --building-min, not several"), std::string::npos) << r.output;
+  EXPECT_FALSE(fs::exists(dir / "x.gpkg"));
+  // A job's threshold, in tiles: the same buildings; with a colour as well, refused.
+  std::ofstream(dir / "p.yaml") << "inputs:\n  segmentation: {path: " << (dir / "probability.tif").string()
+                                << ", building_min: [0.5]}\ntiling: {tile_size_m: 60}\noutput: {dir: p_out}\nwork_dir: p_work\n";
+  r = lodforge("run " + (dir / "p.yaml").string());
+  ASSERT_EQ(r.code, 0) << r.output;
+  EXPECT_TRUE(run_outlines(dir / "p_out") == expected);
+  std::ofstream(dir / "b.yaml") << "inputs:\n  segmentation: {path: " << (dir / "bytes.tif").string()
+                                << ", building_min: [128]}\ntiling: {tile_size_m: 60}\noutput: {dir: b_out}\nwork_dir: b_work\n";
+  r = lodforge("run " + (dir / "b.yaml").string());
+  ASSERT_EQ(r.code, 0) << r.output;
+  EXPECT_TRUE(run_outlines(dir / "b_out") == expected);
+  std::ofstream(dir / "both.yaml") << "inputs:\n  segmentation: {path: " << (dir / "probability.tif").string()
+                                   << ", building_min: [0.5], building_rgb: [0, 0, 255]}\noutput: {dir: both_out}\nwork_dir: both_work\n";
+  r = lodforge("run " + (dir / "both.yaml").string());
+  EXPECT_EQ(r.code, 1) << r.output;
+  EXPECT_NE(r.output.find("inputs.segmentation.building_min: give it or building_rgb, not both"), std::string::npos) << r.output;
+}
+
 // At 0.1 m pixels (not exact in binary) under a fractional origin and half a metre of wobble,
 // tiles of 47 m, one tile and `regularize` give the same outlines (16 buildings): a
 // window's coordinates (its origin plus its pixels) come out as the whole raster's.
@@ -841,7 +931,7 @@ TEST_F(SynthRun, EveryTilingGivesTheOneTileRunsBuildings) {
   int k = 0;
   for (const double tile : {37.0, 60.0, 100.0})
     for (const double halo : {0.0, 0.3, 3.0}) {
-      const std::string name = "t" + std::to_string(k++);
+      const std::string name = std::string("t").append(std::to_string(k++));
       r = lodforge("run " + job(name, seg, tile).string() + " --set tiling.halo_m=" + std::to_string(halo));
       ASSERT_EQ(r.code, 0) << r.output;
       EXPECT_TRUE(footprints(dir / (name + "_out")) == whole) << "tile " << tile << " m, halo " << halo << " m";

@@ -1,5 +1,6 @@
 // lodforge regularize: the per-building core on one segmentation raster, LOD0 polygons out.
 #include <algorithm>
+#include <cmath>
 #include <cstdint>
 #include <atomic>
 #include <sstream>
@@ -25,8 +26,8 @@ namespace {
 
 BuildingSelector parse_selector(const Args& args) {
   BuildingSelector selector;
-  if (args.has("building-rgb") && args.has("building-value"))
-    throw InputError("give either --building-value or --building-rgb, not both");
+  if (int(args.has("building-rgb")) + int(args.has("building-value")) + int(args.has("building-min")) > 1)
+    throw InputError("give one of --building-value, --building-rgb and --building-min, not several");
   auto numbers = [](const std::string& text, const std::string& flag) {
     std::vector<int> out;
     std::size_t start = 0;
@@ -51,6 +52,14 @@ BuildingSelector parse_selector(const Args& args) {
     selector.rgb = std::array<int, 3>{v[0], v[1], v[2]};
   } else if (auto values = args.get("building-value")) {
     selector.values = numbers(*values, "--building-value");
+  } else if (auto min = args.get("building-min")) {
+    try {
+      std::size_t used = 0;
+      selector.min = std::stod(*min, &used);
+      if (used != min->size() || !std::isfinite(*selector.min)) throw std::invalid_argument(*min);
+    } catch (const std::exception&) {
+      throw InputError("--building-min '" + *min + "': not a number");
+    }
   }
   return selector;
 }
@@ -70,6 +79,7 @@ int run_regularize(int argc, char** argv) {
   args.value("mask", "RASTER", "segmentation raster (any GDAL format), georeferenced")
       .value("building-value", "V[,V...]", "class value(s) of buildings in a one-band raster (default 6)")
       .value("building-rgb", "R,G,B", "building colour in an RGB raster, e.g. 0,0,255 (ISPRS)")
+      .value("building-min", "V", "buildings are the pixels of a one-band raster whose value is at least V: a network's probability or score, e.g. 0.5 (never its nodata value)")
       .value("out", "FILE", "output footprints (.gpkg or .geojson): id, status, stage, reason, regularizer, model (the outline the paper's chain chose: docs/models.md), vertex_count, area_m2")
       .value("route", "NAME", "corner route: 'original' (lines fitted to the raw contour) or 'deformed' (the paper)")
       .value("regularizer", "NAME", "one of " + regularizer_list() + " (default: deformation, the paper's chain; see lodforge options)")
@@ -103,10 +113,15 @@ int run_regularize(int argc, char** argv) {
                selector.describe());
   const ContourResult contours = extract_contours(raster.mask, raster.transform, options.contour);
   const std::size_t count = contours.buildings.size();
-  if (count == 0)
-    throw InputError("'" + mask_path + "': no building of at least " + std::to_string(options.contour.min_area_m2) + " m^2 and " +
-                     std::to_string(options.contour.min_pixels) + " pixels (" + std::to_string(contours.dropped_small) +
-                     " smaller components dropped)");
+  if (count == 0) {
+    std::string held;  // (what the raster holds, which may tell a wrong selector: a probability read by a value)
+    try {
+      if (!selector.min) held = "; its " + values_held(mask_path, selector);
+    } catch (const std::exception&) {
+    }
+    throw InputError(fmt::format("'{}': no building of at least {:g} m^2 and {} pixels ({} smaller components dropped){}", mask_path,
+                                 options.contour.min_area_m2, options.contour.min_pixels, contours.dropped_small, held));
+  }
   spdlog::info("{} buildings, {} components below {} m^2 or {} pixels dropped", count, contours.dropped_small, options.contour.min_area_m2,
                options.contour.min_pixels);
 

@@ -187,6 +187,7 @@ int run_job(int argc, char** argv) {
   if (job.inputs.segmentation.building_rgb.size() == 3)
     selector.rgb = std::array<int, 3>{job.inputs.segmentation.building_rgb[0], job.inputs.segmentation.building_rgb[1],
                                       job.inputs.segmentation.building_rgb[2]};
+  if (job.inputs.segmentation.building_min.size() == 1) selector.min = job.inputs.segmentation.building_min[0];
   MaskWindowReader(job.inputs.segmentation.path, selector);  // fails early on a wrong band count
   const fs::path out_dir = job.output.dir;
   std::error_code ec;

@@ -22,11 +22,15 @@ using Dataset = std::unique_ptr<GDALDataset, DatasetCloser>;
 // can read, has no raster band); "KEY: " only when a key is given.
 Dataset open_raster(const std::string& path, const std::string& key = "");
 
-// Which pixels are buildings: class values of a one-band raster, or an RGB colour.
+// Which pixels are buildings: class values of a one-band raster, an RGB colour, or the values of a
+// one-band raster at or above a threshold (a network's probability or score; not its nodata value).
+// A floating-point band's values are compared as they are (0.85 is not class 1).
 struct BuildingSelector {
   std::vector<int> values{6};
   std::optional<std::array<int, 3>> rgb;
-  std::string describe() const;
+  std::optional<double> min;  // overrides values
+  std::string describe() const;  // "value 6", "colour (0, 0, 255)", "value at least 0.5"
+  std::string job_key() const;   // the job's key that selects so: "inputs.segmentation.building_values", ...
 };
 
 struct MaskRaster {
@@ -34,6 +38,12 @@ struct MaskRaster {
   GeoTransform transform;
   std::string crs_wkt;      // may be empty if the raster has none
 };
+
+// Whether a band holds floating-point values (Float32, Float64 and their complex kinds).
+bool floating_band(GDALDataset& dataset, int band);
+
+// A band's nodata value as its pixels hold it (a Float32 band's as a float), if it has one.
+std::optional<double> band_nodata(GDALDataset& dataset, int band);
 
 // Throws InputError naming the file: missing, not a raster, no georeference, wrong band
 // count for the selector, or no building pixel at all.

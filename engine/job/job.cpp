@@ -51,8 +51,11 @@ Job load_job(const std::string& path, const std::vector<std::string>& overrides)
                      std::to_string(job.tiling.tile_size_m + 2 * job.tiling.halo_m) + ")");
   const auto& rgb = job.inputs.segmentation.building_rgb;
   if (!rgb.empty() && rgb.size() != 3) errors.push_back("inputs.segmentation.building_rgb: needs three values [R, G, B]");
-  if (rgb.empty() && job.inputs.segmentation.building_values.empty())
-    errors.push_back("inputs.segmentation.building_values: needs at least one value (or give building_rgb)");
+  const auto& min = job.inputs.segmentation.building_min;
+  if (min.size() > 1) errors.push_back("inputs.segmentation.building_min: needs one value [V] (or none)");
+  if (!min.empty() && !rgb.empty()) errors.push_back("inputs.segmentation.building_min: give it or building_rgb, not both");
+  if (rgb.empty() && min.empty() && job.inputs.segmentation.building_values.empty())
+    errors.push_back("inputs.segmentation.building_values: needs at least one value (or give building_rgb or building_min)");
   for (auto [key, p] : {std::pair{"inputs.segmentation.path", job.inputs.segmentation.path},
                         {"inputs.dsm.path", job.inputs.dsm.path}, {"inputs.dtm.path", job.inputs.dtm.path},
                         {"inputs.orthophoto.path", job.inputs.orthophoto.path}}) {

@@ -14,12 +14,14 @@ struct SegmentationInput {
   std::string path;
   std::vector<int> building_values{6};  // class values of buildings (one-band raster)
   std::vector<int> building_rgb;        // or an RGB colour, e.g. [0, 0, 255]; overrides values
+  std::vector<double> building_min;     // or [V]: band 1 at or above V (a probability); overrides values
 
   template <class V>
   void visit(V& v) {
     v("path", path, "segmentation raster (any GDAL format), georeferenced; required");
     v("building_values", building_values, "class values that are buildings in a one-band raster", Check::between(-2147483648.0, 2147483647.0));
     v("building_rgb", building_rgb, "building colour of an RGB raster, e.g. [0, 0, 255] (ISPRS); empty: use building_values", Check::between(0, 65535));
+    v("building_min", building_min, "[V]: the buildings are the pixels of a one-band raster whose value is at least V, a network's probability or score, e.g. [0.5] (never its nodata value); empty: use building_values");
   }
 };
 

@@ -270,9 +270,8 @@ void write_index_and_report(const Totals& totals, const RunPlan& plan, const std
       if (shard_count <= 1) held = " Its " + values_held(job.inputs.segmentation.path, plan.selector);
     } catch (const std::exception&) {
     }
-    spdlog::warn("no building found in {}{}: is inputs.segmentation.{} right for this raster?{}", job.inputs.segmentation.path,
-                 shard_count > 1 ? " (in this shard)" : "", job.inputs.segmentation.building_rgb.empty() ? "building_values" : "building_rgb",
-                 held);
+    spdlog::warn("no building found in {}{}: is {} right for this raster?{}", job.inputs.segmentation.path,
+                 shard_count > 1 ? " (in this shard)" : "", plan.selector.job_key(), held);
   }
   spdlog::info("outputs in {} (tile_index{}.geojson, report{}.json)", out_dir.string(), suffix, suffix);
 }

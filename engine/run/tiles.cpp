@@ -2,6 +2,7 @@
 
 #include <chrono>
 #include <map>
+#include <optional>
 #include <cstdio>
 #include <gdal_priv.h>
 #include <opencv2/imgproc.hpp>
@@ -35,6 +36,8 @@ struct MaskWindowReader::Impl {
   std::string path;
   BlockCache* cache = nullptr;
   bool byte_values = true;  // every selected value fits a byte: a byte band is read and compared as bytes
+  bool as_double = false;   // a threshold, or a floating-point band: read and compared as 64-bit floats
+  std::optional<double> nodata;  // the band's, never a building by a threshold
 };
 
 MaskWindowReader::MaskWindowReader(const std::string& path, const BuildingSelector& selector, BlockCache* cache) : impl_(new Impl) {
@@ -61,6 +64,10 @@ MaskWindowReader::MaskWindowReader(const std::string& path, const BuildingSelect
     throw InputError("'" + path + "': has " + std::to_string(bands) + " bands; building values are read from a one-band class raster " +
                      "(for an RGB label raster give inputs.segmentation.building_rgb, e.g. [0, 0, 255])");
   }
+  if (!selector.rgb) {
+    impl_->as_double = selector.min || floating_band(*impl_->dataset, 1);
+    impl_->nodata = band_nodata(*impl_->dataset, 1);
+  }
 }
 
 MaskWindowReader::~MaskWindowReader() {
@@ -85,6 +92,26 @@ cv::Mat MaskWindowReader::read(const cv::Rect& w) const {
       cv::compare(band(b + 1), cv::Scalar((*impl_->selector.rgb)[b]), match, cv::CMP_EQ);
       if (b == 0) mask = match;
       else cv::bitwise_and(mask, match, mask);
+    }
+  } else if (impl_->as_double) {
+    // As read_building_mask: a threshold (not at the nodata value; a NaN compares false), or the
+    // class values against a floating-point band's own values.
+    cv::Mat values(w.height, w.width, CV_64F);
+    read_window(impl_->cache, *impl_->dataset, impl_->path, 1, GDT_Float64, w, values.data);
+    if (const std::optional<double>& min = impl_->selector.min) {
+      cv::compare(values, cv::Scalar(*min), mask, cv::CMP_GE);
+      if (impl_->nodata) {
+        cv::Mat valid;
+        cv::compare(values, cv::Scalar(*impl_->nodata), valid, cv::CMP_NE);
+        cv::bitwise_and(mask, valid, mask);
+      }
+    } else {
+      mask = cv::Mat::zeros(w.size(), CV_8U);
+      for (int v : impl_->selector.values) {
+        cv::Mat match;
+        cv::compare(values, cv::Scalar(v), match, cv::CMP_EQ);
+        cv::bitwise_or(mask, match, mask);
+      }
     }
   } else {
     const cv::Mat values = band(1);
