@@ -3,6 +3,8 @@
 #include <cmath>
 #include <cstdint>
 #include <atomic>
+#include <chrono>
+#include <optional>
 #include <sstream>
 #include <iostream>
 #include <map>
@@ -128,9 +130,27 @@ int run_regularize(int argc, char** argv) {
   std::atomic<std::size_t> done{0};
   std::unique_ptr<tbb::global_control> limit;
   if (threads > 0) limit = std::make_unique<tbb::global_control>(tbb::global_control::max_allowed_parallelism, threads);
-  if (pools_noise(regularizer, options.core))
+  // The mask's noise measured first at twice its pixel (noise.coarse_resolved_px): taken where it
+  // is resolved there, its pooling's time shared by every building.
+  std::optional<MaskNoise> coarse_noise;
+  double coarse_seconds = 0;
+  std::size_t coarse_samples = 0;
+  if (pools_noise(regularizer, options.core) && tries_coarse_noise(pixel_size, options.core)) {
+    // (Its time: each start and round, summed and shared by the buildings; the averaging and the
+    // tracing, as the tracing at the pixel, are not a building's regularization.)
+    const MaskRaster half = averaged(raster, 2);
+    const ContourResult coarse = extract_contours(half.mask, half.transform, options.contour);
+    const MaskNoise noise = pooled_noise(coarse.buildings, half.transform.pixel_size(), options.core, &coarse_samples, &coarse_seconds);
+    coarse_noise = coarse_noise_taken(noise, pixel_size, options.core);
+    const bool resolved = coarse_noise.has_value();
+    spdlog::info("boundary noise pooled over the {} buildings of the mask averaged to twice its pixel: {:.3f} m, {} {} pixels "
+                 "(stages.noise.coarse_resolved_px): {}",
+                 coarse.buildings.size(), noise.floor_m, resolved ? "at least" : "less than", options.core.noise.coarse_resolved_px,
+                 resolved ? "the mask's noise" : "measured again at the pixel");
+  }
+  if (pools_noise(regularizer, options.core) && !coarse_noise)
     spdlog::info("measuring the boundary noise of {} buildings, to pool it (stages.noise.pooled_floor)", count);
-  const RegularizedBatch batch = regularize_batch(regularizer, contours.buildings, pixel_size, options.core, std::nullopt,
+  RegularizedBatch batch = regularize_batch(regularizer, contours.buildings, pixel_size, options.core, coarse_noise,
                                                   Lenders{Lenders::From::batch, {}}, [&] {
     const std::size_t n = ++done;
     if (count >= 20 && n % (count / 10) == 0) spdlog::info("{}/{} buildings", n, count);
@@ -138,6 +158,8 @@ int run_regularize(int argc, char** argv) {
   if (batch.noise_samples > 0)
     spdlog::info("boundary noise pooled over {} buildings: {:.3f} m (stages.noise.pooled_floor = {}), normals smoothed for {:.3f} m",
                  batch.noise_samples, batch.noise_floor_m, options.core.noise.pooled_floor, batch.noise_smoothing_m);
+  for (BuildingResult& r : batch.results) r.seconds += coarse_seconds / double(count);
+  if (coarse_noise) batch.noise_samples = coarse_samples;
   const std::vector<BuildingResult>& results = batch.results;
 
   std::vector<FootprintRecord> records(count);
@@ -206,6 +228,7 @@ int run_regularize(int argc, char** argv) {
     out["noise_floor_m"] = batch.noise_floor_m;
     out["noise_smoothing_m"] = batch.noise_smoothing_m;
     out["noise_samples"] = batch.noise_samples;
+    if (pools_noise(regularizer, options.core)) out["noise_pixel_m"] = coarse_noise ? 2 * pixel_size : pixel_size;  // where it was measured
     if (regularizer == "deformation") out["models"] = models;
     out["seconds_total"] = total;
     times(all, out);

@@ -271,8 +271,22 @@ int run_job(int argc, char** argv) {
     // (At most the raster's side, and the largest window a tile may read.)
     const double window_px = std::min({job.tiling.noise_survey_window_m / pixel, double(std::max(seg.size.width, seg.size.height)),
                                        job.tiling.max_window_m / pixel});
-    survey = survey_noise(MaskWindowReader(job.inputs.segmentation.path, selector), seg.size, seg.transform, job.stages.contour,
-                          job.stages.core, std::max(16, int(std::ceil(window_px))), job.tiling.noise_survey_windows);
+    const MaskWindowReader reader(job.inputs.segmentation.path, selector);
+    const int survey_px = std::max(16, int(std::ceil(window_px)));
+    // First at twice the pixel (stages.noise.coarse_resolved_px), as regularize measures it.
+    bool resolved = false;
+    if (tries_coarse_noise(pixel, job.stages.core)) {
+      survey = survey_noise(reader, seg.size, seg.transform, job.stages.contour, job.stages.core, survey_px, job.tiling.noise_survey_windows, 2);
+      const std::optional<MaskNoise> taken = survey.buildings > 0 ? coarse_noise_taken(survey.noise, pixel, job.stages.core) : std::nullopt;
+      resolved = taken.has_value();
+      if (resolved) survey.noise = *taken;
+      spdlog::info("boundary noise pooled over {} buildings of the mask averaged to twice its pixel: {:.3f} m, {} {} pixels "
+                   "(stages.noise.coarse_resolved_px): {}",
+                   survey.buildings, survey.noise.floor_m, resolved ? "at least" : "less than", job.stages.core.noise.coarse_resolved_px,
+                   resolved ? "the raster's noise" : "surveyed again at the pixel");
+    }
+    if (!resolved)
+      survey = survey_noise(reader, seg.size, seg.transform, job.stages.contour, job.stages.core, survey_px, job.tiling.noise_survey_windows);
     if (survey.buildings == 0)
       spdlog::warn("tiling.noise_survey_windows: no building found whole in the survey's {} window(s) of {} m; each building "
                    "allows for its own boundary noise only (more or larger windows survey more)",

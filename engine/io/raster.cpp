@@ -184,6 +184,28 @@ std::string values_held(const std::string& path, const BuildingSelector& selecto
   return held_values(*d, path, selector.rgb && d->GetRasterCount() >= 3);
 }
 
+cv::Mat average_blocks(const cv::Mat& mask, cv::Size blocks, int f) {
+  cv::Mat sums = cv::Mat::zeros(blocks, CV_32S);
+  for (int y = 0; y < std::min(mask.rows, blocks.height * f); ++y) {
+    const uint8_t* m = mask.ptr<uint8_t>(y);
+    int* row = sums.ptr<int>(y / f);
+    for (int x = 0; x < std::min(mask.cols, blocks.width * f); ++x) row[x / f] += m[x];
+  }
+  cv::Mat out(blocks, CV_8U);
+  for (int y = 0; y < blocks.height; ++y)
+    for (int x = 0; x < blocks.width; ++x) out.at<uint8_t>(y, x) = uint8_t(2 * sums.at<int>(y, x) >= f * f);
+  return out;
+}
+
+MaskRaster averaged(const MaskRaster& raster, int f) {
+  MaskRaster out;
+  out.mask = average_blocks(raster.mask, cv::Size((raster.mask.cols + f - 1) / f, (raster.mask.rows + f - 1) / f), f);
+  out.transform = raster.transform;
+  for (std::size_t k : {1, 2, 4, 5}) out.transform.c[k] *= f;
+  out.crs_wkt = raster.crs_wkt;
+  return out;
+}
+
 MaskRaster read_building_mask(const std::string& path, const BuildingSelector& selector) {
   GDALAllRegister();
   Dataset d = open_raster(path);

@@ -45,6 +45,14 @@ bool floating_band(GDALDataset& dataset, int band);
 // A band's nodata value as its pixels hold it (a Float32 band's as a float), if it has one.
 std::optional<double> band_nodata(GDALDataset& dataset, int band);
 
+// A building mask (CV_8U, 1 = building) averaged over blocks of f x f pixels: a block is a building
+// where at least half of its f^2 pixels are (pixels beyond the mask count as none). `mask`'s pixel
+// (0, 0) is the first of block (0, 0); the result has `blocks` (columns and rows) blocks.
+cv::Mat average_blocks(const cv::Mat& mask, cv::Size blocks, int f);
+
+// The whole mask so averaged (from its first pixel), its geotransform's pixel f times as large.
+MaskRaster averaged(const MaskRaster& raster, int f);
+
 // Throws InputError naming the file: missing, not a raster, no georeference, wrong band
 // count for the selector, or no building pixel at all.
 MaskRaster read_building_mask(const std::string& path, const BuildingSelector& selector);

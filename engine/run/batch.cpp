@@ -172,6 +172,31 @@ void lend_neighbour_lattices(const std::vector<BuildingContour>& buildings, doub
 
 }  // namespace
 
+MaskNoise pooled_noise(const std::vector<BuildingContour>& buildings, double pixel_size, const CoreOptions& options, std::size_t* samples,
+                       double* seconds) {
+  std::vector<double> each;
+  const PooledStarts pooled = pool_starts(buildings, pixel_size, options, seconds ? &each : nullptr);
+  if (samples) *samples = pooled.samples;
+  if (seconds) *seconds = std::accumulate(each.begin(), each.end(), 0.0);
+  return pooled.noise;
+}
+
+bool tries_coarse_noise(double pixel_size, const CoreOptions& options) {
+  return options.noise.pooled_floor > 0 && options.noise.coarse_resolved_px > 0 &&
+         options.noise.coarse_resolved_px * pixel_size <= options.noise.coarse_max_m;
+}
+
+std::optional<MaskNoise> coarse_noise_taken(const MaskNoise& coarse, double pixel_size, const CoreOptions& options) {
+  // (The pooled median itself against the pixels, whatever pooled_floor multiplies it by.)
+  if (!(coarse.floor_m / options.noise.pooled_floor >= options.noise.coarse_resolved_px * pixel_size)) return std::nullopt;
+  // The normals smoothed at the pixel at least as wide as the averaged mask's narrowest smoothing
+  // (its min_neighbourhood_px of twice the pixel), which the noise was measured after.
+  MaskNoise taken = coarse;
+  if (options.smoothing.noise_neighbourhood > 0)
+    taken.smoothing_m = std::max(taken.smoothing_m, options.smoothing.min_neighbourhood_px * 2 * pixel_size / options.smoothing.noise_neighbourhood);
+  return taken;
+}
+
 bool pools_noise(const std::string& regularizer, const CoreOptions& options) {
   return regularizer == "deformation" && options.noise.pooled_floor > 0;
 }
@@ -309,10 +334,22 @@ std::vector<cv::Rect> survey_cells(cv::Size raster, int window_px, int windows) 
   return cells;
 }
 
-NoiseSurvey survey_noise(const MaskWindowReader& mask, cv::Size raster, const GeoTransform& transform, const ContourOptions& contour,
-                         const CoreOptions& options, int window_px, int windows) {
+NoiseSurvey survey_noise(const MaskWindowReader& mask, cv::Size fine_raster, const GeoTransform& fine_transform, const ContourOptions& contour,
+                         const CoreOptions& options, int fine_window_px, int windows, int factor) {
   NoiseSurvey survey;
   if (options.noise.pooled_floor <= 0) return survey;
+  // On the mask averaged over blocks of factor x factor pixels (average_blocks, as `averaged`
+  // makes a whole mask): the survey's grid, cells and windows in blocks.
+  const int f = std::max(1, factor);
+  const cv::Size raster((fine_raster.width + f - 1) / f, (fine_raster.height + f - 1) / f);
+  GeoTransform transform = fine_transform;
+  for (std::size_t k : {1, 2, 4, 5}) transform.c[k] *= f;
+  const int window_px = std::max(1, (fine_window_px + f - 1) / f);  // (rounded up: a window over the whole raster stays one)
+  const auto read = [&](const cv::Rect& window) {
+    if (f == 1) return mask.read(window);
+    const cv::Rect fine = cv::Rect(window.x * f, window.y * f, window.width * f, window.height * f) & cv::Rect(cv::Point(0, 0), fine_raster);
+    return average_blocks(mask.read(fine), window.size(), f);
+  };
   const int margin = std::max(1, window_px / 4);
   const std::vector<cv::Rect> cells = survey_cells(raster, window_px, windows);
   survey.windows = int(cells.size());
@@ -326,7 +363,7 @@ NoiseSurvey survey_noise(const MaskWindowReader& mask, cv::Size raster, const Ge
       const cv::Rect window = cv::Rect(cell.x - margin, cell.y - margin, cell.width + 2 * margin, cell.height + 2 * margin) &
                               cv::Rect(0, 0, raster.width, raster.height);
       ContourResult traced =
-          extract_contours(mask.read(window), transform.window(window.x, window.y), contour, [&](const cv::Rect& box, const cv::Point& at) {
+          extract_contours(read(window), transform.window(window.x, window.y), contour, [&](const cv::Rect& box, const cv::Point& at) {
             return cell.contains(at + window.tl()) && !touches_inner_border(box, window, raster);
           });
       visit(first, traced.buildings);

@@ -27,6 +27,18 @@ struct MaskNoise {
   double smoothing_m = 0;
 };
 
+// The noise pooled over these buildings (in rounds, as regularize_batch pools it), alone; *samples
+// (when given): the buildings measured; *seconds: the time of each start and round, summed.
+MaskNoise pooled_noise(const std::vector<BuildingContour>& buildings, double pixel_size, const CoreOptions& options,
+                       std::size_t* samples = nullptr, double* seconds = nullptr);
+
+// Whether a mask of this pixel has its noise measured first at twice it (noise.coarse_resolved_px
+// and coarse_max_m; noise.pooled_floor on), and the noise so measured as the mask's, to smooth
+// and regularize at the pixel with, where it is at least coarse_resolved_px of the mask's own
+// pixels (none where it is less).
+bool tries_coarse_noise(double pixel_size, const CoreOptions& options);
+std::optional<MaskNoise> coarse_noise_taken(const MaskNoise& coarse, double pixel_size, const CoreOptions& options);
+
 struct RegularizedBatch {
   std::vector<BuildingResult> results;  // in the buildings' order
   double noise_floor_m = 0;             // the noise floor they were regularized with
@@ -97,7 +109,10 @@ struct NoiseSurvey {
   std::size_t buildings = 0;  // sampled
   int windows = 0;            // read
 };
+// raster, transform and window_px: the mask's own, in its pixels. factor: on the mask averaged over
+// blocks of that many pixels a side from its first pixel (average_blocks, as `averaged` makes a
+// whole mask), the survey's cells and windows in blocks (as many metres), the noise at that pixel.
 NoiseSurvey survey_noise(const MaskWindowReader& mask, cv::Size raster, const GeoTransform& transform, const ContourOptions& contour,
-                         const CoreOptions& options, int window_px, int windows);
+                         const CoreOptions& options, int window_px, int windows, int factor = 1);
 
 }  // namespace lodforge

@@ -22,6 +22,8 @@ struct NoiseOptions {
   double max_tilt_deg = 5; // a run's line turns at most this far from its lattice direction
   double pooled_floor = 1; // a building's noise is at least this many times that pooled over its mask
   double pooled_ceiling = 2;  // ... and at most this many times (0 = no ceiling)
+  double coarse_resolved_px = 5;  // the mask's noise measured on it averaged to twice the pixel, taken where this many pixels
+  double coarse_max_m = 1;        // ... tried where that many pixels are at most this (m)
 
   template <class V>
   void visit(V& v) {
@@ -30,6 +32,8 @@ struct NoiseOptions {
     v("max_tilt_deg", max_tilt_deg, "... each run fitted by a line of its own direction, turned at most this far from its lattice direction (degrees)", Check::between(0, 45));
     v("pooled_floor", pooled_floor, "every building's boundary noise is taken as at least this many times the noise pooled over its mask's buildings (all of them in regularize; in run, those of the survey, tiling.noise_survey_*): the median, weighted by outline length, of each one's noise about the lattice of its contour's chords. A segmentation's noise is its mask's, not a building's: a small building's walls, shorter than a wobble's wavelength, and runs cut short at fine pixels measure too little of it (0 = off)", Check::at_least(0));
     v("pooled_ceiling", pooled_ceiling, "... and at most this many times the noise pooled over its mask's buildings (and never below the floor): a contour that lies farther off its lattice's lines is not noisier than the mask's other buildings, it has arcs or walls off the lattice (a round building measures metres about lattice lines), which a noise that large would take for noise and straighten. 2 is about the 95th percentile of the buildings' own noise over the pooled one on masks of one wobble (bench/sweep.sh's synthetic city with a wobble, 1.4-2.3), beyond which a building's own measure is its structure's (steps of a row of houses, a sawtooth of bays, arcs), not the noise's: on clean masks it reaches 3.5-4.3. Only where the floor applies (pooled_floor above 0 and a pooled noise measured; 0 = no ceiling)", Check::at_least(0));
+    v("coarse_resolved_px", coarse_resolved_px, "the noise pooled over the mask is first measured on the mask averaged to twice its pixel (each 2 x 2 block a building where at least half of it is), in the same rounds; where the median it pools comes out at least this many of the mask's own pixels, it is the mask's noise, and the normals are smoothed for what it smoothed for (at least as wide as the averaged mask's narrowest smoothing): at a pixel that fine against a fast wobble the wobble's flanks cut the runs short and the noise measures low (0.27 m at 0.1 m against 0.53 m at 0.2 m on bench/sweep.sh's campus under a metre of wobble at a 2 m wavelength; docs/quality.md). Else it is measured at the pixel (0 = always at the pixel)", Check::at_least(0));
+    v("coarse_max_m", coarse_max_m, "... tried only where coarse_resolved_px pixels are at most this (m): a boundary noise of more than a metre is no building's, and the coarser measurement would be time lost (0 = never tried)", Check::at_least(0));
     v("quantile", quantile, "the noise is the distances' quantile of this share (by length), read as that of a Gaussian noise: low, so that oblique walls and arcs, off the lattice lines, do not count", Check::between(0.05, 0.95));
   }
 };
