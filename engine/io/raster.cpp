@@ -197,13 +197,30 @@ cv::Mat average_blocks(const cv::Mat& mask, cv::Size blocks, int f) {
   return out;
 }
 
+cv::Size blocks_of(cv::Size pixels, int f) { return {(pixels.width + f - 1) / f, (pixels.height + f - 1) / f}; }
+
 MaskRaster averaged(const MaskRaster& raster, int f) {
-  MaskRaster out;
-  out.mask = average_blocks(raster.mask, cv::Size((raster.mask.cols + f - 1) / f, (raster.mask.rows + f - 1) / f), f);
-  out.transform = raster.transform;
-  for (std::size_t k : {1, 2, 4, 5}) out.transform.c[k] *= f;
-  out.crs_wkt = raster.crs_wkt;
-  return out;
+  return {average_blocks(raster.mask, blocks_of(raster.mask.size(), f), f), raster.transform.coarsened(f), raster.crs_wkt};
+}
+
+cv::Mat building_pixels(const cv::Mat& values, const BuildingSelector& selector, const std::optional<double>& nodata) {
+  cv::Mat mask;
+  if (selector.min) {
+    cv::compare(values, cv::Scalar(*selector.min), mask, cv::CMP_GE);  // (a NaN compares false)
+    if (nodata) {
+      cv::Mat valid;
+      cv::compare(values, cv::Scalar(*nodata), valid, cv::CMP_NE);
+      cv::bitwise_and(mask, valid, mask);
+    }
+    return mask;
+  }
+  mask = cv::Mat::zeros(values.size(), CV_8U);
+  for (int v : selector.values) {
+    cv::Mat match;
+    cv::compare(values, cv::Scalar(v), match, cv::CMP_EQ);
+    cv::bitwise_or(mask, match, mask);
+  }
+  return mask;
 }
 
 MaskRaster read_building_mask(const std::string& path, const BuildingSelector& selector) {
@@ -245,30 +262,13 @@ MaskRaster read_building_mask(const std::string& path, const BuildingSelector& s
           for (int x = 0; x < strip.cols; ++x) m[x] &= uint8_t(in[x] == value);
         }
       });
-  } else if (selector.min || floating_band(*d, 1)) {
-    // As 64-bit floats: a threshold (never the band's nodata value; a NaN is below any), or the
-    // class values compared with a floating-point band's own values (GDAL would round 0.85 to 1).
-    const std::optional<double> nodata = band_nodata(*d, 1);
-    read_band_strips(*d, 1, path, true, [&](int first_row, const cv::Mat& strip) {
-      for (int r = 0; r < strip.rows; ++r) {
-        const double* in = strip.ptr<double>(r);
-        uint8_t* m = out.mask.ptr<uint8_t>(first_row + r);
-        if (selector.min) {
-          for (int x = 0; x < strip.cols; ++x) m[x] = uint8_t(in[x] >= *selector.min && !(nodata && in[x] == *nodata));
-        } else {
-          for (int v : selector.values)
-            for (int x = 0; x < strip.cols; ++x) m[x] |= uint8_t(in[x] == double(v));
-        }
-      }
-    });
   } else {
-    read_band_strips(*d, 1, path, false, [&](int first_row, const cv::Mat& strip) {
-      for (int r = 0; r < strip.rows; ++r) {
-        const int* in = strip.ptr<int>(r);
-        uint8_t* m = out.mask.ptr<uint8_t>(first_row + r);
-        for (int v : selector.values)
-          for (int x = 0; x < strip.cols; ++x) m[x] |= uint8_t(in[x] == v);
-      }
+    // A threshold, or the class values of a floating-point band, as 64-bit floats (GDAL's integers
+    // would round 0.85 to 1).
+    const std::optional<double> nodata = band_nodata(*d, 1);
+    read_band_strips(*d, 1, path, selector.min || floating_band(*d, 1), [&](int first_row, const cv::Mat& strip) {
+      cv::Mat rows = out.mask.rowRange(first_row, first_row + strip.rows);
+      cv::bitwise_and(building_pixels(strip, selector, nodata), cv::Scalar(1), rows);
     });
   }
   if (cv::countNonZero(out.mask) == 0) {

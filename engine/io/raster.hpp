@@ -50,8 +50,16 @@ std::optional<double> band_nodata(GDALDataset& dataset, int band);
 // (0, 0) is the first of block (0, 0); the result has `blocks` (columns and rows) blocks.
 cv::Mat average_blocks(const cv::Mat& mask, cv::Size blocks, int f);
 
+// The blocks of f x f that cover `pixels` (the last ones cut by its edges).
+cv::Size blocks_of(cv::Size pixels, int f);
+
 // The whole mask so averaged (from its first pixel), its geotransform's pixel f times as large.
 MaskRaster averaged(const MaskRaster& raster, int f);
+
+// Of one band's values (any depth), the buildings' pixels (0 / 255) by the selector's class
+// values, or by its threshold (never at the band's nodata value; a NaN is below any): how
+// read_building_mask and a run's windows (MaskWindowReader) select them alike. Not for a colour.
+cv::Mat building_pixels(const cv::Mat& values, const BuildingSelector& selector, const std::optional<double>& nodata);
 
 // Throws InputError naming the file: missing, not a raster, no georeference, wrong band
 // count for the selector, or no building pixel at all.

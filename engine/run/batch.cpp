@@ -341,9 +341,8 @@ NoiseSurvey survey_noise(const MaskWindowReader& mask, cv::Size fine_raster, con
   // On the mask averaged over blocks of factor x factor pixels (average_blocks, as `averaged`
   // makes a whole mask): the survey's grid, cells and windows in blocks.
   const int f = std::max(1, factor);
-  const cv::Size raster((fine_raster.width + f - 1) / f, (fine_raster.height + f - 1) / f);
-  GeoTransform transform = fine_transform;
-  for (std::size_t k : {1, 2, 4, 5}) transform.c[k] *= f;
+  const cv::Size raster = blocks_of(fine_raster, f);
+  const GeoTransform transform = fine_transform.coarsened(f);
   const int window_px = std::max(1, (fine_window_px + f - 1) / f);  // (rounded up: a window over the whole raster stays one)
   const auto read = [&](const cv::Rect& window) {
     if (f == 1) return mask.read(window);

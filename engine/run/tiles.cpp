@@ -36,7 +36,7 @@ struct MaskWindowReader::Impl {
   std::string path;
   BlockCache* cache = nullptr;
   bool byte_values = true;  // every selected value fits a byte: a byte band is read and compared as bytes
-  bool as_double = false;   // a threshold, or a floating-point band: read and compared as 64-bit floats
+  bool as_double = false;   // a threshold, or a floating-point band's values: read as 64-bit floats
   std::optional<double> nodata;  // the band's, never a building by a threshold
 };
 
@@ -77,10 +77,12 @@ MaskWindowReader::~MaskWindowReader() {
 
 cv::Mat MaskWindowReader::read(const cv::Rect& w) const {
   auto band = [&](int b) {
-    // A byte band is compared as bytes (a quarter of the memory traffic); anything else as Int32.
-    const bool bytes = impl_->byte_values && impl_->dataset->GetRasterBand(b)->GetRasterDataType() == GDT_Byte;
-    cv::Mat m(w.height, w.width, bytes ? CV_8U : CV_32S);
-    read_window(impl_->cache, *impl_->dataset, impl_->path, b, bytes ? GDT_Byte : GDT_Int32, w, m.data);
+    // A byte band is compared as bytes (a quarter of the memory traffic); a threshold or a
+    // floating-point band as 64-bit floats; anything else as Int32.
+    const bool bytes = !impl_->as_double && impl_->byte_values && impl_->dataset->GetRasterBand(b)->GetRasterDataType() == GDT_Byte;
+    const int depth = bytes ? CV_8U : impl_->as_double ? CV_64F : CV_32S;
+    cv::Mat m(w.height, w.width, depth);
+    read_window(impl_->cache, *impl_->dataset, impl_->path, b, bytes ? GDT_Byte : impl_->as_double ? GDT_Float64 : GDT_Int32, w, m.data);
     return m;
   };
   // The matches are 0 / 255, combined as such, and taken to 0 / 1 once (a bitwise and: dividing
@@ -93,34 +95,8 @@ cv::Mat MaskWindowReader::read(const cv::Rect& w) const {
       if (b == 0) mask = match;
       else cv::bitwise_and(mask, match, mask);
     }
-  } else if (impl_->as_double) {
-    // As read_building_mask: a threshold (not at the nodata value; a NaN compares false), or the
-    // class values against a floating-point band's own values.
-    cv::Mat values(w.height, w.width, CV_64F);
-    read_window(impl_->cache, *impl_->dataset, impl_->path, 1, GDT_Float64, w, values.data);
-    if (const std::optional<double>& min = impl_->selector.min) {
-      cv::compare(values, cv::Scalar(*min), mask, cv::CMP_GE);
-      if (impl_->nodata) {
-        cv::Mat valid;
-        cv::compare(values, cv::Scalar(*impl_->nodata), valid, cv::CMP_NE);
-        cv::bitwise_and(mask, valid, mask);
-      }
-    } else {
-      mask = cv::Mat::zeros(w.size(), CV_8U);
-      for (int v : impl_->selector.values) {
-        cv::Mat match;
-        cv::compare(values, cv::Scalar(v), match, cv::CMP_EQ);
-        cv::bitwise_or(mask, match, mask);
-      }
-    }
   } else {
-    const cv::Mat values = band(1);
-    mask = cv::Mat::zeros(w.size(), CV_8U);
-    for (int v : impl_->selector.values) {
-      cv::Mat match;
-      cv::compare(values, cv::Scalar(v), match, cv::CMP_EQ);
-      cv::bitwise_or(mask, match, mask);
-    }
+    mask = building_pixels(band(1), impl_->selector, impl_->nodata);  // (as read_building_mask selects them)
   }
   cv::bitwise_and(mask, cv::Scalar(1), mask);
   return mask;

@@ -21,6 +21,12 @@ struct GeoTransform {
     w.c[3] = origin.y();
     return w;
   }
+  // The grid of blocks of f x f of its pixels, from its first pixel: the same origin, pixels f times as large.
+  GeoTransform coarsened(int f) const {
+    GeoTransform g = *this;
+    for (std::size_t k : {1, 2, 4, 5}) g.c[k] *= f;
+    return g;
+  }
   // sqrt of the pixel's area, the ground sampling distance
   double pixel_size() const { return std::sqrt(std::abs(c[1] * c[5] - c[2] * c[4])); }
   // Map (x, y) to fractional (column, row).
