@@ -85,7 +85,7 @@ int run_regularize(int argc, char** argv) {
       .value("out", "FILE", "output footprints (.gpkg or .geojson): id, status, stage, reason, regularizer, model (the outline the paper's chain chose: docs/models.md), vertex_count, area_m2")
       .value("route", "NAME", "corner route: 'original' (lines fitted to the raw contour) or 'deformed' (the paper)")
       .value("regularizer", "NAME", "one of " + regularizer_list() + " (default: deformation, the paper's chain; see lodforge options)")
-      .value("stats", "FILE", "also write a JSON summary: counts by status (for the paper's chain, also by the outline model chosen) and the regularization time per building (mean, median, p99; also by contour size)")
+      .value("stats", "FILE", "also write a JSON summary: counts by status (for the paper's chain, also by the outline model chosen) and the regularization time per building (mean, median, p99; also by contour size), and for the paper's chain where it goes: each stage's mean a building (stage_seconds_mean: start, labeling, outline, other)")
       .value("threads", "N", "worker threads (default: all cores)", false, "j")
       .value("set", "KEY=VALUE", "set any stage option as in a job, e.g. stages.labeling.kappa2=5 (see lodforge options)", true);
   args.parse(argc, argv, 2);
@@ -158,7 +158,10 @@ int run_regularize(int argc, char** argv) {
   if (batch.noise_samples > 0)
     spdlog::info("boundary noise pooled over {} buildings: {:.3f} m (stages.noise.pooled_floor = {}), normals smoothed for {:.3f} m",
                  batch.noise_samples, batch.noise_floor_m, options.core.noise.pooled_floor, batch.noise_smoothing_m);
-  for (BuildingResult& r : batch.results) r.seconds += coarse_seconds / double(count);
+  for (BuildingResult& r : batch.results) {
+    r.seconds += coarse_seconds / double(count);
+    r.stage_seconds.start += coarse_seconds / double(count);
+  }
   if (coarse_noise) batch.noise_samples = coarse_samples;
   const std::vector<BuildingResult>& results = batch.results;
 
@@ -197,14 +200,18 @@ int run_regularize(int argc, char** argv) {
     spdlog::info("{} building(s) took the original corner route instead of the deformed one (over a budget; the reason is in their 'reason' field)", rerouted);
   if (auto stats = args.get("stats")) {
     // Times overall, then by contour size (edges of all rings), which the cost grows with.
-    struct SizeClass { const char* name; std::size_t below; std::vector<double> seconds; };
+    struct SizeClass { const char* name; std::size_t below; std::vector<double> seconds; std::vector<const BuildingResult*> results; };
     std::vector<SizeClass> classes = {{"edges_below_250", 250, {}}, {"edges_250_to_1000", 1000, {}}, {"edges_1000_and_more", SIZE_MAX, {}}};
     std::vector<double> all;
+    std::vector<const BuildingResult*> all_results;
     for (std::size_t i = 0; i < count; ++i) {
       std::size_t edges = 0;
       for (const Ring& ring : contours.buildings[i].rings) edges += ring.size();
-      std::find_if(classes.begin(), classes.end(), [&](const SizeClass& c) { return edges < c.below; })->seconds.push_back(results[i].seconds);
+      SizeClass& size_class = *std::find_if(classes.begin(), classes.end(), [&](const SizeClass& c) { return edges < c.below; });
+      size_class.seconds.push_back(results[i].seconds);
+      size_class.results.push_back(&results[i]);
       all.push_back(results[i].seconds);
+      all_results.push_back(&results[i]);
     }
     const auto times = [](std::vector<double> seconds, nlohmann::ordered_json& into) {  // mean, median, p99
       std::sort(seconds.begin(), seconds.end());
@@ -214,6 +221,22 @@ int run_regularize(int argc, char** argv) {
       into["seconds_mean"] = seconds.empty() ? 0.0 : total / double(seconds.size());
       into["seconds_median"] = at(0.5);
       into["seconds_p99"] = at(0.99);
+    };
+    // Where the time goes (the paper's chain): each stage's mean a building (BuildingResult::stage_seconds).
+    const auto stage_means = [&](const std::vector<const BuildingResult*>& of, nlohmann::ordered_json& into) {
+      if (regularizer != "deformation" || of.empty()) return;
+      double start = 0, labeling = 0, outline = 0, whole = 0;
+      for (const BuildingResult* r : of) {
+        start += r->stage_seconds.start;
+        labeling += r->stage_seconds.labeling;
+        outline += r->stage_seconds.outline;
+        whole += r->seconds;
+      }
+      const double n = double(of.size());
+      into["stage_seconds_mean"] = {{"start", start / n},
+                                    {"labeling", labeling / n},
+                                    {"outline", outline / n},
+                                    {"other", std::max(0.0, whole - start - labeling - outline) / n}};
     };
     double total = 0;
     for (double s : all) total += s;
@@ -232,10 +255,12 @@ int run_regularize(int argc, char** argv) {
     if (regularizer == "deformation") out["models"] = models;
     out["seconds_total"] = total;
     times(all, out);
+    stage_means(all_results, out);
     for (const SizeClass& c : classes) {
       nlohmann::ordered_json size_class;
       size_class["buildings"] = c.seconds.size();
       times(c.seconds, size_class);
+      stage_means(c.results, size_class);
       out["by_size"][c.name] = size_class;
     }
     write_text_atomically(*stats, out.dump(1) + "\n");

@@ -76,28 +76,18 @@ double smoothing_neighbourhood_m(double pixel_size, const SmoothingOptions& o, d
   return o.neighbourhood_m * neighbourhood_scale(pixel_size, o, noise_m);
 }
 
-std::vector<Vec2> smooth_normals(const Ring& ring, double pixel_size, const SmoothingOptions& o, double noise_m) {
-  const std::size_t n = ring.size();
-  std::vector<Vec2> normals = edge_normals(ring);
-  if (n < 3) return normals;
-  // Arc length position of every edge midpoint.
-  std::vector<double> mid(n);
-  double s = 0;
-  for (std::size_t i = 0; i < n; ++i) {
-    const double len = edge_vector(ring, i).norm();
-    mid[i] = s + 0.5 * len;
-    s += len;
-  }
-  const double total = s;
-  const double scale = neighbourhood_scale(pixel_size, o, noise_m);
-  const double threshold = o.neighbourhood_m * scale;
-  const double sigma_d2 = std::pow(o.sigma_d_m * scale, 2);
-  const double sigma_a2 = o.sigma_a_deg * o.sigma_a_deg;
+namespace {
+
+// Eq. 2's passes over normals at arc lengths mid (ascending along a closed contour of length
+// total): neighbours closer than threshold along it, their weights exp(-d / sigma_d2) times the
+// angle weight.
+std::vector<Vec2> smooth_along(std::vector<Vec2> normals, const std::vector<double>& mid, double total, double threshold,
+                               double sigma_d2, const AngleWeight& angle, int passes) {
+  const std::size_t n = normals.size();
   auto arc = [&](std::size_t i, std::size_t k) {
     const double d = std::abs(mid[i] - mid[k]);
     return std::min(d, total - d);
   };
-  const AngleWeight& angle = angle_weight(sigma_a2);
   auto weight = [&](std::size_t i, std::size_t k, double d) { return std::exp(-d / sigma_d2) * angle(normals[i], normals[k]); };
   // The weight of a pair is symmetric (the same arc, the same angle: bit for bit), so each pass
   // computes the weights of every edge to its successors once, and an edge's predecessors take
@@ -120,7 +110,7 @@ std::vector<Vec2> smooth_normals(const Ring& ring, double pixel_size, const Smoo
   first[n] = distance_weight.size();
   ahead.resize(distance_weight.size());
   std::vector<Vec2> twice(2 * n);  // the normals twice round: a successor i + 1 + s read without a modulo
-  for (int pass = 0; pass < o.passes; ++pass) {
+  for (int pass = 0; pass < passes; ++pass) {
     std::copy(normals.begin(), normals.end(), twice.begin());
     std::copy(normals.begin(), normals.end(), twice.begin() + long(n));
     for (std::size_t i = 0; i < n; ++i)
@@ -146,6 +136,69 @@ std::vector<Vec2> smooth_normals(const Ring& ring, double pixel_size, const Smoo
       next[i] = len > 1e-12 ? Vec2(sum / len) : normals[i];
     }
     normals.swap(next);
+  }
+  return normals;
+}
+
+}  // namespace
+
+std::vector<Vec2> smooth_normals(const Ring& ring, double pixel_size, const SmoothingOptions& o, double noise_m) {
+  const std::size_t n = ring.size();
+  std::vector<Vec2> normals = edge_normals(ring);
+  if (n < 3) return normals;
+  // Arc length position of every edge midpoint.
+  std::vector<double> mid(n), length(n);
+  double s = 0;
+  for (std::size_t i = 0; i < n; ++i) {
+    length[i] = edge_vector(ring, i).norm();
+    mid[i] = s + 0.5 * length[i];
+    s += length[i];
+  }
+  const double total = s;
+  const double scale = neighbourhood_scale(pixel_size, o, noise_m);
+  const double threshold = o.neighbourhood_m * scale;
+  const double sigma_d2 = std::pow(o.sigma_d_m * scale, 2);
+  const AngleWeight& angle = angle_weight(o.sigma_a_deg * o.sigma_a_deg);
+  // Where the neighbourhood spans many edges (fine pixels, a wide noise), consecutive edges are
+  // smoothed as blocks of about threshold / block_neighbours (their normals summed by length),
+  // and each edge takes the normal interpolated between the two blocks about it.
+  const double block_m = o.block_neighbours > 0 ? threshold / o.block_neighbours : 0.0;
+  if (block_m < 2.0 * total / double(n)) return smooth_along(std::move(normals), mid, total, threshold, sigma_d2, angle, o.passes);
+  std::vector<std::size_t> block_of(n);
+  std::vector<Vec2> block_normals;
+  std::vector<double> block_mid;
+  double block_start = 0, filled = 0;
+  Vec2 sum = Vec2::Zero();
+  for (std::size_t i = 0; i < n; ++i) {
+    block_of[i] = block_normals.size();
+    sum += length[i] * normals[i];
+    filled += length[i];
+    const bool last = i + 1 == n;
+    // (A short last block joins the one before.)
+    if ((filled >= block_m && !(total - (mid[i] + 0.5 * length[i]) < 0.5 * block_m && !last)) || last) {
+      const double norm = sum.norm();
+      block_normals.push_back(norm > 1e-12 ? Vec2(sum / norm) : normals[i]);
+      block_mid.push_back(block_start + 0.5 * filled);
+      block_start += filled;
+      filled = 0;
+      sum = Vec2::Zero();
+    }
+  }
+  const std::size_t m = block_normals.size();
+  if (m < 3) return smooth_along(std::move(normals), mid, total, threshold, sigma_d2, angle, o.passes);
+  const std::vector<Vec2> smoothed = smooth_along(std::move(block_normals), block_mid, total, threshold, sigma_d2, angle, o.passes);
+  for (std::size_t i = 0; i < n; ++i) {
+    const std::size_t b = block_of[i];
+    // The blocks before and after the edge's midpoint, along the ring (cyclically).
+    const bool after = mid[i] >= block_mid[b];
+    const std::size_t a = after ? b : (b + m - 1) % m, c = after ? (b + 1) % m : b;
+    double span = block_mid[c] - block_mid[a], into = mid[i] - block_mid[a];
+    if (span <= 0) span += total;
+    if (into < 0) into += total;
+    const double t = std::clamp(into / span, 0.0, 1.0);
+    const Vec2 v = (1 - t) * smoothed[a] + t * smoothed[c];
+    const double len = v.norm();
+    normals[i] = len > 1e-12 ? Vec2(v / len) : smoothed[b];
   }
   return normals;
 }

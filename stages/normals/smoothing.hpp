@@ -20,6 +20,7 @@ struct SmoothingOptions {
   double noise_gain = 0.1;              // ... a wider round kept where it pools this much more noise
   int noise_gain_buildings = 128;       // ... judged on this many of the mask's buildings
   int passes = 3;                // one pass leaves a wall as two clusters (NOTES.md)
+  double block_neighbours = 8;   // where the neighbourhood spans more edges, edges smoothed in blocks
 
   template <class V>
   void visit(V& v) {
@@ -34,6 +35,7 @@ struct SmoothingOptions {
     v("noise_gain", noise_gain, "... and a wider round kept only where the noise it pools is more than the narrower round's by this fraction: where the narrower smoothing measured the noise whole (a wobble long against its amplitude), the wider one only averages short walls away", Check::at_least(0));
     v("noise_gain_buildings", noise_gain_buildings, "... that gain judged on this many of the buildings, spread evenly over the mask's (all of a mask of fewer), their noise pooled both ways, and a kept round's noise, which the next round smooths for, pooled over them too: only the last round kept smooths the others (a round judged then costs a mask of thousands little; its time, kept or dropped, is charged to the buildings judged)", Check::at_least(1));
     v("passes", passes, "number of smoothing passes", Check::between(1, 100));
+    v("block_neighbours", block_neighbours, "where thre_d spans more than twice this many contour edges (fine pixels, a wide noise), consecutive edges are smoothed as blocks of thre_d / block_neighbours metres, their normals summed by length, and each edge takes the normal interpolated between the two blocks about it: the same neighbourhood read at block_neighbours samples a side, not one an edge, for a fraction of the time (0 = every edge)", Check::at_least(0));
   }
 };
 

@@ -34,6 +34,12 @@ struct BuildingResult {
   std::string route;            // the chain's corner route taken: "original" or "deformed"; empty otherwise
   std::string note;             // when ok: why the route taken is not the one asked for (a budget), else empty
   double seconds = 0;
+  // ... of which: its start (the normals smoothed, the noise sampled: its share of the mask's
+  // noise rounds too), its labeling (directions, noise, lattice), its outline (corner route and
+  // model choice); the rest is the fallback's, where there was one.
+  struct StageSeconds {
+    double start = 0, labeling = 0, outline = 0;
+  } stage_seconds;
 
   std::string status() const { return ok ? "ok" : "fallback"; }
 };
