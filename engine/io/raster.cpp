@@ -186,10 +186,12 @@ std::string values_held(const std::string& path, const BuildingSelector& selecto
 
 cv::Mat average_blocks(const cv::Mat& mask, cv::Size blocks, int f) {
   cv::Mat sums = cv::Mat::zeros(blocks, CV_32S);
+  const int width = std::min(mask.cols, blocks.width * f);
   for (int y = 0; y < std::min(mask.rows, blocks.height * f); ++y) {
     const uint8_t* m = mask.ptr<uint8_t>(y);
     int* row = sums.ptr<int>(y / f);
-    for (int x = 0; x < std::min(mask.cols, blocks.width * f); ++x) row[x / f] += m[x];
+    for (int x = 0, block = 0; x < width; ++block)  // (block by block: no division a pixel)
+      for (const int end = std::min(width, x + f); x < end; ++x) row[block] += m[x];
   }
   cv::Mat out(blocks, CV_8U);
   for (int y = 0; y < blocks.height; ++y)
