@@ -370,15 +370,15 @@ TEST_F(Cli, SynthFromFootprintsRegularizeWithEachMethodAndEvaluate) {
     // Where the paper's chain spends it: its stages' means add up to the mean a building, every
     // one of them spent (a start, a labeling, an outline); none for a peer.
     if (name == "deformation") {
-      const nlohmann::json& stages = stats.at("stage_seconds_mean");
+      const nlohmann::json& stages = stats.at("chain_seconds_mean");
       double sum = 0;
       for (const char* stage : {"start", "labeling", "outline", "other"}) sum += stages.at(stage).get<double>();
       EXPECT_NEAR(sum, stats.at("seconds_mean").get<double>(), 1e-9 + 1e-6 * sum) << stats.dump();
       for (const char* stage : {"start", "labeling", "outline"}) EXPECT_GT(stages.at(stage).get<double>(), 0.0) << stage;
       for (const auto& [size, entry] : stats.at("by_size").items())
-        if (entry.at("buildings").get<int>() > 0) EXPECT_TRUE(entry.contains("stage_seconds_mean")) << size;
+        if (entry.at("buildings").get<int>() > 0) EXPECT_TRUE(entry.contains("chain_seconds_mean")) << size;
     } else {
-      EXPECT_FALSE(stats.contains("stage_seconds_mean")) << name;
+      EXPECT_FALSE(stats.contains("chain_seconds_mean")) << name;
     }
     // Each footprint names the outline the chain kept (NULL for a peer); --stats counts them.
     std::map<std::string, int> models;

@@ -85,7 +85,7 @@ int run_regularize(int argc, char** argv) {
       .value("out", "FILE", "output footprints (.gpkg or .geojson): id, status, stage, reason, regularizer, model (the outline the paper's chain chose: docs/models.md), vertex_count, area_m2")
       .value("route", "NAME", "corner route: 'original' (lines fitted to the raw contour) or 'deformed' (the paper)")
       .value("regularizer", "NAME", "one of " + regularizer_list() + " (default: deformation, the paper's chain; see lodforge options)")
-      .value("stats", "FILE", "also write a JSON summary: counts by status (for the paper's chain, also by the outline model chosen) and the regularization time per building (mean, median, p99; also by contour size), and for the paper's chain where it goes: each stage's mean a building (stage_seconds_mean: start, labeling, outline, other)")
+      .value("stats", "FILE", "also write a JSON summary: counts by status (for the paper's chain, also by the outline model chosen) and the regularization time per building (mean, median, p99; also by contour size), and for the paper's chain where it goes: each stage's mean a building (chain_seconds_mean: start, labeling, outline, other)")
       .value("threads", "N", "worker threads (default: all cores)", false, "j")
       .value("set", "KEY=VALUE", "set any stage option as in a job, e.g. stages.labeling.kappa2=5 (see lodforge options)", true);
   args.parse(argc, argv, 2);
@@ -160,7 +160,7 @@ int run_regularize(int argc, char** argv) {
                  batch.noise_samples, batch.noise_floor_m, options.core.noise.pooled_floor, batch.noise_smoothing_m);
   for (BuildingResult& r : batch.results) {
     r.seconds += coarse_seconds / double(count);
-    r.stage_seconds.start += coarse_seconds / double(count);
+    r.chain_seconds.start += coarse_seconds / double(count);
   }
   if (coarse_noise) batch.noise_samples = coarse_samples;
   const std::vector<BuildingResult>& results = batch.results;
@@ -222,18 +222,18 @@ int run_regularize(int argc, char** argv) {
       into["seconds_median"] = at(0.5);
       into["seconds_p99"] = at(0.99);
     };
-    // Where the time goes (the paper's chain): each stage's mean a building (BuildingResult::stage_seconds).
+    // Where the time goes (the paper's chain): each stage's mean a building (BuildingResult::chain_seconds).
     const auto stage_means = [&](const std::vector<const BuildingResult*>& of, nlohmann::ordered_json& into) {
       if (regularizer != "deformation" || of.empty()) return;
       double start = 0, labeling = 0, outline = 0, whole = 0;
       for (const BuildingResult* r : of) {
-        start += r->stage_seconds.start;
-        labeling += r->stage_seconds.labeling;
-        outline += r->stage_seconds.outline;
+        start += r->chain_seconds.start;
+        labeling += r->chain_seconds.labeling;
+        outline += r->chain_seconds.outline;
         whole += r->seconds;
       }
       const double n = double(of.size());
-      into["stage_seconds_mean"] = {{"start", start / n},
+      into["chain_seconds_mean"] = {{"start", start / n},
                                     {"labeling", labeling / n},
                                     {"outline", outline / n},
                                     {"other", std::max(0.0, whole - start - labeling - outline) / n}};

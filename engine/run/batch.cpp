@@ -231,7 +231,7 @@ RegularizedBatch regularize_batch(const std::string& regularizer, const std::vec
                                        starts.empty() ? BuildingStart{} : std::move(starts[i]));
     if (!start_seconds.empty()) {
       batch.results[i].seconds += start_seconds[i];
-      batch.results[i].stage_seconds.start += start_seconds[i];
+      batch.results[i].chain_seconds.start += start_seconds[i];
     }
     if (on_done) on_done();
   });

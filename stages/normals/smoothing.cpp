@@ -160,10 +160,13 @@ std::vector<Vec2> smooth_normals(const Ring& ring, double pixel_size, const Smoo
   const double sigma_d2 = std::pow(o.sigma_d_m * scale, 2);
   const AngleWeight& angle = angle_weight(o.sigma_a_deg * o.sigma_a_deg);
   // Where the neighbourhood spans many edges (fine pixels, a wide noise), consecutive edges are
-  // smoothed as blocks of about threshold / block_neighbours (their normals summed by length),
+  // smoothed as blocks of at least threshold / block_neighbours (each closed at the edge that
+  // reaches that length; a short last one joins the one before; their normals summed by length),
   // and each edge takes the normal interpolated between the two blocks about it.
-  const double block_m = o.block_neighbours > 0 ? threshold / o.block_neighbours : 0.0;
-  if (block_m < 2.0 * total / double(n)) return smooth_along(std::move(normals), mid, total, threshold, sigma_d2, angle, o.passes);
+  // (Under 1, or a contour of no finite length: every edge on its own.)
+  const double block_m = o.block_neighbours >= 1 ? threshold / o.block_neighbours : 0.0;
+  if (!(o.block_neighbours >= 1) || !(block_m >= 2.0 * total / double(n)))
+    return smooth_along(std::move(normals), mid, total, threshold, sigma_d2, angle, o.passes);
   std::vector<std::size_t> block_of(n);
   std::vector<Vec2> block_normals;
   std::vector<double> block_mid;

@@ -197,14 +197,20 @@ void run_chain(const std::vector<Ring>& rings, double pixel_size, const CoreOpti
   bool started = start.normals.size() == rings.size();
   for (std::size_t r = 0; started && r < rings.size(); ++r) started = start.normals[r].size() == rings[r].size();
   const NeighbourLattice neighbour_lattice = start.neighbour_lattice;  // (a start made here has none)
-  auto lap = Clock::now();
-  const auto time = [&](double& stage) {
-    const auto now = Clock::now();
-    stage += std::chrono::duration<double>(now - lap).count();
-    lap = now;
-  };
+  // Each stage's time, charged as it ends, or as the chain leaves it (a stage that throws).
+  struct Laps {
+    double* stage;
+    Clock::time_point lap = Clock::now();
+    void next(double* following) {
+      const auto now = Clock::now();
+      *stage += std::chrono::duration<double>(now - lap).count();
+      lap = now;
+      stage = following;
+    }
+    ~Laps() { next(stage); }
+  } laps{&result.chain_seconds.start};
   if (!started) start = start_building(rings, pixel_size, o, false, start.smoothing_noise_m);
-  time(result.stage_seconds.start);
+  laps.next(&result.chain_seconds.labeling);
   LabelingInput input = labeling_input(rings, std::move(start.normals));
   if (over_budget()) throw BudgetExceeded("smoothing", "time budget exceeded");
   EdgeLabels labels = label_directions(rings, pixel_size, o, input);
@@ -252,7 +258,7 @@ void run_chain(const std::vector<Ring>& rings, double pixel_size, const CoreOpti
   if (over_budget()) throw BudgetExceeded("labeling", "time budget exceeded");
   result.directions = input.directions;
   result.labels = labels;
-  time(result.stage_seconds.labeling);
+  laps.next(&result.chain_seconds.outline);
 
   const Vec2 origin = rings[0][0];
   const std::vector<Ring> fit_rings = chain::route_rings(rings, origin, pixel_size, labels, input.directions, o, over_budget, result);
@@ -264,7 +270,6 @@ void run_chain(const std::vector<Ring>& rings, double pixel_size, const CoreOpti
   context.mask_noise = noise_floor_m;
   const chain::LabeledBuilding labeled{rings, fit_rings, origin, pixel_size, labels, input, context, on_lattice, follow_chords, fitted.spread};
   chain::choose_outline(labeled, o, over_budget, result);
-  time(result.stage_seconds.outline);
 }
 
 // The start's noise sample, from its normals and chords.

@@ -36,10 +36,11 @@ struct BuildingResult {
   double seconds = 0;
   // ... of which: its start (the normals smoothed, the noise sampled: its share of the mask's
   // noise rounds too), its labeling (directions, noise, lattice), its outline (corner route and
-  // model choice); the rest is the fallback's, where there was one.
-  struct StageSeconds {
+  // model choice), each to its end or to where the chain failed in it; the rest is the
+  // fallback's, where one was drawn.
+  struct ChainSeconds {
     double start = 0, labeling = 0, outline = 0;
-  } stage_seconds;
+  } chain_seconds;
 
   std::string status() const { return ok ? "ok" : "fallback"; }
 };
