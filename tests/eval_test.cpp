@@ -1,5 +1,9 @@
 // The quality metrics on cases computed by hand.
 #include <filesystem>
+#include <set>
+#include <sstream>
+#include <string>
+#include <vector>
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
@@ -91,6 +95,12 @@ TEST(Eval, RightAngledCorners) {
 TEST(Eval, MatchingNeedsIoUOfOneHalfAndBlobsCompareWithTheUnion) {
   EvalResult r = evaluate({square(6, 0)}, {square(0, 0)});  // IoU 40/160
   EXPECT_EQ(r.matched, 0u);
+  // Its score: no truth, its best IoU with any.
+  ASSERT_EQ(r.scores.size(), 1u);
+  EXPECT_EQ(r.scores[0].truth, -1);
+  EXPECT_NEAR(r.scores[0].iou, 0.25, 1e-9);
+  EXPECT_EQ(r.scores[0].vertices, 4u);
+  EXPECT_EQ(r.scores[0].right_corners, 4u);
   EXPECT_DOUBLE_EQ(r.precision, 0.0);
   EXPECT_NEAR(r.overall_iou, 0.25, 1e-9);
   // One blob over two houses sharing a wall.
@@ -104,9 +114,17 @@ TEST(Eval, MatchingNeedsIoUOfOneHalfAndBlobsCompareWithTheUnion) {
 
 TEST(Eval, AreaOfInterestClipsPredictionsAndDropsTruthOutside) {
   const PolygonWithHoles aoi = square(0, 0, 15);
-  const EvalResult r = evaluate({square(0, 0), square(12, 0)}, {square(0, 0), square(30, 30)}, aoi);
+  const EvalResult r = evaluate({square(30, 30), square(0, 0), square(12, 0)}, {square(30, 30), square(0, 0)}, aoi);
   EXPECT_EQ(r.truth, 1u);
   EXPECT_EQ(r.predicted, 2u);
+  // A score per prediction inside, named by its index among those given, its match by the truth's.
+  ASSERT_EQ(r.scores.size(), 2u);
+  EXPECT_EQ(r.scores[0].predicted, 1u);
+  EXPECT_EQ(r.scores[0].truth, 1);
+  EXPECT_NEAR(r.scores[0].iou, 1.0, 1e-9);
+  EXPECT_NEAR(r.scores[0].polis, 0.0, 1e-9);
+  EXPECT_EQ(r.scores[1].predicted, 2u);
+  EXPECT_EQ(r.scores[1].truth, -1);
   // Inside the AOI: truth 100 m², predictions 100 + 3 x 10 m².
   EXPECT_NEAR(r.overall_iou, 100.0 / 130.0, 1e-9);
 }
@@ -121,6 +139,36 @@ TEST(EvalCommand, ReportsOnFilesAndRefusesMissingOnes) {
   EXPECT_NE(r.output.find("overall IoU"), std::string::npos) << r.output;
   const nlohmann::json json = nlohmann::json::parse(test::slurp(dir / "eval.json"));
   EXPECT_GT(json.at("overall_iou").get<double>(), 0.9) << json;
+  // A row per prediction: its feature (the GeoPackage's id), the truth it matched, the match's
+  // scores, whose means are the report's.
+  ASSERT_EQ(test::lodforge("eval --pred " + (dir / "lod0.gpkg").string() + " --gt " + (dir / "city" / "footprints.gpkg").string() +
+                           " --scores " + (dir / "scores.csv").string()).code, 0);
+  std::istringstream csv(test::slurp(dir / "scores.csv"));
+  std::string line;
+  std::getline(csv, line);
+  EXPECT_EQ(line, "prediction,truth,iou,vertices,truth_vertices,polis_m,hausdorff_m,max_tangent_deg,corners,right_corners");
+  std::size_t rows = 0, matched = 0;
+  double iou = 0, polis = 0;
+  std::set<std::string> names;
+  while (std::getline(csv, line)) {
+    std::vector<std::string> f;
+    std::stringstream fields(line);
+    for (std::string v; std::getline(fields, v, ',');) f.push_back(v);
+    if (f.size() == 9) f.push_back("");  // (a trailing empty field)
+    ASSERT_EQ(f.size(), 10u) << line;
+    ++rows;
+    names.insert(f[0]);
+    if (f[1].empty()) continue;
+    ++matched;
+    iou += std::stod(f[2]);
+    polis += std::stod(f[5]);
+  }
+  EXPECT_EQ(rows, json.at("predicted").get<std::size_t>());
+  EXPECT_EQ(names.size(), rows);  // every prediction named once
+  EXPECT_TRUE(names.count("1")) << "the GeoPackage's ids, from 1";
+  ASSERT_EQ(matched, json.at("matched").get<std::size_t>());
+  EXPECT_NEAR(iou / double(matched), json.at("mean_iou").get<double>(), 1e-4);
+  EXPECT_NEAR(polis / double(matched), json.at("polis_m").get<double>(), 1e-3);
   const auto missing = test::lodforge("eval --pred " + (dir / "nope.gpkg").string() + " --gt " + (dir / "lod0.gpkg").string());
   EXPECT_EQ(missing.code, 1);
   EXPECT_NE(missing.output.find("nope.gpkg': file not found"), std::string::npos) << missing.output;

@@ -2,6 +2,7 @@
 #include <filesystem>
 #include <fstream>
 #include <iostream>
+#include <sstream>
 #include <spdlog/spdlog.h>
 
 #include "cli/args.hpp"
@@ -14,6 +15,18 @@
 
 namespace lodforge {
 
+namespace {
+
+std::string fixed(double v, int digits) {
+  std::ostringstream out;
+  out.setf(std::ios::fixed);
+  out.precision(digits);
+  out << v;
+  return out.str();
+}
+
+}  // namespace
+
 int run_eval(int argc, char** argv) {
   Args args("eval", "Scores predicted footprints against ground truth: overall IoU, matching at IoU >= 0.5 (precision,\n"
                     "recall, F1, mean IoU), C-IoU, N-ratio, PoLiS, Hausdorff, blob IoU. All in metres: the files in one CRS\n"
@@ -22,6 +35,7 @@ int run_eval(int argc, char** argv) {
       .value("gt", "FILE", "ground-truth footprints")
       .value("aoi", "FILE", "area of interest: only what lies inside counts")
       .value("json", "FILE", "also write the metrics as JSON")
+      .value("scores", "FILE", "also write a CSV with a row per prediction (inside the AOI, in the file's order): its feature (its id field, else its FID; .K for a multipolygon's K-th part), the truth feature it matched (IoU >= 0.5; empty: none), the IoU (unmatched: its best with any truth), vertex counts, PoLiS, Hausdorff and max tangent angle of the match, its corners and right-angled corners: to find the buildings that cost the most")
       .flag("help", "show this help");
   args.parse(argc, argv, 2);
   if (args.has("help")) { std::cout << args.help(); return 0; }
@@ -48,9 +62,10 @@ int run_eval(int argc, char** argv) {
                        (reference_epsg.empty() ? std::string("<the CRS of --pred>") : reference_epsg) + " OUT IN'");
   };
   std::string pred_crs, gt_crs, aoi_crs;
-  const auto predicted = read_polygons(args.require("pred"), "--pred", &pred_crs);
+  std::vector<std::string> pred_names, truth_names;
+  const auto predicted = read_polygons(args.require("pred"), "--pred", &pred_crs, &pred_names);
   check("--pred", args.require("pred"), predicted, pred_crs, nullptr);
-  const auto truth = read_polygons(args.require("gt"), "--gt", &gt_crs);
+  const auto truth = read_polygons(args.require("gt"), "--gt", &gt_crs, &truth_names);
   check("--gt", args.require("gt"), truth, gt_crs, &pred_crs);
   std::optional<PolygonWithHoles> aoi;
   if (auto a = args.get("aoi")) {
@@ -61,6 +76,26 @@ int run_eval(int argc, char** argv) {
   const EvalResult r = evaluate(predicted, truth, aoi);
   std::cout << eval_table(r);
   if (auto j = args.get("json")) write_text_atomically(*j, eval_json(r) + "\n");
+  if (auto path = args.get("scores")) {
+    const auto csv_field = [](const std::string& v) {  // (quoted where it holds a comma or a quote)
+      if (v.find_first_of(",\"\n") == std::string::npos) return v;
+      std::string q = "\"";
+      for (char c : v) q += c == '"' ? std::string("\"\"") : std::string(1, c);
+      return q + "\"";
+    };
+    std::ostringstream csv;
+    csv << "prediction,truth,iou,vertices,truth_vertices,polis_m,hausdorff_m,max_tangent_deg,corners,right_corners\n";
+    for (const PredictionScore& s : r.scores) {
+      csv << csv_field(pred_names[s.predicted]) << ',' << (s.truth >= 0 ? csv_field(truth_names[std::size_t(s.truth)]) : "") << ','
+          << fixed(s.iou, 4) << ',' << s.vertices << ',';
+      if (s.truth >= 0)
+        csv << s.truth_vertices << ',' << fixed(s.polis, 3) << ',' << fixed(s.hausdorff, 3) << ',' << fixed(s.max_tangent_angle_deg, 2);
+      else
+        csv << ",,,";
+      csv << ',' << s.corners << ',' << s.right_corners << '\n';
+    }
+    write_text_atomically(*path, csv.str());
+  }
   return 0;
 }
 

@@ -12,6 +12,7 @@
 #include <numeric>
 #include <ogr_geometry.h>
 #include <sstream>
+#include <tuple>
 
 namespace lodforge {
 
@@ -204,17 +205,20 @@ EvalResult evaluate(const std::vector<PolygonWithHoles>& predicted_in, const std
   const Geometry area = aoi ? to_ogr(*aoi) : nullptr;
   std::vector<PolygonWithHoles> predicted, truth;
   std::vector<Geometry> pred_geom, truth_geom;
-  for (const PolygonWithHoles& t : truth_in) {
-    Geometry g = to_ogr(t);
+  std::vector<std::size_t> pred_index, truth_index;  // (their indices among those given)
+  for (std::size_t k = 0; k < truth_in.size(); ++k) {
+    Geometry g = to_ogr(truth_in[k]);
     if (area && !g->Intersects(area.get())) continue;
-    truth.push_back(t);
+    truth.push_back(truth_in[k]);
     truth_geom.push_back(std::move(g));
+    truth_index.push_back(k);
   }
-  for (const PolygonWithHoles& p : predicted_in) {
-    Geometry g = to_ogr(p);
+  for (std::size_t k = 0; k < predicted_in.size(); ++k) {
+    Geometry g = to_ogr(predicted_in[k]);
     if (area && !g->Intersects(area.get())) continue;
-    predicted.push_back(p);
+    predicted.push_back(predicted_in[k]);
     pred_geom.push_back(std::move(g));
+    pred_index.push_back(k);
   }
   r.predicted = predicted.size();
   r.truth = truth.size();
@@ -243,10 +247,11 @@ EvalResult evaluate(const std::vector<PolygonWithHoles>& predicted_in, const std
   for (std::size_t i = 0; i < predicted.size(); ++i) {
     std::vector<Geometry> covered;
     int best = -1;
-    double best_iou = 0.5;
+    double best_iou = 0.5, any_iou = 0;
     for (std::size_t j = 0; j < truth.size(); ++j) {
       if (!pred_geom[i]->Intersects(truth_geom[j].get())) continue;
       const double v = iou(pred_geom[i].get(), truth_geom[j].get());
+      any_iou = std::max(any_iou, v);
       if (v >= best_iou) { best_iou = v; best = int(j); }
       const Geometry inter(pred_geom[i]->Intersection(truth_geom[j].get()));
       if (area_of(inter.get()) > 0.5 * area_of(truth_geom[j].get())) covered.push_back(Geometry(truth_geom[j]->clone()));
@@ -255,7 +260,15 @@ EvalResult evaluate(const std::vector<PolygonWithHoles>& predicted_in, const std
       const Geometry u = union_of(covered);
       blobs.push_back(iou(pred_geom[i].get(), u.get()));
     }
-    if (best < 0) continue;
+    PredictionScore score;
+    score.predicted = pred_index[i];
+    score.iou = any_iou;
+    score.vertices = vertex_count(predicted[i]);
+    std::tie(score.right_corners, score.corners) = right_angle_corners(predicted[i]);
+    if (best < 0) {
+      r.scores.push_back(score);
+      continue;
+    }
     ++r.matched;
     ious.push_back(best_iou);
     const double np = double(vertex_count(predicted[i])), ng = double(vertex_count(truth[best]));
@@ -264,6 +277,13 @@ EvalResult evaluate(const std::vector<PolygonWithHoles>& predicted_in, const std
     polises.push_back(polis(predicted[i], truth[best]));
     hausdorffs.push_back(hausdorff(predicted[i], truth[best]));
     tangents.push_back(max_tangent_angle_deg(predicted[i], truth[best]));
+    score.truth = long(truth_index[std::size_t(best)]);
+    score.iou = best_iou;
+    score.truth_vertices = vertex_count(truth[best]);
+    score.polis = polises.back();
+    score.hausdorff = hausdorffs.back();
+    score.max_tangent_angle_deg = tangents.back();
+    r.scores.push_back(score);
     const auto [good, all] = regular_corners(predicted[i], truth[best]);
     regular += good;
     corners += all;

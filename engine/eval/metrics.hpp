@@ -11,6 +11,16 @@
 
 namespace lodforge {
 
+// One prediction (inside the AOI) and the truth footprint it matched (IoU >= 0.5), if any.
+struct PredictionScore {
+  std::size_t predicted = 0;   // its index among the predictions given
+  long truth = -1;             // the matched truth's index among those given; -1: none
+  double iou = 0;              // with the matched truth; unmatched: the best IoU with any
+  std::size_t vertices = 0, truth_vertices = 0;
+  double polis = 0, hausdorff = 0, max_tangent_angle_deg = 0;  // matched only
+  std::size_t corners = 0, right_corners = 0;  // its corners (turn over 5°), and those within 5° of 90° or 180°
+};
+
 struct EvalResult {
   std::size_t predicted = 0, truth = 0, matched = 0;
   double overall_iou = 0;
@@ -28,6 +38,7 @@ struct EvalResult {
   // over every prediction and, for comparison, every truth footprint (inside the AOI). A pixel
   // staircase scores 1: read it with the N-ratio.
   double right_angle_share = 0, truth_right_angle_share = 0;
+  std::vector<PredictionScore> scores;  // per prediction inside the AOI, in the order given
 };
 
 // aoi (optional): only what lies inside counts; truth outside it is dropped, predictions clipped.

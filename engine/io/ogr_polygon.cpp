@@ -46,13 +46,16 @@ PolygonWithHoles from_ogr_polygon(const OGRPolygon& p) {
   return out;
 }
 
-std::vector<PolygonWithHoles> read_polygons(const std::string& path, const std::string& label, std::string* crs_wkt) {
+std::vector<PolygonWithHoles> read_polygons(const std::string& path, const std::string& label, std::string* crs_wkt,
+                                            std::vector<std::string>* names) {
   if (path.rfind("/vsi", 0) != 0 && !std::filesystem::exists(path)) throw InputError(label + " '" + path + "': file not found");
   GDALDataset* d = static_cast<GDALDataset*>(GDALOpenEx(path.c_str(), GDAL_OF_VECTOR | GDAL_OF_READONLY, nullptr, nullptr, nullptr));
   if (!d) throw InputError(label + " '" + path + "': not a vector file GDAL can read");
   std::vector<PolygonWithHoles> out;
-  auto add = [&out](const OGRPolygon* p) {
-    if (p->getExteriorRing() && p->getExteriorRing()->getNumPoints() >= 4) out.push_back(from_ogr_polygon(*p));
+  auto add = [&out, names](const OGRPolygon* p, const std::string& name) {
+    if (!p->getExteriorRing() || p->getExteriorRing()->getNumPoints() < 4) return;
+    out.push_back(from_ogr_polygon(*p));
+    if (names) names->push_back(name);
   };
   // A lodforge GeoPackage holds its footprints in "footprints" beside the LOD1 blocks' faces
   // (layer "lod1"): the footprints only, then.
@@ -66,13 +69,20 @@ std::vector<PolygonWithHoles> read_polygons(const std::string& path, const std::
       *crs_wkt = wkt ? wkt : "";
       CPLFree(wkt);
     }
+    const int id_field = layer->GetLayerDefn()->GetFieldIndex("id");
     for (auto& f : *layer) {
       const OGRGeometry* g = f->GetGeometryRef();
       if (!g) continue;
+      const std::string name = names ? (id_field >= 0 && f->IsFieldSetAndNotNull(id_field) ? std::string(f->GetFieldAsString(id_field))
+                                                                                           : std::to_string(f->GetFID()))
+                                     : std::string();
       const auto type = wkbFlatten(g->getGeometryType());
-      if (type == wkbPolygon) add(g->toPolygon());
-      else if (type == wkbMultiPolygon)
-        for (const OGRPolygon* part : *g->toMultiPolygon()) add(part);
+      if (type == wkbPolygon) {
+        add(g->toPolygon(), name);
+      } else if (type == wkbMultiPolygon) {
+        int part_number = 0;
+        for (const OGRPolygon* part : *g->toMultiPolygon()) add(part, name + "." + std::to_string(++part_number));
+      }
     }
   }
   GDALClose(d);

@@ -18,7 +18,10 @@ PolygonWithHoles from_ogr_polygon(const OGRPolygon& polygon);
 // Every polygon of every layer of a vector file (multipolygons split into their parts); of the
 // layer "footprints" alone when there is one (lodforge's GeoPackages: not the LOD1 faces). Throws
 // InputError naming `label` and the file when it is missing, unreadable or holds no polygon.
-// crs_wkt, when given, receives the first layer's CRS (empty if it has none).
-std::vector<PolygonWithHoles> read_polygons(const std::string& path, const std::string& label, std::string* crs_wkt = nullptr);
+// crs_wkt, when given, receives the first layer's CRS (empty if it has none); names, when given,
+// each polygon's feature: its "id" field where the layer has one, else its FID, and ".K" for the
+// K-th part (from 1) of a multipolygon.
+std::vector<PolygonWithHoles> read_polygons(const std::string& path, const std::string& label, std::string* crs_wkt = nullptr,
+                                            std::vector<std::string>* names = nullptr);
 
 }  // namespace lodforge
