@@ -1,5 +1,6 @@
 // The quality metrics on cases computed by hand.
 #include <filesystem>
+#include <fstream>
 #include <set>
 #include <sstream>
 #include <string>
@@ -169,6 +170,20 @@ TEST(EvalCommand, ReportsOnFilesAndRefusesMissingOnes) {
   ASSERT_EQ(matched, json.at("matched").get<std::size_t>());
   EXPECT_NEAR(iou / double(matched), json.at("mean_iou").get<double>(), 1e-4);
   EXPECT_NEAR(polis / double(matched), json.at("polis_m").get<double>(), 1e-3);
+  // A multipolygon's parts are named by its id and their number; an unmatched one has no truth; a
+  // name holding a comma is quoted. (Metres: no CRS given, coordinates out of degrees' range.)
+  {
+    std::ofstream(dir / "parts.geojson")
+        << R"({"type": "FeatureCollection", "features": [{"type": "Feature", "properties": {"id": "b7"}, "geometry": {"type": "MultiPolygon", "coordinates": [)"
+        << R"([[[85000, 447000], [85010, 447000], [85010, 447010], [85000, 447010], [85000, 447000]]], [[[85050, 447000], [85060, 447000], [85060, 447010], [85050, 447010], [85050, 447000]]]]}}]})";
+    std::ofstream(dir / "one.geojson")
+        << R"({"type": "FeatureCollection", "features": [{"type": "Feature", "properties": {"id": "h, 1"}, "geometry": {"type": "Polygon", "coordinates": [[[85000, 447000], [85010, 447000], [85010, 447010], [85000, 447010], [85000, 447000]]]}}]})";
+  }
+  ASSERT_EQ(test::lodforge("eval --pred " + (dir / "parts.geojson").string() + " --gt " + (dir / "one.geojson").string() + " --scores " +
+                           (dir / "parts.csv").string()).code, 0);
+  const std::string parts = test::slurp(dir / "parts.csv");
+  EXPECT_NE(parts.find("\nb7.1,\"h, 1\",1.0000,4,4,0.000,0.000,"), std::string::npos) << parts;
+  EXPECT_NE(parts.find("\nb7.2,,0.0000,4,,,,,4,4\n"), std::string::npos) << parts;
   const auto missing = test::lodforge("eval --pred " + (dir / "nope.gpkg").string() + " --gt " + (dir / "lod0.gpkg").string());
   EXPECT_EQ(missing.code, 1);
   EXPECT_NE(missing.output.find("nope.gpkg': file not found"), std::string::npos) << missing.output;
