@@ -1488,7 +1488,18 @@ TEST(NoiseModels, ASkewedQuadrilateralCompetesWithTheRectangle) {
   const PolygonWithHoles truth = test::rotated({{{0, 0}, {24, 0}, {24, 15}, {0, 15}}, {}}, 33.0);
   const test::RasterizedShape shape = test::rasterize_shape_m(truth, 2.0, 1.0, 8.0, 2.0, 5);
   ASSERT_EQ(shape.buildings.size(), 1u);
+  // (Without the rectangle test the chain's outline is that skewed quadrilateral: the case is the one meant.)
+  CoreOptions no_rectangle;
+  no_rectangle.models.rectangle_tolerance = 0;
+  const BuildingResult skewed = regularize_building(shape.buildings[0].rings, 2.0, no_rectangle, 0.6);
+  ASSERT_TRUE(skewed.ok) << skewed.reason;
+  ASSERT_EQ(skewed.footprint.outer.size(), 4u) << skewed.model;
+  double worst = 0;
+  for (std::size_t i = 0; i < 4; ++i)
+    worst = std::max(worst, std::abs(turn_deg(edge_vector(skewed.footprint.outer, (i + 3) % 4), edge_vector(skewed.footprint.outer, i)) - 90.0));
+  ASSERT_GT(worst, 3.0) << skewed.model;
   const BuildingResult r = regularize_building(shape.buildings[0].rings, 2.0, CoreOptions{}, 0.6);
+  ASSERT_TRUE(r.ok) << r.reason;
   const Ring& outer = r.footprint.outer;
   ASSERT_EQ(outer.size(), 4u) << r.model;
   for (std::size_t i = 0; i < 4; ++i)

@@ -78,7 +78,7 @@ int run_eval(int argc, char** argv) {
   if (auto j = args.get("json")) write_text_atomically(*j, eval_json(r) + "\n");
   if (auto path = args.get("scores")) {
     const auto csv_field = [](const std::string& v) {  // (quoted where it holds a comma or a quote)
-      if (v.find_first_of(",\"\n") == std::string::npos) return v;
+      if (v.find_first_of(",\"\r\n") == std::string::npos) return v;
       std::string q = "\"";
       for (char c : v) q += c == '"' ? std::string("\"\"") : std::string(1, c);
       return q + "\"";

@@ -70,12 +70,15 @@ std::vector<PolygonWithHoles> read_polygons(const std::string& path, const std::
       CPLFree(wkt);
     }
     const int id_field = layer->GetLayerDefn()->GetFieldIndex("id");
+    // (Of several layers, each numbers its own features: the layer's name goes first.)
+    const std::string prefix = layers.size() > 1 ? std::string(layer->GetName()) + ":" : std::string();
     for (auto& f : *layer) {
       const OGRGeometry* g = f->GetGeometryRef();
       if (!g) continue;
-      const std::string name = names ? (id_field >= 0 && f->IsFieldSetAndNotNull(id_field) ? std::string(f->GetFieldAsString(id_field))
-                                                                                           : std::to_string(f->GetFID()))
-                                     : std::string();
+      const std::string name =
+          names ? prefix + (id_field >= 0 && f->IsFieldSetAndNotNull(id_field) ? std::string(f->GetFieldAsString(id_field))
+                                                                               : std::to_string(f->GetFID()))
+                : std::string();
       const auto type = wkbFlatten(g->getGeometryType());
       if (type == wkbPolygon) {
         add(g->toPolygon(), name);

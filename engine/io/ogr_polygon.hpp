@@ -20,7 +20,7 @@ PolygonWithHoles from_ogr_polygon(const OGRPolygon& polygon);
 // InputError naming `label` and the file when it is missing, unreadable or holds no polygon.
 // crs_wkt, when given, receives the first layer's CRS (empty if it has none); names, when given,
 // each polygon's feature: its "id" field where the layer has one, else its FID, and ".K" for the
-// K-th part (from 1) of a multipolygon.
+// K-th part (from 1) of a multipolygon; "LAYER:" before it where several layers are read.
 std::vector<PolygonWithHoles> read_polygons(const std::string& path, const std::string& label, std::string* crs_wkt = nullptr,
                                             std::vector<std::string>* names = nullptr);
 
