@@ -63,15 +63,16 @@ class StretchGuard {
 void choose_rectangle(const std::vector<Ring>& rings, double pixel_size, const CoreOptions& co, BuildingResult& result,
                       const Vec2* lattice = nullptr) {
   const ModelOptions& o = co.models;
-  // (A quadrilateral is tested too unless it is a rectangle already: a skewed one, a small
-  // building's blob read as two directions, competes with the rectangle as any outline does.)
+  // (A triangle and a quadrilateral are tested too, unless the quadrilateral is a rectangle
+  // already: a skewed one, or a triangle, a small building's blob read as two or three
+  // directions, competes with the rectangle as any outline does.)
   const Ring& outer = result.footprint.outer;
   const auto square = [&outer] {
     for (std::size_t i = 0; i < outer.size(); ++i)
       if (std::abs(turn_deg(edge_vector(outer, (i + outer.size() - 1) % outer.size()), edge_vector(outer, i)) - 90.0) > 1.0) return false;
     return true;
   };
-  if (o.rectangle_tolerance <= 0 || rings.size() != 1 || outer.size() < 4 || (outer.size() == 4 && square())) return;
+  if (o.rectangle_tolerance <= 0 || rings.size() != 1 || outer.size() < 3 || (outer.size() == 4 && square())) return;
   double mean_fit = 0;  // the best rectangle's mean distance, which chose it
   Ring rectangle = lattice ? moment_rectangle(rings[0], *lattice) : best_rectangle(rings[0], result.directions, &mean_fit);
   if (rectangle.empty()) return;
