@@ -94,6 +94,17 @@ std::multiset<std::string> gpkg_outlines(const fs::path& path) {
   return outlines;
 }
 
+// A run's noise (its report.json) is regularize's (its --stats), and its footprints regularize's,
+// outline for outline: more than `least` of them.
+void expect_run_is_regularize(const nlohmann::json& report, const nlohmann::json& stats, const fs::path& run_out, const fs::path& gpkg,
+                              std::size_t least) {
+  EXPECT_DOUBLE_EQ(report.at("noise_floor_m").get<double>(), stats.at("noise_floor_m").get<double>());
+  EXPECT_DOUBLE_EQ(report.at("noise_smoothing_m").get<double>(), stats.at("noise_smoothing_m").get<double>());
+  const std::multiset<std::string> run = run_outlines(run_out), regularized = gpkg_outlines(gpkg);
+  EXPECT_GT(run.size(), least);
+  EXPECT_TRUE(run == regularized) << run.size() << " against " << regularized.size();
+}
+
 class Run : public ::testing::Test {
  protected:
   void SetUp() override { dir = test::fresh_test_directory("lodforge_run"); }
@@ -460,11 +471,7 @@ TEST_F(Run, AFastWobbleIsSmoothedAlikeInARunAndInRegularize) {
   const nlohmann::json narrow_stats = report_of(dir / "n.json");
   EXPECT_EQ(narrow_stats.at("noise_smoothing_m").get<double>(), 0.0) << narrow_stats;
   EXPECT_GT(stats.at("noise_floor_m").get<double>(), 1.1 * narrow_stats.at("noise_floor_m").get<double>()) << stats << narrow_stats;
-  EXPECT_DOUBLE_EQ(report.at("noise_smoothing_m").get<double>(), stats.at("noise_smoothing_m").get<double>());
-  EXPECT_DOUBLE_EQ(report.at("noise_floor_m").get<double>(), stats.at("noise_floor_m").get<double>());
-  const std::multiset<std::string> run = run_outlines(dir / "wobbly_out"), regularized = gpkg_outlines(dir / "w.gpkg");
-  EXPECT_GT(run.size(), 5u);
-  EXPECT_TRUE(run == regularized) << run.size() << " against " << regularized.size();
+  expect_run_is_regularize(report, stats, dir / "wobbly_out", dir / "w.gpkg", 5);
 }
 
 // A metre of wobble at a 2 m wavelength on 0.1 m pixels: the flanks cut the contour's runs short
@@ -500,12 +507,7 @@ TEST_F(Run, AFastMetreWobbleAtFinePixelsIsMeasuredAtTwiceThePixel) {
   ASSERT_EQ(r.code, 0) << r.output;
   EXPECT_NE(r.output.find("of the mask averaged to twice its pixel"), std::string::npos) << r.output;
   EXPECT_NE(r.output.find("the raster's noise"), std::string::npos) << r.output;
-  const nlohmann::json report = report_of(dir / "fast_out" / "report.json");
-  EXPECT_DOUBLE_EQ(report.at("noise_floor_m").get<double>(), coarse.at("noise_floor_m").get<double>());
-  EXPECT_DOUBLE_EQ(report.at("noise_smoothing_m").get<double>(), coarse.at("noise_smoothing_m").get<double>());
-  const std::multiset<std::string> run = run_outlines(dir / "fast_out"), regularized = gpkg_outlines(dir / "c.gpkg");
-  EXPECT_GT(run.size(), 5u);
-  EXPECT_TRUE(run == regularized) << run.size() << " against " << regularized.size();
+  expect_run_is_regularize(report_of(dir / "fast_out" / "report.json"), coarse, dir / "fast_out", dir / "c.gpkg", 5);
 }
 
 // A mask averaged over 2 x 2 blocks whole and window by window (as a survey reads it) agree,

@@ -15,18 +15,6 @@
 
 namespace lodforge {
 
-namespace {
-
-std::string fixed(double v, int digits) {
-  std::ostringstream out;
-  out.setf(std::ios::fixed);
-  out.precision(digits);
-  out << v;
-  return out.str();
-}
-
-}  // namespace
-
 int run_eval(int argc, char** argv) {
   Args args("eval", "Scores predicted footprints against ground truth: overall IoU, matching at IoU >= 0.5 (precision,\n"
                     "recall, F1, mean IoU), C-IoU, N-ratio, PoLiS, Hausdorff, blob IoU. All in metres: the files in one CRS\n"
@@ -87,9 +75,9 @@ int run_eval(int argc, char** argv) {
     csv << "prediction,truth,iou,vertices,truth_vertices,polis_m,hausdorff_m,max_tangent_deg,corners,right_corners\n";
     for (const PredictionScore& s : r.scores) {
       csv << csv_field(pred_names[s.predicted]) << ',' << (s.truth >= 0 ? csv_field(truth_names[std::size_t(s.truth)]) : "") << ','
-          << fixed(s.iou, 4) << ',' << s.vertices << ',';
+          << fmt::format("{:.4f}", s.iou) << ',' << s.vertices << ',';
       if (s.truth >= 0)
-        csv << s.truth_vertices << ',' << fixed(s.polis, 3) << ',' << fixed(s.hausdorff, 3) << ',' << fixed(s.max_tangent_angle_deg, 2);
+        csv << fmt::format("{},{:.3f},{:.3f},{:.2f}", s.truth_vertices, s.polis, s.hausdorff, s.max_tangent_angle_deg);
       else
         csv << ",,,";
       csv << ',' << s.corners << ',' << s.right_corners << '\n';

@@ -158,10 +158,7 @@ int run_regularize(int argc, char** argv) {
   if (batch.noise_samples > 0)
     spdlog::info("boundary noise pooled over {} buildings: {:.3f} m (stages.noise.pooled_floor = {}), normals smoothed for {:.3f} m",
                  batch.noise_samples, batch.noise_floor_m, options.core.noise.pooled_floor, batch.noise_smoothing_m);
-  for (BuildingResult& r : batch.results) {
-    r.seconds += coarse_seconds / double(count);
-    r.chain_seconds.start += coarse_seconds / double(count);
-  }
+  for (BuildingResult& r : batch.results) r.add_start_seconds(coarse_seconds / double(count));
   if (coarse_noise) batch.noise_samples = coarse_samples;
   const std::vector<BuildingResult>& results = batch.results;
 
@@ -200,20 +197,18 @@ int run_regularize(int argc, char** argv) {
     spdlog::info("{} building(s) took the original corner route instead of the deformed one (over a budget; the reason is in their 'reason' field)", rerouted);
   if (auto stats = args.get("stats")) {
     // Times overall, then by contour size (edges of all rings), which the cost grows with.
-    struct SizeClass { const char* name; std::size_t below; std::vector<double> seconds; std::vector<const BuildingResult*> results; };
+    struct SizeClass { const char* name; std::size_t below; std::vector<const BuildingResult*> results; };
     std::vector<SizeClass> classes = {{"edges_below_250", 250, {}}, {"edges_250_to_1000", 1000, {}}, {"edges_1000_and_more", SIZE_MAX, {}}};
-    std::vector<double> all;
-    std::vector<const BuildingResult*> all_results;
+    std::vector<const BuildingResult*> all;
     for (std::size_t i = 0; i < count; ++i) {
       std::size_t edges = 0;
       for (const Ring& ring : contours.buildings[i].rings) edges += ring.size();
-      SizeClass& size_class = *std::find_if(classes.begin(), classes.end(), [&](const SizeClass& c) { return edges < c.below; });
-      size_class.seconds.push_back(results[i].seconds);
-      size_class.results.push_back(&results[i]);
-      all.push_back(results[i].seconds);
-      all_results.push_back(&results[i]);
+      std::find_if(classes.begin(), classes.end(), [&](const SizeClass& c) { return edges < c.below; })->results.push_back(&results[i]);
+      all.push_back(&results[i]);
     }
-    const auto times = [](std::vector<double> seconds, nlohmann::ordered_json& into) {  // mean, median, p99
+    const auto times = [](const std::vector<const BuildingResult*>& of, nlohmann::ordered_json& into) {  // mean, median, p99
+      std::vector<double> seconds;
+      for (const BuildingResult* r : of) seconds.push_back(r->seconds);
       std::sort(seconds.begin(), seconds.end());
       double total = 0;
       for (double s : seconds) total += s;
@@ -239,7 +234,7 @@ int run_regularize(int argc, char** argv) {
                                     {"other", std::max(0.0, whole - start - labeling - outline) / n}};
     };
     double total = 0;
-    for (double s : all) total += s;
+    for (const BuildingResult* r : all) total += r->seconds;
     nlohmann::ordered_json out;
     out["regularizer"] = regularizer;
     out["route"] = options.core.corners.route;
@@ -255,11 +250,11 @@ int run_regularize(int argc, char** argv) {
     if (regularizer == "deformation") out["models"] = models;
     out["seconds_total"] = total;
     times(all, out);
-    stage_means(all_results, out);
+    stage_means(all, out);
     for (const SizeClass& c : classes) {
       nlohmann::ordered_json size_class;
-      size_class["buildings"] = c.seconds.size();
-      times(c.seconds, size_class);
+      size_class["buildings"] = c.results.size();
+      times(c.results, size_class);
       stage_means(c.results, size_class);
       out["by_size"][c.name] = size_class;
     }

@@ -229,10 +229,7 @@ RegularizedBatch regularize_batch(const std::string& regularizer, const std::vec
   tbb::parallel_for(std::size_t(0), buildings.size(), [&](std::size_t i) {
     batch.results[i] = regularize_with(regularizer, buildings[i].rings, pixel_size, options, batch.noise_floor_m,
                                        starts.empty() ? BuildingStart{} : std::move(starts[i]));
-    if (!start_seconds.empty()) {
-      batch.results[i].seconds += start_seconds[i];
-      batch.results[i].chain_seconds.start += start_seconds[i];
-    }
+    if (!start_seconds.empty()) batch.results[i].add_start_seconds(start_seconds[i]);
     if (on_done) on_done();
   });
   return batch;

@@ -41,6 +41,11 @@ struct BuildingResult {
   struct ChainSeconds {
     double start = 0, labeling = 0, outline = 0;
   } chain_seconds;
+  // Time spent on its start outside the chain (its share of the mask's noise rounds), in both.
+  void add_start_seconds(double s) {
+    seconds += s;
+    chain_seconds.start += s;
+  }
 
   std::string status() const { return ok ? "ok" : "fallback"; }
 };
