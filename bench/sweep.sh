@@ -6,7 +6,7 @@
 # Regenerates the sweep section of docs/quality.md (between its sweep markers).
 #
 #   bench/sweep.sh [--work DIR] [--sets synth,campus,delft] [--pixels 0.1,0.25,0.5,1,2]
-#                  [--wobbles 0,0.25,0.5,1] [--wavelength 8]
+#                  [--wobbles 0,0.25,0.5,1] [--wavelength 8] [--seed N]
 #                  [--methods lodforge,cgal,douglas_peucker,none] [--no-docs]
 #
 # A row (pixel size P, wobble W metres): `lodforge synth --pixel-size P --set boundary_noise_m=W
@@ -19,7 +19,9 @@
 # (the default), paper (the deformed route), nocriterion (the default without the outlines an
 # information criterion chooses: the coarse lattice outlines, the staircases drawn as lines and
 # the merged steps: models.coarse_scale = 0, models.staircase_corners = 0,
-# models.merge_patience = 0), cgal, douglas_peucker, none (the raw contour).
+# models.merge_patience = 0), cgal, douglas_peucker, none (the raw contour). --seed N draws
+# another synthetic city and other degradations (every set's seed N; files ROW.sN, section
+# sweep-results[-lL]-sN): a check of the defaults on data they were not measured on.
 set -euo pipefail
 root="$(cd "$(dirname "$0")/.." && pwd)"
 lodforge="${LODFORGE:-$root/build/lodforge}"
@@ -29,6 +31,7 @@ sets="synth,campus,delft"
 pixels="0.1,0.25,0.5,1,2"
 wobbles="0,0.25,0.5,1"
 wavelength=8
+seed=""
 methods="lodforge,cgal,douglas_peucker,none"
 docs=1
 while [ $# -gt 0 ]; do
@@ -38,9 +41,10 @@ while [ $# -gt 0 ]; do
     --pixels) pixels="$2"; shift 2 ;;
     --wobbles) wobbles="$2"; shift 2 ;;
     --wavelength) wavelength="$2"; shift 2 ;;
+    --seed) seed="$2"; shift 2 ;;
     --methods) methods="$2"; shift 2 ;;
     --no-docs) docs=0; shift ;;
-    -h|--help) sed -n '2,22p' "$0"; exit 0 ;;
+    -h|--help) sed -n '2,24p' "$0"; exit 0 ;;
     *) echo "bench/sweep.sh: unknown argument '$1' (see --help)" >&2; exit 2 ;;
   esac
 done
@@ -55,6 +59,10 @@ else
   /usr/bin/python3 -c "import sys; assert float(sys.argv[1]) > 0" "$wavelength" 2>/dev/null ||
     { echo "bench/sweep.sh: --wavelength must be a positive number of metres, not '$wavelength'" >&2; exit 2; }
   section="sweep-results-l$wavelength"
+fi
+if [ -n "$seed" ]; then
+  [[ "$seed" =~ ^[0-9]+$ ]] || { echo "bench/sweep.sh: --seed must be a whole number, not '$seed'" >&2; exit 2; }
+  section="$section-s$seed"
 fi
 if [ "$docs" = 1 ] && ! grep -q "<!-- $section:begin -->" "$root/docs/quality.md"; then
   echo "bench/sweep.sh: docs/quality.md has no $section markers (<!-- $section:begin --> ... <!-- $section:end -->); add them or pass --no-docs" >&2
@@ -91,6 +99,7 @@ for s in "${set_list[@]}"; do
     for w in "${wobble_list[@]}"; do
       row="$s.p$p.w$w"
       [ "$wavelength" = 8 ] || row="$row.l$wavelength"
+      [ -z "$seed" ] || row="$row.s$seed"
       data="$work/data/$row"
       if [ ! -f "$data/seg_class.tif" ]; then
         degrade=(--set boundary_noise_m=0 --set corner_radius_m=0 --set speckle_per_km2=0)
@@ -100,11 +109,11 @@ for s in "${set_list[@]}"; do
                    --set speckle_per_km2=400 --set speckle_size_m=0.5)
         fi
         if [ "$s" = synth ]; then
-          "$lodforge" synth --size-m 500x500 --pixel-size "$p" --seed 11 "${degrade[@]}" --out "$data" >/dev/null 2>&1
+          "$lodforge" synth --size-m 500x500 --pixel-size "$p" --seed "${seed:-11}" "${degrade[@]}" --out "$data" >/dev/null 2>&1
         else
           from="$campus_gt"
           [ "$s" = delft ] && from="$delft_gt"
-          "$lodforge" synth --from "$from" --pixel-size "$p" --seed 1 "${degrade[@]}" --out "$data" >/dev/null 2>&1
+          "$lodforge" synth --from "$from" --pixel-size "$p" --seed "${seed:-1}" "${degrade[@]}" --out "$data" >/dev/null 2>&1
         fi
       fi
       gt="$data/footprints.gpkg"
@@ -121,6 +130,7 @@ for s in "${set_list[@]}"; do
   done
 done
 table_args=("$work" --sets "$sets" --pixels "$pixels" --wobbles "$wobbles" --wavelength "$wavelength" --methods "$methods")
+[ -z "$seed" ] || table_args+=(--seed "$seed")
 if [ "$docs" = 1 ]; then
   /usr/bin/python3 "$root/bench/sweep_table.py" "${table_args[@]}" --doc "$root/docs/quality.md"
   echo "bench/sweep.sh: results written to docs/quality.md" >&2

@@ -1,7 +1,8 @@
 #!/usr/bin/python3
 """Builds the sweep tables of docs/quality.md from bench/sweep.sh's work directory.
-usage: sweep_table.py WORK --sets a,b --pixels p,q --wobbles w,v [--wavelength 8] --methods m,n [--doc DOC.md]
-Rows of a wavelength other than 8 m are read from ROW.lL files and written to the sweep-results-lL section."""
+usage: sweep_table.py WORK --sets a,b --pixels p,q --wobbles w,v [--wavelength 8] [--seed N] --methods m,n [--doc DOC.md]
+Rows of a wavelength other than 8 m are read from ROW.lL files and written to the sweep-results-lL section;
+rows of another seed from ROW[.lL].sN files, to the sweep-results[-lL]-sN section."""
 import argparse, json, os
 
 from doc_section import write_section
@@ -15,6 +16,7 @@ ap = argparse.ArgumentParser()
 ap.add_argument("work")
 for key in ("sets", "pixels", "wobbles", "methods"): ap.add_argument("--" + key, required=True)
 ap.add_argument("--wavelength", default="8")
+ap.add_argument("--seed")
 ap.add_argument("--doc")
 a = ap.parse_args()
 sets, pixels, wobbles, methods = (getattr(a, k).split(",") for k in ("sets", "pixels", "wobbles", "methods"))
@@ -47,6 +49,7 @@ def targets(r, method="lodforge"):
 out, met, rows_total = [], 0, 0
 for s in sets:
     title = TITLES.get(s, s) + ("" if a.wavelength == "8" else f", wobble wavelength {a.wavelength} m")
+    if a.seed: title = title.replace("(seed 11)", f"(seed {a.seed})").replace("(seed 1)", f"(seed {a.seed})")
     out.append(f"#### {title}\n")
     head = ["pixel (m)", "wobble (m)"]
     head += [f"IoU {SHORT[m]}" for m in methods]
@@ -59,7 +62,7 @@ for s in sets:
     out.append("|---" * len(head) + "|")
     for p in pixels:
         for w in wobbles:
-            row = f"{s}.p{p}.w{w}" + ("" if a.wavelength == "8" else f".l{a.wavelength}")
+            row = f"{s}.p{p}.w{w}" + ("" if a.wavelength == "8" else f".l{a.wavelength}") + (f".s{a.seed}" if a.seed else "")
             try:
                 r = {m: load(row, m) for m in methods}
             except FileNotFoundError:
@@ -88,6 +91,7 @@ if not a.doc:
     print(text)
 else:
     section, wavelength = ("sweep-results", "") if a.wavelength == "8" else (f"sweep-results-l{a.wavelength}", f" --wavelength {a.wavelength}")
+    if a.seed: section, wavelength = f"{section}-s{a.seed}", f"{wavelength} --seed {a.seed}"
     write_section(a.doc, section,
                   f"bench/sweep.sh --sets {a.sets} --pixels {a.pixels} --wobbles {a.wobbles}{wavelength} --methods {a.methods}",
                   "ms: each building's regularization on one core.", text)
