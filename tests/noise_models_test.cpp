@@ -1481,6 +1481,80 @@ TEST(Squaring, AShortConnectorBecomesAStepOrACorner) {
   EXPECT_EQ(in_hole->holes.at(0).size(), 6u);
 }
 
+// The corners a segmentation rounded made sharp where at least half of a building's square
+// corners are rounded (models.rounded_share): a 20 x 12 m rectangle whose four corners are each drawn as two
+// short walls along an arc of 1.8 m gets its corners back, as a hole too; an L with two of its six
+// corners cut (a building's own) stays, with three cut it gets them back; knobs past the corners
+// are no rounding.
+TEST(Corners, RoundedCornersAreMadeSharpWhereMostAre) {
+  // Each corner of the rectangle (counter-clockwise from (0, 0)) drawn as two walls along an arc
+  // of 1.8 m about it: where the arc leaves the wall before, its middle, where it meets the wall
+  // after (the two walls 2.76 m together, under corners.max_cut_m's 3 m).
+  const double r = 1.8, d = r * (1 - std::sqrt(0.5));  // the arc's middle, from the corner's two walls
+  const Ring rounded{{r, 0},      {20 - r, 0},      {20 - d, d},      {20, r},      {20, 12 - r}, {20 - d, 12 - d},
+                     {20 - r, 12}, {r, 12},          {d, 12 - d},      {0, 12 - r}, {0, r},       {d, d}};
+  const PolygonWithHoles arcs{rounded, {}};
+  ASSERT_TRUE(polygon_problem(arcs).empty());
+  ASSERT_EQ(arcs.outer.size(), 12u);
+  const std::optional<PolygonWithHoles> sharp = sharpen_rounded_corners(arcs, 3.0, 10.0, 0.5);
+  ASSERT_TRUE(sharp);
+  ASSERT_EQ(sharp->outer.size(), 4u);
+  EXPECT_NEAR(std::abs(signed_area(sharp->outer)), 240, 1e-9);
+  EXPECT_FALSE(sharpen_rounded_corners(arcs, 3.0, 10.0, 0));  // (off)
+  // The same rounded rectangle as a hole (clockwise) in a square: the hole gets its corners back.
+  const PolygonWithHoles holed{{{-10, -10}, {30, -10}, {30, 30}, {-10, 30}}, {Ring(rounded.rbegin(), rounded.rend())}};
+  const std::optional<PolygonWithHoles> sharp_hole = sharpen_rounded_corners(holed, 3.0, 10.0, 0.5);
+  ASSERT_TRUE(sharp_hole);
+  EXPECT_EQ(sharp_hole->outer.size(), 4u);
+  ASSERT_EQ(sharp_hole->holes.at(0).size(), 4u);
+  EXPECT_NEAR(std::abs(signed_area(sharp_hole->holes[0])), 240, 1e-9);
+  // An L of six square corners with two of them cut by 1.5 m (a third: the building's own cuts)
+  // stays; with three of them cut (half), the three cuts become corners.
+  const PolygonWithHoles two_cut{{{0, 0}, {18.5, 0}, {20, 1.5}, {20, 10}, {10, 10}, {10, 20}, {1.5, 20}, {0, 18.5}}, {}};
+  EXPECT_FALSE(sharpen_rounded_corners(two_cut, 3.0, 10.0, 0.5));
+  const PolygonWithHoles three_cut{{{1.5, 0}, {18.5, 0}, {20, 1.5}, {20, 10}, {10, 10}, {10, 20}, {1.5, 20}, {0, 18.5}, {0, 1.5}}, {}};
+  const std::optional<PolygonWithHoles> l_sharp = sharpen_rounded_corners(three_cut, 3.0, 10.0, 0.5);
+  ASSERT_TRUE(l_sharp);
+  EXPECT_EQ(l_sharp->outer.size(), 6u);
+  EXPECT_NEAR(std::abs(signed_area(l_sharp->outer)), 300, 1e-9);
+  // Knobs of 0.8 m sticking out past all four corners (each met through four walls of 2.4 m
+  // together, under max_cut, but outside the corner): no rounding, nothing changes.
+  const double h = 0.4;
+  const PolygonWithHoles knobs{{{20 - h, 0},  {20 - h, -h}, {20 + h, -h},     {20 + h, h},      {20, h},
+                                {20, 12 - h}, {20 + h, 12 - h}, {20 + h, 12 + h}, {20 - h, 12 + h}, {20 - h, 12},
+                                {h, 12},      {h, 12 + h},  {-h, 12 + h},     {-h, 12 - h},     {0, 12 - h},
+                                {0, h},       {-h, h},      {-h, -h},         {h, -h},          {h, 0}},
+                               {}};
+  ASSERT_TRUE(polygon_problem(knobs).empty());
+  EXPECT_FALSE(sharpen_rounded_corners(knobs, 3.0, 10.0, 0.5));
+}
+
+// A clean mask whose corners the segmentation rounded by 2 m (no wobble: the noise measures a few
+// centimetres, so the outline followed two or four of the roundings as a step or a cut): a 24 x
+// 14 m house at 0.25 m, turned by 0-82.5 degrees, comes out a rectangle at every angle (it did at
+// 5 of the 12 angles before).
+TEST(CleanMasks, CornersRoundedByTwoMetresComeBackSquare) {
+  CoreOptions off;
+  off.models.rounded_share = 0;
+  int drawn_without = 0;
+  double iou = 0, iou_without = 0;
+  for (double angle = 0; angle < 90; angle += 7.5) {
+    const PolygonWithHoles truth = test::rotated(PolygonWithHoles{{{0, 0}, {24, 0}, {24, 14}, {0, 14}}, {}}, angle);
+    const test::RasterizedShape shape = test::rasterize_shape_m(truth, 0.25, 0.0, 8.0, 2.0, 1);
+    ASSERT_EQ(shape.buildings.size(), 1u);
+    const BuildingResult on = regularize_building(shape.buildings[0].rings, 0.25, CoreOptions{});
+    const BuildingResult without = regularize_building(shape.buildings[0].rings, 0.25, off);
+    ASSERT_TRUE(on.ok && without.ok) << angle << ": " << on.reason << without.reason;
+    EXPECT_EQ(on.footprint.outer.size(), 4u) << "at " << angle << " degrees";
+    drawn_without += without.footprint.outer.size() > 4;
+    EXPECT_GE(test::iou(on.footprint, truth), test::iou(without.footprint, truth) - 1e-9) << "at " << angle << " degrees";
+    iou += test::iou(on.footprint, truth) / 12;
+    iou_without += test::iou(without.footprint, truth) / 12;
+  }
+  EXPECT_GE(drawn_without, 6);  // (the roundings drawn as steps or cuts without the rule)
+  EXPECT_GT(iou, iou_without + 0.002) << "without the rule: " << iou_without;
+}
+
 // A quadrilateral that is not a rectangle competes with the building's rectangle as any other
 // outline does (models.rectangle_tolerance): a 24 x 15 m house at 33 degrees, 2 m pixels, under a
 // metre of wobble (a mask's noise of 0.6 m given), was drawn as a quadrilateral 6 degrees off square.

@@ -163,6 +163,95 @@ std::optional<PolygonWithHoles> square_connectors(const PolygonWithHoles& polygo
   return out;
 }
 
+namespace {
+
+// A ring's rounded corners: the first vertex of the walls through which each meets (after wall a),
+// how many walls, and the point where its two walls meet; *square: its square corners counted.
+struct RoundedCorner {
+  std::size_t first;  // the vertex after wall a's start: wall a ends there
+  std::size_t walls;  // the short walls between wall a and wall b
+  Vec2 corner;
+};
+std::vector<RoundedCorner> rounded_corners(const Ring& ring, double max_cut, double square_cos, std::size_t* square) {
+  const std::size_t n = ring.size();
+  std::vector<RoundedCorner> rounded;
+  *square = 0;
+  for (std::size_t i = 0; i < n; ++i) {
+    const Vec2 a0 = ring[i], wall_a = ring[(i + 1) % n] - a0;
+    if (wall_a.norm() < max_cut) continue;
+    double chain = 0;
+    for (std::size_t k = 0; k <= 4 && k + 3 <= n; ++k) {  // k short walls after wall a
+      if (k > 0) chain += (ring[(i + k + 1) % n] - ring[(i + k) % n]).norm();
+      if (chain >= max_cut) break;
+      const Vec2 b0 = ring[(i + k + 1) % n], wall_b = ring[(i + k + 2) % n] - b0;
+      if (wall_b.norm() < max_cut || std::abs(wall_a.dot(wall_b)) > square_cos * wall_a.norm() * wall_b.norm()) continue;
+      const double det = cross(wall_a, wall_b);
+      if (det == 0) continue;
+      const Vec2 corner = a0 + (cross(b0 - a0, wall_b) / det) * wall_a;
+      if (!corner.allFinite()) continue;
+      if (k == 0) {
+        ++*square;
+        break;
+      }
+      // Every vertex of the walls between (the end of wall a .. the start of wall b) inside the
+      // corner: on the side of wall a's line that wall b goes to, on the side of wall b's line that
+      // wall a comes from, and near the corner. (Wall a's end lies on its own line and wall b's
+      // start on its own: not tested against them, where rounding could put them a hair outside.)
+      bool inside = true;
+      for (std::size_t j = 1; j <= k + 1 && inside; ++j) {
+        const Vec2 q = ring[(i + j) % n];
+        inside = (j == 1 || cross(wall_a, q - a0) * det >= 0) && (j == k + 1 || cross(wall_b, q - b0) * det >= 0) &&
+                 (q - corner).norm() <= chain;
+      }
+      if (!inside) continue;
+      ++*square;
+      rounded.push_back({(i + 1) % n, k, corner});
+      break;
+    }
+  }
+  return rounded;
+}
+
+}  // namespace
+
+std::optional<PolygonWithHoles> sharpen_rounded_corners(const PolygonWithHoles& polygon, double max_cut, double square_deg,
+                                                        double min_share) {
+  if (!(max_cut > 0) || !(min_share > 0)) return std::nullopt;
+  const double square_cos = std::sin(square_deg * M_PI / 180.0);  // |cos| of two walls within square_deg of square
+  PolygonWithHoles out = polygon;
+  bool any = false;
+  for (std::size_t r = 0; r <= polygon.holes.size(); ++r) {
+    PolygonWithHoles candidate = out;
+    Ring& ring = ring_at(candidate, r);
+    const std::size_t n = ring.size();
+    if (n < 5) continue;
+    std::size_t square = 0;
+    const std::vector<RoundedCorner> rounded = rounded_corners(ring, max_cut, square_cos, &square);
+    if (rounded.size() < 2 || double(rounded.size()) < min_share * double(square)) continue;
+    // Each rounded corner's walls between become the corner (the first vertex moved there, the
+    // others dropped); one whose vertices another already took stays.
+    std::vector<char> taken(n, 0), dropped(n, 0);
+    std::vector<std::optional<Vec2>> moved(n);
+    for (const RoundedCorner& c : rounded) {
+      bool free = true;
+      for (std::size_t j = 0; j <= c.walls; ++j) free = free && !taken[(c.first + j) % n];
+      if (!free) continue;
+      for (std::size_t j = 0; j <= c.walls; ++j) taken[(c.first + j) % n] = 1, dropped[(c.first + j) % n] = j > 0;
+      moved[c.first] = c.corner;
+    }
+    Ring sharp;
+    sharp.reserve(n);
+    for (std::size_t j = 0; j < n; ++j)
+      if (!dropped[j]) sharp.push_back(moved[j] ? *moved[j] : ring[j]);
+    ring = std::move(sharp);
+    if (!polygon_problem(candidate).empty()) continue;
+    out = std::move(candidate);
+    any = true;
+  }
+  if (!any) return std::nullopt;
+  return out;
+}
+
 std::optional<PolygonWithHoles> merge_cheapest_step(const PolygonWithHoles& polygon, double parallel_deg) {
   const auto [r, step] = cheapest_of(polygon, std::cos(parallel_deg * M_PI / 180.0));
   if (r < 0) return std::nullopt;

@@ -41,6 +41,21 @@ std::optional<PolygonWithHoles> staircases_as_lines(const PolygonWithHoles& poly
 std::optional<PolygonWithHoles> square_connectors(const PolygonWithHoles& polygon, const Vec2& lattice, double on_deg,
                                                   double noise, double correlation, double k);
 
+// The corners the segmentation rounded made sharp, on rings where most square corners are: a
+// square corner is two walls at least max_cut long meeting within square_deg of a right angle,
+// directly or through one to four shorter walls, together shorter than max_cut, whose vertices all
+// lie inside the corner the two walls make (on the inner side of both walls' lines, no farther
+// from where they meet than the shorter walls are long together; a step or a wing beside the
+// corner lies outside one of the lines); it is rounded when it meets through such walls (an arc drawn as a cut or as
+// a few walls along it; a small notch cut out of the corner looks the same). Where at least
+// min_share of a ring's square corners are rounded, and two or more, every rounded one becomes
+// the point where its two walls meet: a segmentation network rounds every corner of a building
+// alike, where a building's own cut, rounded or notched corners are a few of its corners
+// (models.rounded_share). Ring by ring, each kept where the polygon stays valid; none when no
+// corner is sharpened.
+std::optional<PolygonWithHoles> sharpen_rounded_corners(const PolygonWithHoles& polygon, double max_cut, double square_deg,
+                                                        double min_share);
+
 // The same merges one after another, with the contour's mean distance to the outline (each
 // contour edge's midpoint to the nearest wall, weighted by the edge's length: contour_fit) kept
 // up to date: a merge changes five walls, so only the midpoints nearest them are measured again,

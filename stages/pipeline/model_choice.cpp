@@ -484,6 +484,12 @@ void ModelChoice::square_and_clean() {
             square_connectors(result.footprint, context.lattice, o.models.merge_parallel_deg, context.noise,
                               noise_correlation_m(o.corners, pixel_size), o.models.square_noise))
       result.footprint = std::move(*squared);
+  // The corners the segmentation rounded made sharp, where most of the building's are
+  // (models.rounded_share); not on an outline that draws an arc (a building rounded by design).
+  if (!has_arc(result.footprint))
+    if (std::optional<PolygonWithHoles> sharp =
+            sharpen_rounded_corners(result.footprint, o.corners.max_cut_m, o.corners.parallel_angle_deg, o.models.rounded_share))
+      result.footprint = std::move(*sharp);
   // Last of all, the needles where two walls' lines met past the end of one (models.spike_deg).
   // (remove_spikes keeps the outline valid; the collinear vertices it may leave are dropped where
   // that keeps it valid too.)
