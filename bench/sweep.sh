@@ -6,7 +6,7 @@
 # Regenerates the sweep section of docs/quality.md (between its sweep markers).
 #
 #   bench/sweep.sh [--work DIR] [--sets synth,campus,delft] [--pixels 0.1,0.25,0.5,1,2]
-#                  [--wobbles 0,0.25,0.5,1] [--wavelength 8] [--seed N]
+#                  [--wobbles 0,0.25,0.5,1] [--wavelength 8] [--seed N] [--radius R]
 #                  [--methods lodforge,cgal,douglas_peucker,none] [--no-docs]
 #
 # A row (pixel size P, wobble W metres): `lodforge synth --pixel-size P --set boundary_noise_m=W
@@ -21,7 +21,9 @@
 # the merged steps: models.coarse_scale = 0, models.staircase_corners = 0,
 # models.merge_patience = 0), cgal, douglas_peucker, none (the raw contour). --seed N draws
 # another synthetic city and other degradations (every set's seed N; files ROW.sN, section
-# sweep-results[-lL]-sN): a check of the defaults on data they were not measured on.
+# sweep-results[-lL]-sN): a check of the defaults on data they were not measured on. --radius R
+# rounds the corners by R metres on every row, the unwobbled ones too, instead of twice the
+# wobble (files ROW[.lL][.sN].rR, section ...-rR): a mask rounded more than it wobbles.
 set -euo pipefail
 root="$(cd "$(dirname "$0")/.." && pwd)"
 lodforge="${LODFORGE:-$root/build/lodforge}"
@@ -32,6 +34,7 @@ pixels="0.1,0.25,0.5,1,2"
 wobbles="0,0.25,0.5,1"
 wavelength=8
 seed=""
+radius=""
 methods="lodforge,cgal,douglas_peucker,none"
 docs=1
 while [ $# -gt 0 ]; do
@@ -42,9 +45,10 @@ while [ $# -gt 0 ]; do
     --wobbles) wobbles="$2"; shift 2 ;;
     --wavelength) wavelength="$2"; shift 2 ;;
     --seed) seed="$2"; shift 2 ;;
+    --radius) radius="$2"; shift 2 ;;
     --methods) methods="$2"; shift 2 ;;
     --no-docs) docs=0; shift ;;
-    -h|--help) sed -n '2,24p' "$0"; exit 0 ;;
+    -h|--help) sed -n '2,26p' "$0"; exit 0 ;;
     *) echo "bench/sweep.sh: unknown argument '$1' (see --help)" >&2; exit 2 ;;
   esac
 done
@@ -63,6 +67,11 @@ fi
 if [ -n "$seed" ]; then
   [[ "$seed" =~ ^[0-9]+$ ]] || { echo "bench/sweep.sh: --seed must be a whole number, not '$seed'" >&2; exit 2; }
   section="$section-s$seed"
+fi
+if [ -n "$radius" ]; then
+  /usr/bin/python3 -c "import sys; assert float(sys.argv[1]) >= 0" "$radius" 2>/dev/null ||
+    { echo "bench/sweep.sh: --radius must be a number of metres, 0 or more, not '$radius'" >&2; exit 2; }
+  section="$section-r$radius"
 fi
 if [ "$docs" = 1 ] && ! grep -q "<!-- $section:begin -->" "$root/docs/quality.md"; then
   echo "bench/sweep.sh: docs/quality.md has no $section markers (<!-- $section:begin --> ... <!-- $section:end -->); add them or pass --no-docs" >&2
@@ -100,14 +109,16 @@ for s in "${set_list[@]}"; do
       row="$s.p$p.w$w"
       [ "$wavelength" = 8 ] || row="$row.l$wavelength"
       [ -z "$seed" ] || row="$row.s$seed"
+      [ -z "$radius" ] || row="$row.r$radius"
       data="$work/data/$row"
       if [ ! -f "$data/seg_class.tif" ]; then
         degrade=(--set boundary_noise_m=0 --set corner_radius_m=0 --set speckle_per_km2=0)
         if [ "$w" != 0 ]; then
-          radius=$(/usr/bin/python3 -c "print(2 * $w)")
-          degrade=(--set "boundary_noise_m=$w" --set "noise_wavelength_m=$wavelength" --set "corner_radius_m=$radius"
+          rounding=$(/usr/bin/python3 -c "print(2 * $w)")
+          degrade=(--set "boundary_noise_m=$w" --set "noise_wavelength_m=$wavelength" --set "corner_radius_m=$rounding"
                    --set speckle_per_km2=400 --set speckle_size_m=0.5)
         fi
+        [ -z "$radius" ] || degrade+=(--set "corner_radius_m=$radius")
         if [ "$s" = synth ]; then
           "$lodforge" synth --size-m 500x500 --pixel-size "$p" --seed "${seed:-11}" "${degrade[@]}" --out "$data" >/dev/null 2>&1
         else
@@ -131,6 +142,7 @@ for s in "${set_list[@]}"; do
 done
 table_args=("$work" --sets "$sets" --pixels "$pixels" --wobbles "$wobbles" --wavelength "$wavelength" --methods "$methods")
 [ -z "$seed" ] || table_args+=(--seed "$seed")
+[ -z "$radius" ] || table_args+=(--radius "$radius")
 if [ "$docs" = 1 ]; then
   /usr/bin/python3 "$root/bench/sweep_table.py" "${table_args[@]}" --doc "$root/docs/quality.md"
   echo "bench/sweep.sh: results written to docs/quality.md" >&2
