@@ -165,6 +165,10 @@ std::optional<PolygonWithHoles> square_connectors(const PolygonWithHoles& polygo
 
 namespace {
 
+// The most walls a rounding is drawn with between its two walls: at 0.1 m a rounding of 2 m is
+// drawn with 5-10 (as a few steps, or walls along the arc), at 0.25 m with 1-4.
+constexpr std::size_t kMaxRoundingWalls = 12;
+
 // A ring's rounded corners: the first vertex of the walls through which each meets (after wall a),
 // how many walls, and the point where its two walls meet; *square: its square corners counted.
 struct RoundedCorner {
@@ -180,7 +184,7 @@ std::vector<RoundedCorner> rounded_corners(const Ring& ring, double max_cut, dou
     const Vec2 a0 = ring[i], wall_a = ring[(i + 1) % n] - a0;
     if (wall_a.norm() < max_cut) continue;
     double chain = 0;
-    for (std::size_t k = 0; k <= 4 && k + 3 <= n; ++k) {  // k short walls after wall a
+    for (std::size_t k = 0; k <= kMaxRoundingWalls && k + 3 <= n; ++k) {  // k short walls after wall a
       if (k > 0) chain += (ring[(i + k + 1) % n] - ring[(i + k) % n]).norm();
       if (chain >= max_cut) break;
       const Vec2 b0 = ring[(i + k + 1) % n], wall_b = ring[(i + k + 2) % n] - b0;

@@ -43,7 +43,7 @@ std::optional<PolygonWithHoles> square_connectors(const PolygonWithHoles& polygo
 
 // The corners the segmentation rounded made sharp, on rings where most square corners are: a
 // square corner is two walls at least max_cut long meeting within square_deg of a right angle,
-// directly or through one to four shorter walls, together shorter than max_cut, whose vertices all
+// directly or through one to twelve shorter walls, together shorter than max_cut, whose vertices all
 // lie inside the corner the two walls make (on the inner side of both walls' lines, no farther
 // from where they meet than the shorter walls are long together; a step or a wing beside the
 // corner lies outside one of the lines); it is rounded when it meets through such walls (an arc drawn as a cut or as
