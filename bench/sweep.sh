@@ -112,13 +112,10 @@ for s in "${set_list[@]}"; do
       [ -z "$radius" ] || row="$row.r$radius"
       data="$work/data/$row"
       if [ ! -f "$data/seg_class.tif" ]; then
-        degrade=(--set boundary_noise_m=0 --set corner_radius_m=0 --set speckle_per_km2=0)
-        if [ "$w" != 0 ]; then
-          rounding=$(/usr/bin/python3 -c "print(2 * $w)")
-          degrade=(--set "boundary_noise_m=$w" --set "noise_wavelength_m=$wavelength" --set "corner_radius_m=$rounding"
-                   --set speckle_per_km2=400 --set speckle_size_m=0.5)
-        fi
-        [ -z "$radius" ] || degrade+=(--set "corner_radius_m=$radius")
+        rounding="${radius:-$(/usr/bin/python3 -c "print(2 * $w)")}"  # (0 for the unwobbled rows unless --radius)
+        degrade=(--set boundary_noise_m=0 --set "corner_radius_m=$rounding" --set speckle_per_km2=0)
+        [ "$w" = 0 ] || degrade=(--set "boundary_noise_m=$w" --set "noise_wavelength_m=$wavelength" --set "corner_radius_m=$rounding"
+                                 --set speckle_per_km2=400 --set speckle_size_m=0.5)
         if [ "$s" = synth ]; then
           "$lodforge" synth --size-m 500x500 --pixel-size "$p" --seed "${seed:-11}" "${degrade[@]}" --out "$data" >/dev/null 2>&1
         else

@@ -222,37 +222,31 @@ std::optional<PolygonWithHoles> sharpen_rounded_corners(const PolygonWithHoles& 
                                                         double min_share) {
   if (!(max_cut > 0) || !(min_share > 0)) return std::nullopt;
   const double square_cos = std::sin(square_deg * M_PI / 180.0);  // |cos| of two walls within square_deg of square
-  PolygonWithHoles out = polygon;
-  bool any = false;
-  for (std::size_t r = 0; r <= polygon.holes.size(); ++r) {
-    PolygonWithHoles candidate = out;
-    Ring& ring = ring_at(candidate, r);
+  std::optional<PolygonWithHoles> out;  // (copied when a ring is sharpened)
+  const std::vector<const Ring*> rings = rings_of(polygon);
+  for (std::size_t r = 0; r < rings.size(); ++r) {
+    const Ring& ring = *rings[r];
     const std::size_t n = ring.size();
     if (n < 5) continue;
     std::size_t square = 0;
     const std::vector<RoundedCorner> rounded = rounded_corners(ring, max_cut, square_cos, &square);
     if (rounded.size() < 2 || double(rounded.size()) < min_share * double(square)) continue;
-    // Each rounded corner's walls between become the corner (the first vertex moved there, the
-    // others dropped); one whose vertices another already took stays.
-    std::vector<char> taken(n, 0), dropped(n, 0);
+    // Each rounded corner's walls between become the corner: the first vertex moved there, the
+    // others dropped. (A corner's vertices are those of the short walls between two long ones:
+    // no two corners share one.)
+    std::vector<char> dropped(n, 0);
     std::vector<std::optional<Vec2>> moved(n);
     for (const RoundedCorner& c : rounded) {
-      bool free = true;
-      for (std::size_t j = 0; j <= c.walls; ++j) free = free && !taken[(c.first + j) % n];
-      if (!free) continue;
-      for (std::size_t j = 0; j <= c.walls; ++j) taken[(c.first + j) % n] = 1, dropped[(c.first + j) % n] = j > 0;
       moved[c.first] = c.corner;
+      for (std::size_t j = 1; j <= c.walls; ++j) dropped[(c.first + j) % n] = 1;
     }
-    Ring sharp;
-    sharp.reserve(n);
+    PolygonWithHoles candidate = out ? *out : polygon;  // (the rings before it as sharpened, this one as given)
+    Ring& sharp = ring_at(candidate, r);
+    sharp.clear();
     for (std::size_t j = 0; j < n; ++j)
       if (!dropped[j]) sharp.push_back(moved[j] ? *moved[j] : ring[j]);
-    ring = std::move(sharp);
-    if (!polygon_problem(candidate).empty()) continue;
-    out = std::move(candidate);
-    any = true;
+    if (polygon_problem(candidate).empty()) out = std::move(candidate);
   }
-  if (!any) return std::nullopt;
   return out;
 }
 
