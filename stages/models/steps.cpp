@@ -84,117 +84,41 @@ std::pair<int, Step> cheapest_of(const PolygonWithHoles& polygon, double cos_par
   return best;
 }
 
-// square_connectors on one ring; true when a wall was squared.
-bool square_ring(Ring& ring, const Vec2& lattice, double on_deg, double noise, double correlation, double k) {
-  const Vec2 axis = lattice.normalized();
-  const double on_sin = std::sin(on_deg * M_PI / 180.0);
-  // The sine of the angle between a wall and the nearest axis of the lattice.
-  const auto off_sin = [&](const Vec2& e) {
-    const double length = e.norm();
-    return length > 0 ? std::abs(cross(e / length, nearest_lattice_axis(e / length, axis))) : 0.0;
-  };
-  bool any = false;
-  // (Each change leaves one wall off the lattice fewer: a step's new wall lies on it, a corner
-  // drops the wall. The bound on the passes is a guard.)
-  for (std::size_t pass = 0, passes = ring.size(); pass < passes && ring.size() >= 5; ++pass) {
-    bool changed = false;
-    const std::size_t n = ring.size();
-    for (std::size_t i = 0; i < n && !changed; ++i) {
-      // Walls a = (i-1, i), b = (i, i+1), c = (i+1, i+2).
-      const Vec2 p0 = ring[(i + n - 1) % n], p1 = ring[i], p2 = ring[(i + 1) % n], p3 = ring[(i + 2) % n];
-      const Vec2 a = p1 - p0, b = p2 - p1, c = p3 - p2;
-      const double la = a.norm(), lb = b.norm(), lc = c.norm();
-      if (la <= 0 || lb <= 0 || lc <= 0 || off_sin(a) > on_sin || off_sin(c) > on_sin) continue;
-      const double sin_turn = off_sin(b);
-      if (sin_turn <= on_sin) continue;
-      const double uncertainty = noise * std::sqrt(3 * correlation / std::max(lb, correlation));
-      if (sin_turn * 0.5 * lb > k * uncertainty) continue;
-      // The axes a and c lie along (each within on_deg of one).
-      const Vec2 along_a = nearest_lattice_axis(a / la, axis), along_c = nearest_lattice_axis(c / lc, axis);
-      const double same = along_a.dot(along_c);
-      if (same > 0.5) {
-        // A step along the lattice, square to a's axis, at b's middle (between walls on the
-        // lattice the two triangles it swaps are equal).
-        Vec2 across(-along_a.y(), along_a.x());
-        if (across.dot(b) < 0) across = -across;
-        const Vec2 middle = 0.5 * (p1 + p2);
-        const std::optional<Vec2> from = meet(p0, a, middle, across), to = meet(middle, across, p3, c);
-        if (!from || !to || !from->allFinite() || !to->allFinite() || (*from - p0).dot(a) <= 0 || (p3 - *to).dot(c) <= 0) continue;
-        ring[i] = *from;
-        ring[(i + 1) % n] = *to;
-      } else if (std::abs(same) < 0.5) {
-        // The corner where a and c meet (square to each other).
-        const std::optional<Vec2> corner = meet(p0, a, p3, c);
-        if (!corner || !corner->allFinite() || (*corner - p0).dot(a) <= 0 || (p3 - *corner).dot(c) <= 0) continue;
-        ring[i] = *corner;
-        ring.erase(ring.begin() + long((i + 1) % n));
-      } else {
-        continue;  // (a and c facing each other: the end of a spike, no connector)
-      }
-      changed = any = true;
-    }
-    if (!changed) break;
-  }
-  return any;
-}
-
-}  // namespace
-
-std::optional<PolygonWithHoles> square_connectors(const PolygonWithHoles& polygon, const Vec2& lattice, double on_deg,
-                                                  double noise, double correlation, double k) {
-  if (lattice.squaredNorm() <= 0 || !(noise > 0) || !(k > 0)) return std::nullopt;
-  double extent = 0;
-  for (const Vec2& p : polygon.outer) extent = std::max(extent, p.cwiseAbs().maxCoeff());
-  const double eps = 1e-9 * std::max(1.0, extent);
-  // Ring by ring, each kept where the polygon stays valid with it: a squaring that would cross
-  // another wall costs its own ring's, not the others'.
-  PolygonWithHoles out = polygon;
-  bool any = false;
-  for (std::size_t r = 0; r <= polygon.holes.size(); ++r) {
-    PolygonWithHoles candidate = out;
-    Ring& ring = ring_at(candidate, r);
-    if (!square_ring(ring, lattice, on_deg, noise, correlation, k)) continue;
-    ring = remove_degenerate_vertices(ring, eps);  // (a step between walls on one line has no width)
-    if (!polygon_problem(candidate).empty()) continue;
-    out = std::move(candidate);
-    any = true;
-  }
-  if (!any) return std::nullopt;
-  return out;
-}
-
-namespace {
-
 // The most walls a rounding is drawn with between its two walls: at 0.1 m a rounding of 2 m is
 // drawn with 5-10 (as a few steps, or walls along the arc), at 0.25 m with 1-4.
 constexpr std::size_t kMaxRoundingWalls = 12;
 
 // A ring's rounded corners: the first vertex of the walls through which each meets (after wall a),
-// how many walls, and the point where its two walls meet; *square: its square corners counted.
+// how many walls, and the point where its two walls meet. Its square corners: two walls at least
+// min_wall long within square_cos of square, met directly or through walls shorter than max_cut
+// together, inside their corner; *square counts them, *corners (when given) gets the point where
+// each one's walls meet.
 struct RoundedCorner {
   std::size_t first;  // the vertex after wall a's start: wall a ends there
   std::size_t walls;  // the short walls between wall a and wall b
   Vec2 corner;
 };
-std::vector<RoundedCorner> rounded_corners(const Ring& ring, double max_cut, double square_cos, std::size_t* square) {
+std::vector<RoundedCorner> rounded_corners(const Ring& ring, double min_wall, double max_cut, double square_cos, std::size_t* square,
+                                           std::vector<Vec2>* corners = nullptr) {
   const std::size_t n = ring.size();
   std::vector<RoundedCorner> rounded;
   *square = 0;
   for (std::size_t i = 0; i < n; ++i) {
     const Vec2 a0 = ring[i], wall_a = ring[(i + 1) % n] - a0;
-    if (wall_a.norm() < max_cut) continue;
+    if (wall_a.norm() < min_wall) continue;
     double chain = 0;
     for (std::size_t k = 0; k <= kMaxRoundingWalls && k + 3 <= n; ++k) {  // k short walls after wall a
       if (k > 0) chain += (ring[(i + k + 1) % n] - ring[(i + k) % n]).norm();
       if (chain >= max_cut) break;
       const Vec2 b0 = ring[(i + k + 1) % n], wall_b = ring[(i + k + 2) % n] - b0;
-      if (wall_b.norm() < max_cut || std::abs(wall_a.dot(wall_b)) > square_cos * wall_a.norm() * wall_b.norm()) continue;
+      if (wall_b.norm() < min_wall || std::abs(wall_a.dot(wall_b)) > square_cos * wall_a.norm() * wall_b.norm()) continue;
       const double det = cross(wall_a, wall_b);
       if (det == 0) continue;
       const Vec2 corner = a0 + (cross(b0 - a0, wall_b) / det) * wall_a;
       if (!corner.allFinite()) continue;
       if (k == 0) {
         ++*square;
+        if (corners) corners->push_back(b0);
         break;
       }
       // Every vertex of the walls between (the end of wall a .. the start of wall b) inside the
@@ -209,12 +133,166 @@ std::vector<RoundedCorner> rounded_corners(const Ring& ring, double max_cut, dou
       }
       if (!inside) continue;
       ++*square;
+      if (corners) corners->push_back(corner);
       rounded.push_back({(i + 1) % n, k, corner});
       break;
     }
   }
   return rounded;
 }
+
+// Replaces `count` vertices of the ring from `first` on (cyclically) by `points` (no more of
+// them), in place: the other vertices keep their order.
+void replace_vertices(Ring& ring, std::size_t first, std::size_t count, const std::vector<Vec2>& points) {
+  const std::size_t n = ring.size();
+  std::vector<std::size_t> at;
+  for (std::size_t j = 0; j < count; ++j) at.push_back((first + j) % n);
+  for (std::size_t j = 0; j < points.size(); ++j) ring[at[j]] = points[j];
+  std::vector<std::size_t> gone(at.begin() + long(points.size()), at.end());
+  std::sort(gone.rbegin(), gone.rend());
+  for (std::size_t g : gone) ring.erase(ring.begin() + long(g));
+}
+
+// A chain of walls to square on a ring, from vertex `first` (where wall a, on the lattice,
+// ends) through `walls` walls to the vertex where wall c, on the lattice, starts.
+struct Chain {
+  std::size_t first = 0, walls = 0;
+  bool rounding = false;  // taken by its length (max_chain), not by the noise
+};
+
+// The chain from vertex i to square, if any: walls off the lattice between two walls on it,
+// (1) together shorter than max_chain, a and c at least min_wall long (the short walls on the
+// lattice between them part of the chain: a rounding drawn as a few steps), or (2) one wall whose
+// direction the noise does not tell from the lattice's (a and c any length).
+std::optional<Chain> chain_from(const Ring& ring, std::size_t i, double on_sin, const Vec2& axis, double noise, double correlation,
+                                double k, double max_chain, double min_wall) {
+  const std::size_t n = ring.size();
+  const auto wall = [&](std::size_t j) { return ring[(j + 1) % n] - ring[j % n]; };  // wall j: vertex j to j+1
+  const auto off_sin = [&](const Vec2& e) {
+    const double length = e.norm();
+    return length > 0 ? std::abs(cross(e / length, nearest_lattice_axis(e / length, axis))) : 0.0;
+  };
+  const Vec2 a = wall(i + n - 1);
+  if (!(a.norm() > 0) || off_sin(a) > on_sin) return std::nullopt;
+  if (max_chain > 0 && a.norm() >= min_wall) {
+    double length = 0;
+    bool oblique = false;
+    for (std::size_t m = 0; m + 3 <= n && m <= kMaxRoundingWalls; ++m) {
+      const Vec2 w = wall(i + m);
+      const bool on = !(w.norm() > 0) || off_sin(w) <= on_sin;  // (a wall of no length is no oblique one)
+      if (on && w.norm() >= min_wall) {
+        if (oblique && m > 0) return Chain{i, m, true};
+        break;
+      }
+      oblique = oblique || !on;
+      length += w.norm();
+      if (length >= max_chain) break;
+    }
+  }
+  if (!(k > 0)) return std::nullopt;
+  const Vec2 b = wall(i), c = wall(i + 1);
+  if (!(b.norm() > 0) || !(c.norm() > 0) || off_sin(c) > on_sin) return std::nullopt;
+  const double sin_turn = off_sin(b);
+  if (sin_turn <= on_sin) return std::nullopt;
+  const double uncertainty = noise * std::sqrt(3 * correlation / std::max(b.norm(), correlation));
+  if (sin_turn * 0.5 * b.norm() > k * uncertainty) return std::nullopt;
+  return Chain{i, 1, false};
+}
+
+// square_connectors on one ring; true when a wall was squared.
+bool square_ring(Ring& ring, const Vec2& lattice, double on_deg, double noise, double correlation, double k, double max_chain,
+                 double min_wall) {
+  const Vec2 axis = lattice.normalized();
+  const double on_sin = std::sin(on_deg * M_PI / 180.0);
+  bool any = false;
+  // (Each change leaves fewer walls off the lattice: a step's new wall lies on it, a corner drops
+  // the walls. The bound on the passes is a guard.)
+  for (std::size_t pass = 0, passes = ring.size(); pass < passes && ring.size() >= 5; ++pass) {
+    bool changed = false;
+    const std::size_t n = ring.size();
+    for (std::size_t i = 0; i < n && !changed; ++i) {
+      const std::optional<Chain> chain = chain_from(ring, i, on_sin, axis, noise, correlation, k, max_chain, min_wall);
+      if (!chain) continue;
+      // Walls a = (i-1, i) and c = (i+m, i+m+1), the chain's m walls between.
+      const std::size_t m = chain->walls;
+      const Vec2 p0 = ring[(i + n - 1) % n], p1 = ring[i], p2 = ring[(i + m) % n], p3 = ring[(i + m + 1) % n];
+      const Vec2 a = p1 - p0, c = p3 - p2;
+      // The axes a and c lie along (each within on_deg of one).
+      const Vec2 along_a = nearest_lattice_axis(a.normalized(), axis), along_c = nearest_lattice_axis(c.normalized(), axis);
+      const double same = along_a.dot(along_c);
+      if (same > 0.5) {
+        // A step along the lattice, square to a's axis, where it keeps the area between the
+        // chain and the lines of a and c: at a single wall's middle (between walls on the
+        // lattice the two triangles it swaps are equal).
+        Vec2 across(-along_a.y(), along_a.x());
+        if (across.dot(p2 - p1) < 0) across = -across;
+        Vec2 riser = 0.5 * (p1 + p2);
+        if (m > 1) {
+          // Along a's axis from p1 (u) and across it (the offset), the area under the chain;
+          // under a step at u it is offset * (end - u).
+          double area = 0;
+          for (std::size_t j = 0; j < m; ++j) {
+            const Vec2 q0 = ring[(i + j) % n] - p1, q1 = ring[(i + j + 1) % n] - p1;
+            area += 0.5 * across.dot(q0 + q1) * along_a.dot(q1 - q0);
+          }
+          const double end = along_a.dot(p2 - p1), offset = across.dot(p2 - p1);
+          const double u = offset > 0 ? end - area / offset : -1.0;
+          if (!(u >= 0 && u <= end)) continue;  // (a notch or a knob between walls on one line: no step)
+          riser = p1 + u * along_a;
+        }
+        const std::optional<Vec2> from = meet(p0, a, riser, across), to = meet(riser, across, p3, c);
+        if (!from || !to || !from->allFinite() || !to->allFinite() || (*from - p0).dot(a) <= 0 || (p3 - *to).dot(c) <= 0) continue;
+        replace_vertices(ring, i, m + 1, {*from, *to});
+      } else if (std::abs(same) < 0.5) {
+        // The corner where a and c meet (square to each other); for a chain taken as a rounding,
+        // where it moves no more area than the triangle of a rounding of radius max_chain / 2
+        // between its tangent points: more, and the chain drew a step or a wing beside the corner
+        // that the rounding merged into it.
+        const std::optional<Vec2> corner = meet(p0, a, p3, c);
+        if (!corner || !corner->allFinite() || (*corner - p0).dot(a) <= 0 || (p3 - *corner).dot(c) <= 0) continue;
+        if (chain->rounding) {
+          double area = 0;  // (twice that of the polygon of the corner and the chain's vertices)
+          for (std::size_t j = 0; j < m; ++j) area += cross(ring[(i + j) % n] - *corner, ring[(i + j + 1) % n] - *corner);
+          if (std::abs(0.5 * area) > 0.5 * std::pow(0.5 * max_chain, 2)) continue;
+        }
+        replace_vertices(ring, i, m + 1, {*corner});
+      } else {
+        continue;  // (a and c facing each other: the end of a spike, no connector)
+      }
+      changed = any = true;
+    }
+    if (!changed) break;
+  }
+  return any;
+}
+
+}  // namespace
+
+std::optional<PolygonWithHoles> square_connectors(const PolygonWithHoles& polygon, const Vec2& lattice, double on_deg,
+                                                  double noise, double correlation, double k, double max_chain, double min_wall) {
+  if (lattice.squaredNorm() <= 0 || !(noise > 0) || !(k > 0 || max_chain > 0)) return std::nullopt;
+  double extent = 0;
+  for (const Vec2& p : polygon.outer) extent = std::max(extent, p.cwiseAbs().maxCoeff());
+  const double eps = 1e-9 * std::max(1.0, extent);
+  // Ring by ring, each kept where the polygon stays valid with it: a squaring that would cross
+  // another wall costs its own ring's, not the others'.
+  PolygonWithHoles out = polygon;
+  bool any = false;
+  for (std::size_t r = 0; r <= polygon.holes.size(); ++r) {
+    PolygonWithHoles candidate = out;
+    Ring& ring = ring_at(candidate, r);
+    if (!square_ring(ring, lattice, on_deg, noise, correlation, k, max_chain, min_wall)) continue;
+    ring = remove_degenerate_vertices(ring, eps);  // (a step between walls on one line has no width)
+    if (!polygon_problem(candidate).empty()) continue;
+    out = std::move(candidate);
+    any = true;
+  }
+  if (!any) return std::nullopt;
+  return out;
+}
+
+namespace {
+
 
 }  // namespace
 
@@ -229,7 +307,7 @@ std::optional<PolygonWithHoles> sharpen_rounded_corners(const PolygonWithHoles& 
     const std::size_t n = ring.size();
     if (n < 5) continue;
     std::size_t square = 0;
-    const std::vector<RoundedCorner> rounded = rounded_corners(ring, max_cut, square_cos, &square);
+    const std::vector<RoundedCorner> rounded = rounded_corners(ring, max_cut, max_cut, square_cos, &square);
     if (rounded.size() < 2 || double(rounded.size()) < min_share * double(square)) continue;
     // Each rounded corner's walls between become the corner: the first vertex moved there, the
     // others dropped. (A corner's vertices are those of the short walls between two long ones:
@@ -248,6 +326,47 @@ std::optional<PolygonWithHoles> sharpen_rounded_corners(const PolygonWithHoles& 
     if (polygon_problem(candidate).empty()) out = std::move(candidate);
   }
   return out;
+}
+
+double corner_rounding_gap(const PolygonWithHoles& outline, const std::vector<Ring>& contour, double min_wall, double max_cut,
+                           double square_deg, double least_gap) {
+  const double square_cos = std::sin(square_deg * M_PI / 180.0);
+  std::vector<Vec2> corners;
+  for (const Ring* ring : rings_of(outline)) {
+    std::size_t square = 0;
+    rounded_corners(*ring, min_wall, max_cut, square_cos, &square, &corners);
+  }
+  if (corners.size() < 3) return 0.0;
+  // The median (the upper one of an even count) lies beyond least_gap when that many corners do:
+  // counted first, each corner passed as soon as a contour segment lies within least_gap of it.
+  const auto within = [&](const Vec2& p, double d) {
+    for (const Ring& ring : contour)
+      for (std::size_t k = 0; k < ring.size(); ++k) {
+        const Vec2& a = ring[k];
+        const Vec2& b = ring[(k + 1) % ring.size()];
+        if (std::min(a.x(), b.x()) > p.x() + d || std::max(a.x(), b.x()) < p.x() - d || std::min(a.y(), b.y()) > p.y() + d ||
+            std::max(a.y(), b.y()) < p.y() - d)
+          continue;
+        if (squared_distance_to_segment(p, a, b) <= d * d) return true;
+      }
+    return false;
+  };
+  const std::size_t needed = corners.size() - corners.size() / 2;
+  std::size_t far = 0;
+  for (const Vec2& corner : corners) far += !within(corner, least_gap);
+  if (far < needed) return 0.0;
+  std::vector<double> gaps;
+  gaps.reserve(corners.size());
+  for (const Vec2& corner : corners) {
+    double best = std::numeric_limits<double>::infinity();
+    for (const Ring& ring : contour)
+      for (std::size_t k = 0; k < ring.size(); ++k)
+        best = std::min(best, squared_distance_to_segment(corner, ring[k], ring[(k + 1) % ring.size()]));
+    gaps.push_back(std::sqrt(best));
+  }
+  const auto middle = gaps.begin() + long(gaps.size() / 2);
+  std::nth_element(gaps.begin(), middle, gaps.end());
+  return *middle;
 }
 
 std::optional<PolygonWithHoles> merge_cheapest_step(const PolygonWithHoles& polygon, double parallel_deg) {

@@ -35,11 +35,26 @@ std::optional<PolygonWithHoles> staircases_as_lines(const PolygonWithHoles& poly
 // its middle onto the nearest axis moves its ends by at most k times the uncertainty a noise of
 // standard deviation `noise`, correlated over `correlation`, leaves at the ends of a fitted line
 // of its length L, noise sqrt(3 correlation / max(L, correlation)) (the rule corners.snap_*
-// applies to the runs). (A corner moves the outline farther than that turn, up to L sin cos of
-// the wall's angle off the lattice.) Ring by ring, each kept where the polygon stays valid with
-// it; none when no wall is squared.
+// applies to the runs; k = 0: no such test). (A corner moves the outline farther than that turn,
+// up to L sin cos of the wall's angle off the lattice.) Also, whatever the noise, a chain of one
+// to twelve walls shorter than max_chain together, one off the lattice at least, between two walls
+// on it at least min_wall long (where the segmentation rounded a step's or a corner's corners;
+// short walls on the lattice within the chain are its steps): a step where it keeps the area
+// between the chain and the two walls' lines, or the corner; none between walls on one line (a
+// notch or a knob). Ring by ring, each kept where the polygon stays valid with it; none when no
+// wall is squared.
 std::optional<PolygonWithHoles> square_connectors(const PolygonWithHoles& polygon, const Vec2& lattice, double on_deg,
-                                                  double noise, double correlation, double k);
+                                                  double noise, double correlation, double k, double max_chain, double min_wall);
+
+// How far the outline's square corners lie from the contour, at the median, where that is
+// farther than least_gap (else 0): its corners where two walls at least min_wall long meet within
+// square_deg of a right angle, directly or through walls shorter than max_cut together that lie
+// inside the corner (as sharpen_rounded_corners finds them), each the point where the two walls'
+// lines meet. A segmentation that rounds corners by a radius R leaves them R (sqrt 2 - 1) off the
+// contour; a sharp corner lies within the boundary noise of it. 0 with fewer than three such
+// corners.
+double corner_rounding_gap(const PolygonWithHoles& outline, const std::vector<Ring>& contour, double min_wall, double max_cut,
+                           double square_deg, double least_gap);
 
 // The corners the segmentation rounded made sharp, on rings where most square corners are: a
 // square corner is two walls at least max_cut long meeting within square_deg of a right angle,

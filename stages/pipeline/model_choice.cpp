@@ -477,12 +477,23 @@ void ModelChoice::walk_merged_steps(StepPath& path, bool outline_replaced, Crite
 
 // Last, the short connectors squared and the needles taken away.
 void ModelChoice::square_and_clean() {
+  // How far the segmentation rounded the building's corners, where more than its noise explains
+  // (models.rounding_noise): its square corners lie R (sqrt 2 - 1) off the contour. (Corners of
+  // walls at least two pixels and the noise's correlation length long, whose directions the
+  // noise leaves defined.) Measured on the outline as chosen.
+  const bool squarable = on_lattice && !has_arc(result.footprint);
+  const double min_wall = std::max(2 * pixel_size, noise_correlation_m(o.corners, pixel_size));
+  double rounding_radius = 0;
+  if (squarable && o.models.rounding_noise > 0)
+    rounding_radius = corner_rounding_gap(result.footprint, rings, min_wall, o.corners.max_cut_m, o.corners.parallel_angle_deg,
+                                          o.models.rounding_noise * context.noise) /
+                      (std::sqrt(2.0) - 1);
   // The short oblique walls between two walls on the lattice that the noise does not tell from it:
   // square steps and corners (models.square_noise).
-  if (on_lattice && o.models.square_noise > 0 && !has_arc(result.footprint))
-    if (std::optional<PolygonWithHoles> squared =
-            square_connectors(result.footprint, context.lattice, o.models.merge_parallel_deg, context.noise,
-                              noise_correlation_m(o.corners, pixel_size), o.models.square_noise))
+  const double correlation = noise_correlation_m(o.corners, pixel_size);
+  if (squarable && o.models.square_noise > 0)
+    if (std::optional<PolygonWithHoles> squared = square_connectors(result.footprint, context.lattice, o.models.merge_parallel_deg,
+                                                                   context.noise, correlation, o.models.square_noise, 0.0, min_wall))
       result.footprint = std::move(*squared);
   // The corners the segmentation rounded made sharp, where most of the building's are
   // (models.rounded_share); not on an outline that draws an arc (a building rounded by design).
@@ -490,6 +501,12 @@ void ModelChoice::square_and_clean() {
     if (std::optional<PolygonWithHoles> sharp =
             sharpen_rounded_corners(result.footprint, o.corners.max_cut_m, o.corners.parallel_angle_deg, o.models.rounded_share))
       result.footprint = std::move(*sharp);
+  // Then, under a rounding, the chains of walls off the lattice up to twice its radius long,
+  // whatever the noise: the rounded steps and the corners the rules before left.
+  if (squarable && rounding_radius > 0)
+    if (std::optional<PolygonWithHoles> squared = square_connectors(result.footprint, context.lattice, o.models.merge_parallel_deg,
+                                                                   context.noise, correlation, 0.0, 2 * rounding_radius, min_wall))
+      result.footprint = std::move(*squared);
   // Last of all, the needles where two walls' lines met past the end of one (models.spike_deg).
   // (remove_spikes keeps the outline valid; the collinear vertices it may leave are dropped where
   // that keeps it valid too.)
