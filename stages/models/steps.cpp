@@ -339,21 +339,34 @@ double corner_rounding_gap(const PolygonWithHoles& outline, const std::vector<Ri
   if (corners.size() < 3) return 0.0;
   // The median (the upper one of an even count) lies beyond least_gap when that many corners do:
   // counted first, each corner passed as soon as a contour segment lies within least_gap of it.
+  // (The corners come in the order of the outline's rings, which follow the contour's: each scan
+  // starts where the one before found its segment.)
+  std::vector<std::size_t> start(contour.size(), 0);
   const auto within = [&](const Vec2& p, double d) {
-    for (const Ring& ring : contour)
-      for (std::size_t k = 0; k < ring.size(); ++k) {
+    for (std::size_t r = 0; r < contour.size(); ++r) {
+      const Ring& ring = contour[r];
+      const std::size_t n = ring.size();
+      for (std::size_t j = 0; j < n; ++j) {
+        const std::size_t k = (start[r] + j) % n;
         const Vec2& a = ring[k];
-        const Vec2& b = ring[(k + 1) % ring.size()];
+        const Vec2& b = ring[(k + 1) % n];
         if (std::min(a.x(), b.x()) > p.x() + d || std::max(a.x(), b.x()) < p.x() - d || std::min(a.y(), b.y()) > p.y() + d ||
             std::max(a.y(), b.y()) < p.y() - d)
           continue;
-        if (squared_distance_to_segment(p, a, b) <= d * d) return true;
+        if (squared_distance_to_segment(p, a, b) <= d * d) {
+          start[r] = k;
+          return true;
+        }
       }
+    }
     return false;
   };
   const std::size_t needed = corners.size() - corners.size() / 2;
-  std::size_t far = 0;
-  for (const Vec2& corner : corners) far += !within(corner, least_gap);
+  std::size_t far = 0, near = 0;
+  for (const Vec2& corner : corners) {
+    (within(corner, least_gap) ? near : far) += 1;
+    if (near > corners.size() - needed) return 0.0;
+  }
   if (far < needed) return 0.0;
   std::vector<double> gaps;
   gaps.reserve(corners.size());
