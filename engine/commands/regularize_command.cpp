@@ -165,6 +165,7 @@ int run_regularize(int argc, char** argv) {
   std::vector<FootprintRecord> records(count);
   std::map<std::string, int> failures, models;
   int failed = 0, rerouted = 0, lent = 0;
+  std::vector<double> roundings;  // of the buildings whose corners the segmentation rounded (BuildingResult::rounding_m)
   for (std::size_t i = 0; i < count; ++i) {
     const BuildingResult& r = results[i];
     FootprintRecord& rec = records[i];
@@ -178,6 +179,7 @@ int run_regularize(int argc, char** argv) {
     ++models[r.ok ? r.model : "fallback"];
     if (r.ok && !r.note.empty()) ++rerouted;
     if (r.ok && r.lattice_lent) ++lent;
+    if (r.ok && r.rounding_m > 0) roundings.push_back(r.rounding_m);
     if (!r.ok) {
       ++failed;
       ++failures[r.failed_stage];
@@ -193,6 +195,12 @@ int run_regularize(int argc, char** argv) {
   for (const auto& [stage, n] : failures) by_stage += (by_stage.empty() ? " (" : ", ") + stage + ": " + std::to_string(n);
   if (!by_stage.empty()) by_stage += ")";
   spdlog::info("wrote {} footprints to {}: {} ok, {} fallback{}", count, out_path, count - failed, failed, by_stage);
+  std::sort(roundings.begin(), roundings.end());
+  const double rounding_median = roundings.empty() ? 0.0 : roundings[roundings.size() / 2];
+  if (!roundings.empty())
+    spdlog::info("{} building(s) with corners the segmentation rounded by more than their noise explains (median radius {:.2f} m): "
+                 "their short oblique walls squared (stages.models.rounding_noise)",
+                 roundings.size(), rounding_median);
   if (rerouted > 0)
     spdlog::info("{} building(s) took the original corner route instead of the deformed one (over a budget; the reason is in their 'reason' field)", rerouted);
   if (auto stats = args.get("stats")) {
@@ -243,6 +251,7 @@ int run_regularize(int argc, char** argv) {
     out["fallback"] = failed;
     out["original_route"] = rerouted;
     out["lattice_lent"] = lent;
+    out["corner_rounding"] = {{"buildings", roundings.size()}, {"radius_m_median", rounding_median}};
     out["noise_floor_m"] = batch.noise_floor_m;
     out["noise_smoothing_m"] = batch.noise_smoothing_m;
     out["noise_samples"] = batch.noise_samples;

@@ -180,7 +180,7 @@ std::optional<Chain> chain_from(const Ring& ring, std::size_t i, double on_sin, 
     for (std::size_t m = 0; m + 3 <= n && m <= kMaxRoundingWalls; ++m) {
       const Vec2 w = wall(i + m);
       const bool on = !(w.norm() > 0) || off_sin(w) <= on_sin;  // (a wall of no length is no oblique one)
-      if (on && w.norm() >= min_wall) {
+      if (on && w.norm() > 0 && w.norm() >= min_wall) {
         if (oblique && m > 0) return Chain{i, m, true};
         break;
       }
@@ -189,7 +189,7 @@ std::optional<Chain> chain_from(const Ring& ring, std::size_t i, double on_sin, 
       if (length >= max_chain) break;
     }
   }
-  if (!(k > 0)) return std::nullopt;
+  if (!(k > 0) || !(noise > 0)) return std::nullopt;
   const Vec2 b = wall(i), c = wall(i + 1);
   if (!(b.norm() > 0) || !(c.norm() > 0) || off_sin(c) > on_sin) return std::nullopt;
   const double sin_turn = off_sin(b);
@@ -251,9 +251,9 @@ bool square_ring(Ring& ring, const Vec2& lattice, double on_deg, double noise, d
         const std::optional<Vec2> corner = meet(p0, a, p3, c);
         if (!corner || !corner->allFinite() || (*corner - p0).dot(a) <= 0 || (p3 - *corner).dot(c) <= 0) continue;
         if (chain->rounding) {
-          double area = 0;  // (twice that of the polygon of the corner and the chain's vertices)
-          for (std::size_t j = 0; j < m; ++j) area += cross(ring[(i + j) % n] - *corner, ring[(i + j + 1) % n] - *corner);
-          if (std::abs(0.5 * area) > 0.5 * std::pow(0.5 * max_chain, 2)) continue;
+          double area = 0;  // (twice the area between the corner and the chain, each wall's triangle counted as it lies)
+          for (std::size_t j = 0; j < m; ++j) area += std::abs(cross(ring[(i + j) % n] - *corner, ring[(i + j + 1) % n] - *corner));
+          if (0.5 * area > 0.5 * std::pow(0.5 * max_chain, 2)) continue;
         }
         replace_vertices(ring, i, m + 1, {*corner});
       } else {
@@ -270,7 +270,7 @@ bool square_ring(Ring& ring, const Vec2& lattice, double on_deg, double noise, d
 
 std::optional<PolygonWithHoles> square_connectors(const PolygonWithHoles& polygon, const Vec2& lattice, double on_deg,
                                                   double noise, double correlation, double k, double max_chain, double min_wall) {
-  if (lattice.squaredNorm() <= 0 || !(noise > 0) || !(k > 0 || max_chain > 0)) return std::nullopt;
+  if (lattice.squaredNorm() <= 0 || !((k > 0 && noise > 0) || max_chain > 0)) return std::nullopt;
   double extent = 0;
   for (const Vec2& p : polygon.outer) extent = std::max(extent, p.cwiseAbs().maxCoeff());
   const double eps = 1e-9 * std::max(1.0, extent);
@@ -363,11 +363,10 @@ double corner_rounding_gap(const PolygonWithHoles& outline, const std::vector<Ri
   };
   const std::size_t needed = corners.size() - corners.size() / 2;
   std::size_t far = 0, near = 0;
-  for (const Vec2& corner : corners) {
-    (within(corner, least_gap) ? near : far) += 1;
+  for (std::size_t c = 0; c < corners.size() && far < needed; ++c) {
+    (within(corners[c], least_gap) ? near : far) += 1;
     if (near > corners.size() - needed) return 0.0;
   }
-  if (far < needed) return 0.0;
   std::vector<double> gaps;
   gaps.reserve(corners.size());
   for (const Vec2& corner : corners) {
@@ -379,7 +378,7 @@ double corner_rounding_gap(const PolygonWithHoles& outline, const std::vector<Ri
   }
   const auto middle = gaps.begin() + long(gaps.size() / 2);
   std::nth_element(gaps.begin(), middle, gaps.end());
-  return *middle;
+  return std::isfinite(*middle) ? *middle : 0.0;  // (a contour without a segment)
 }
 
 std::optional<PolygonWithHoles> merge_cheapest_step(const PolygonWithHoles& polygon, double parallel_deg) {

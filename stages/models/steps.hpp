@@ -41,16 +41,17 @@ std::optional<PolygonWithHoles> staircases_as_lines(const PolygonWithHoles& poly
 // on it at least min_wall long (where the segmentation rounded a step's or a corner's corners;
 // short walls on the lattice within the chain are its steps): a step where it keeps the area
 // between the chain and the two walls' lines, or the corner; none between walls on one line (a
-// notch or a knob). Ring by ring, each kept where the polygon stays valid with it; none when no
-// wall is squared.
+// notch or a knob); the area a corner moves is at most a rounding's of radius max_chain / 2
+// between its tangent points. Ring by ring, each kept where the polygon stays valid with it; none
+// when no wall is squared.
 std::optional<PolygonWithHoles> square_connectors(const PolygonWithHoles& polygon, const Vec2& lattice, double on_deg,
                                                   double noise, double correlation, double k, double max_chain, double min_wall);
 
 // How far the outline's square corners lie from the contour, at the median, where that is
 // farther than least_gap (else 0): its corners where two walls at least min_wall long meet within
 // square_deg of a right angle, directly or through walls shorter than max_cut together that lie
-// inside the corner (as sharpen_rounded_corners finds them), each the point where the two walls'
-// lines meet. A segmentation that rounds corners by a radius R leaves them R (sqrt 2 - 1) off the
+// inside the corner (as sharpen_rounded_corners finds them, there with walls at least max_cut
+// long), each the point where the two walls' lines meet. A segmentation that rounds corners by a radius R leaves them R (sqrt 2 - 1) off the
 // contour; a sharp corner lies within the boundary noise of it. 0 with fewer than three such
 // corners.
 double corner_rounding_gap(const PolygonWithHoles& outline, const std::vector<Ring>& contour, double min_wall, double max_cut,

@@ -31,6 +31,8 @@ struct BuildingResult {
                                 // "merged_steps" (the chosen outline with steps merged, models.merge_patience);
                                 // empty for the fallback
   bool lattice_lent = false;    // its walls held to its neighbours' lattice (BuildingStart::neighbour_lattice)
+  double rounding_m = 0;        // the radius the segmentation rounded its corners by, where its outline's square corners
+                                // lie farther off the contour than its noise explains (models.rounding_noise; m), else 0
   std::string route;            // the chain's corner route taken: "original" or "deformed"; empty otherwise
   std::string note;             // when ok: why the route taken is not the one asked for (a budget), else empty
   double seconds = 0;

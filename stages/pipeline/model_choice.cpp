@@ -488,6 +488,7 @@ void ModelChoice::square_and_clean() {
     rounding_radius = corner_rounding_gap(result.footprint, rings, min_wall, o.corners.max_cut_m, o.corners.parallel_angle_deg,
                                           o.models.rounding_noise * context.noise) /
                       (std::sqrt(2.0) - 1);
+  result.rounding_m = rounding_radius;
   // The short oblique walls between two walls on the lattice that the noise does not tell from it:
   // square steps and corners (models.square_noise).
   const double correlation = noise_correlation_m(o.corners, pixel_size);
