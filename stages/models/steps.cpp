@@ -153,10 +153,10 @@ void replace_vertices(Ring& ring, std::size_t first, std::size_t count, const st
   for (std::size_t g : gone) ring.erase(ring.begin() + long(g));
 }
 
-// A chain of walls to square on a ring, from vertex `first` (where wall a, on the lattice,
-// ends) through `walls` walls to the vertex where wall c, on the lattice, starts.
+// A chain of walls to square on a ring, from the vertex where wall a, on the lattice, ends
+// through `walls` walls to the vertex where wall c, on the lattice, starts.
 struct Chain {
-  std::size_t first = 0, walls = 0;
+  std::size_t walls = 0;
   bool rounding = false;  // taken by its length (max_chain), not by the noise
 };
 
@@ -181,7 +181,7 @@ std::optional<Chain> chain_from(const Ring& ring, std::size_t i, double on_sin, 
       const Vec2 w = wall(i + m);
       const bool on = !(w.norm() > 0) || off_sin(w) <= on_sin;  // (a wall of no length is no oblique one)
       if (on && w.norm() > 0 && w.norm() >= min_wall) {
-        if (oblique && m > 0) return Chain{i, m, true};
+        if (oblique) return Chain{m, true};
         break;
       }
       oblique = oblique || !on;
@@ -196,7 +196,7 @@ std::optional<Chain> chain_from(const Ring& ring, std::size_t i, double on_sin, 
   if (sin_turn <= on_sin) return std::nullopt;
   const double uncertainty = noise * std::sqrt(3 * correlation / std::max(b.norm(), correlation));
   if (sin_turn * 0.5 * b.norm() > k * uncertainty) return std::nullopt;
-  return Chain{i, 1, false};
+  return Chain{1, false};
 }
 
 // square_connectors on one ring; true when a wall was squared.
