@@ -1564,6 +1564,27 @@ TEST(Squaring, AChainShorterThanTheRoundingBecomesAStepOrACorner) {
   EXPECT_FALSE(square_connectors(notch, lattice, 2.0, 0.05, 1.0, 2.0, 3.0, 1.0));
 }
 
+// Under a measured rounding of radius R, rounded_share's corners are taken through walls up to 2.5 R
+// long (a rounding drawn along its arc or as a staircase along it, longer than corners.max_cut_m),
+// where the corner moves no more area than R^2 / 2: a 30 x 20 m rectangle whose corners are drawn as
+// three chords of a quarter circle of 2 m (3.1 m, 0.93 m^2 off each corner).
+TEST(Corners, RoundingsLongerThanMaxCutAreMadeSharpUnderAMeasuredRounding) {
+  Ring ring;
+  const Vec2 centres[4] = {{28, 2}, {28, 18}, {2, 18}, {2, 2}};
+  for (int c = 0; c < 4; ++c)
+    for (int k = 0; k <= 3; ++k) {
+      const double t = (0.5 * c - 0.5 + k / 6.0) * M_PI;
+      ring.push_back(centres[c] + 2.0 * Vec2(std::cos(t), std::sin(t)));
+    }
+  const PolygonWithHoles rounded{ring, {}};
+  EXPECT_FALSE(sharpen_rounded_corners(rounded, 3.0, 10.0, 0.5));       // (3.1 m of walls: over max_cut)
+  EXPECT_FALSE(sharpen_rounded_corners(rounded, 3.0, 10.0, 0.5, 1.3));  // (0.93 m^2 over 1.3^2 / 2)
+  const std::optional<PolygonWithHoles> sharp = sharpen_rounded_corners(rounded, 3.0, 10.0, 0.5, 2.0);
+  ASSERT_TRUE(sharp);
+  ASSERT_EQ(sharp->outer.size(), 4u);
+  EXPECT_NEAR(std::abs(signed_area(sharp->outer)), 600, 1e-9);
+}
+
 // How far the outline's square corners lie from a contour the segmentation rounded: a rectangle's
 // corners R (sqrt 2 - 1) off a contour rounded by R, counted through the short walls a rounding is
 // drawn with too; none beyond a gap that the contour's own corners do not exceed.

@@ -297,7 +297,7 @@ namespace {
 }  // namespace
 
 std::optional<PolygonWithHoles> sharpen_rounded_corners(const PolygonWithHoles& polygon, double max_cut, double square_deg,
-                                                        double min_share) {
+                                                        double min_share, double radius) {
   if (!(max_cut > 0) || !(min_share > 0)) return std::nullopt;
   const double square_cos = std::sin(square_deg * M_PI / 180.0);  // |cos| of two walls within square_deg of square
   std::optional<PolygonWithHoles> out;  // (copied when a ring is sharpened)
@@ -307,7 +307,24 @@ std::optional<PolygonWithHoles> sharpen_rounded_corners(const PolygonWithHoles& 
     const std::size_t n = ring.size();
     if (n < 5) continue;
     std::size_t square = 0;
-    const std::vector<RoundedCorner> rounded = rounded_corners(ring, max_cut, max_cut, square_cos, &square);
+    // Under a measured rounding (radius), roundings up to 2.5 radii long too: one drawn as a
+    // staircase along its arc is 2 radii long, some noise on top; those longer than max_cut only
+    // where their corner moves no more area than the triangle between a rounding's tangent points.
+    const double max_chain = radius > 0 ? std::max(max_cut, 2.5 * radius) : max_cut;
+    std::vector<RoundedCorner> rounded = rounded_corners(ring, max_cut, max_chain, square_cos, &square);
+    if (max_chain > max_cut) {
+      std::vector<RoundedCorner> kept;
+      for (const RoundedCorner& c : rounded) {
+        double length = 0, area = 0;  // (area: twice the gross area between the corner and the walls between)
+        for (std::size_t j = 0; j < c.walls; ++j) {
+          const Vec2 a = ring[(c.first + j) % n], b = ring[(c.first + j + 1) % n];
+          length += (b - a).norm();
+          area += std::abs(cross(a - c.corner, b - c.corner));
+        }
+        if (length < max_cut || 0.5 * area <= 0.5 * radius * radius) kept.push_back(c);
+      }
+      rounded = std::move(kept);
+    }
     if (rounded.size() < 2 || double(rounded.size()) < min_share * double(square)) continue;
     // Each rounded corner's walls between become the corner: the first vertex moved there, the
     // others dropped. (A corner's vertices are those of the short walls between two long ones:

@@ -67,10 +67,13 @@ double corner_rounding_gap(const PolygonWithHoles& outline, const std::vector<Ri
 // min_share of a ring's square corners are rounded, and two or more, every rounded one becomes
 // the point where its two walls meet: a segmentation network rounds every corner of a building
 // alike, where a building's own cut, rounded or notched corners are a few of its corners
-// (models.rounded_share). Ring by ring, each kept where the polygon stays valid; none when no
-// corner is sharpened.
+// (models.rounded_share). Under a rounding of the segmentation's measured (radius > 0: its radius,
+// corner_rounding_gap), the shorter walls may be up to 2.5 radii long together (a rounding drawn
+// as a staircase along its arc is two radii long), where beyond max_cut their corner moves no
+// more area than radius^2 / 2 (the triangle between a rounding's tangent points). Ring by ring,
+// each kept where the polygon stays valid; none when no corner is sharpened.
 std::optional<PolygonWithHoles> sharpen_rounded_corners(const PolygonWithHoles& polygon, double max_cut, double square_deg,
-                                                        double min_share);
+                                                        double min_share, double radius = 0);
 
 // The same merges one after another, with the contour's mean distance to the outline (each
 // contour edge's midpoint to the nearest wall, weighted by the edge's length: contour_fit) kept

@@ -497,10 +497,12 @@ void ModelChoice::square_and_clean() {
                                                                    context.noise, correlation, o.models.square_noise, 0.0, min_wall))
       result.footprint = std::move(*squared);
   // The corners the segmentation rounded made sharp, where most of the building's are
-  // (models.rounded_share); not on an outline that draws an arc (a building rounded by design).
+  // (models.rounded_share; under a measured rounding, roundings up to 2.5 radii long too); not on
+  // an outline that draws an arc (a building rounded by design).
   if (!has_arc(result.footprint))
     if (std::optional<PolygonWithHoles> sharp =
-            sharpen_rounded_corners(result.footprint, o.corners.max_cut_m, o.corners.parallel_angle_deg, o.models.rounded_share))
+            sharpen_rounded_corners(result.footprint, o.corners.max_cut_m, o.corners.parallel_angle_deg, o.models.rounded_share,
+                                    rounding_radius))
       result.footprint = std::move(*sharp);
   // Then, under a rounding, the chains of walls off the lattice up to twice its radius long,
   // whatever the noise: the rounded steps and the corners the rules before left.
