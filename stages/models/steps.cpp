@@ -96,6 +96,7 @@ constexpr std::size_t kMaxRoundingWalls = 12;
 struct RoundedCorner {
   std::size_t first;  // the vertex after wall a's start: wall a ends there
   std::size_t walls;  // the short walls between wall a and wall b
+  double length;      // ... together
   Vec2 corner;
 };
 std::vector<RoundedCorner> rounded_corners(const Ring& ring, double min_wall, double max_cut, double square_cos, std::size_t* square,
@@ -134,11 +135,20 @@ std::vector<RoundedCorner> rounded_corners(const Ring& ring, double min_wall, do
       if (!inside) continue;
       ++*square;
       if (corners) corners->push_back(corner);
-      rounded.push_back({(i + 1) % n, k, corner});
+      rounded.push_back({(i + 1) % n, k, chain, corner});
       break;
     }
   }
   return rounded;
+}
+
+// The area between a corner and the `walls` walls of the ring from vertex `first` on, each wall's
+// triangle with the corner counted as it lies (a chain that bows out and back in counts both).
+double area_off_corner(const Ring& ring, std::size_t first, std::size_t walls, const Vec2& corner) {
+  const std::size_t n = ring.size();
+  double twice = 0;
+  for (std::size_t j = 0; j < walls; ++j) twice += std::abs(cross(ring[(first + j) % n] - corner, ring[(first + j + 1) % n] - corner));
+  return 0.5 * twice;
 }
 
 // Replaces `count` vertices of the ring from `first` on (cyclically) by `points` (no more of
@@ -250,11 +260,7 @@ bool square_ring(Ring& ring, const Vec2& lattice, double on_deg, double noise, d
         // that the rounding merged into it.
         const std::optional<Vec2> corner = meet(p0, a, p3, c);
         if (!corner || !corner->allFinite() || (*corner - p0).dot(a) <= 0 || (p3 - *corner).dot(c) <= 0) continue;
-        if (chain->rounding) {
-          double area = 0;  // (twice the area between the corner and the chain, each wall's triangle counted as it lies)
-          for (std::size_t j = 0; j < m; ++j) area += std::abs(cross(ring[(i + j) % n] - *corner, ring[(i + j + 1) % n] - *corner));
-          if (0.5 * area > 0.5 * std::pow(0.5 * max_chain, 2)) continue;
-        }
+        if (chain->rounding && area_off_corner(ring, i, m, *corner) > 0.5 * std::pow(0.5 * max_chain, 2)) continue;
         replace_vertices(ring, i, m + 1, {*corner});
       } else {
         continue;  // (a and c facing each other: the end of a spike, no connector)
@@ -291,11 +297,6 @@ std::optional<PolygonWithHoles> square_connectors(const PolygonWithHoles& polygo
   return out;
 }
 
-namespace {
-
-
-}  // namespace
-
 std::optional<PolygonWithHoles> sharpen_rounded_corners(const PolygonWithHoles& polygon, double max_cut, double square_deg,
                                                         double min_share, double radius) {
   if (!(max_cut > 0) || !(min_share > 0)) return std::nullopt;
@@ -314,15 +315,8 @@ std::optional<PolygonWithHoles> sharpen_rounded_corners(const PolygonWithHoles& 
     std::vector<RoundedCorner> rounded = rounded_corners(ring, max_cut, max_chain, square_cos, &square);
     if (max_chain > max_cut) {
       std::vector<RoundedCorner> kept;
-      for (const RoundedCorner& c : rounded) {
-        double length = 0, area = 0;  // (area: twice the gross area between the corner and the walls between)
-        for (std::size_t j = 0; j < c.walls; ++j) {
-          const Vec2 a = ring[(c.first + j) % n], b = ring[(c.first + j + 1) % n];
-          length += (b - a).norm();
-          area += std::abs(cross(a - c.corner, b - c.corner));
-        }
-        if (length < max_cut || 0.5 * area <= 0.5 * radius * radius) kept.push_back(c);
-      }
+      for (const RoundedCorner& c : rounded)
+        if (c.length < max_cut || area_off_corner(ring, c.first, c.walls, c.corner) <= 0.5 * radius * radius) kept.push_back(c);
       rounded = std::move(kept);
     }
     if (rounded.size() < 2 || double(rounded.size()) < min_share * double(square)) continue;
@@ -354,12 +348,13 @@ double corner_rounding_gap(const PolygonWithHoles& outline, const std::vector<Ri
     rounded_corners(*ring, min_wall, max_cut, square_cos, &square, &corners);
   }
   if (corners.size() < 3) return 0.0;
-  // The median (the upper one of an even count) lies beyond least_gap when that many corners do:
-  // counted first, each corner passed as soon as a contour segment lies within least_gap of it.
-  // (The corners come in the order of the outline's rings, which follow the contour's: each scan
-  // starts where the one before found its segment.)
+  // The squared distance from p to the contour, the scan stopped at the first segment within
+  // `stop` (each ring scanned from where the scan before stopped: the corners come in the order
+  // of the outline's rings, which follow the contour's), segments whose boxes lie farther than
+  // the nearest so far passed over.
   std::vector<std::size_t> start(contour.size(), 0);
-  const auto within = [&](const Vec2& p, double d) {
+  const auto nearest = [&](const Vec2& p, double stop) {
+    double best = std::numeric_limits<double>::infinity(), reach = best;
     for (std::size_t r = 0; r < contour.size(); ++r) {
       const Ring& ring = contour[r];
       const std::size_t n = ring.size();
@@ -367,32 +362,32 @@ double corner_rounding_gap(const PolygonWithHoles& outline, const std::vector<Ri
         const std::size_t k = (start[r] + j) % n;
         const Vec2& a = ring[k];
         const Vec2& b = ring[(k + 1) % n];
-        if (std::min(a.x(), b.x()) > p.x() + d || std::max(a.x(), b.x()) < p.x() - d || std::min(a.y(), b.y()) > p.y() + d ||
-            std::max(a.y(), b.y()) < p.y() - d)
+        if (std::min(a.x(), b.x()) > p.x() + reach || std::max(a.x(), b.x()) < p.x() - reach ||
+            std::min(a.y(), b.y()) > p.y() + reach || std::max(a.y(), b.y()) < p.y() - reach)
           continue;
-        if (squared_distance_to_segment(p, a, b) <= d * d) {
+        const double squared = squared_distance_to_segment(p, a, b);
+        if (squared >= best) continue;
+        best = squared, reach = std::sqrt(squared);
+        if (best <= stop * stop) {
           start[r] = k;
-          return true;
+          return best;
         }
       }
     }
-    return false;
+    return best;
   };
+  // The median (the upper one of an even count) lies beyond least_gap when that many corners do:
+  // counted first, the count stopped once it is decided.
+  const double least = least_gap * least_gap;
   const std::size_t needed = corners.size() - corners.size() / 2;
   std::size_t far = 0, near = 0;
   for (std::size_t c = 0; c < corners.size() && far < needed; ++c) {
-    (within(corners[c], least_gap) ? near : far) += 1;
+    (nearest(corners[c], least_gap) <= least ? near : far) += 1;
     if (near > corners.size() - needed) return 0.0;
   }
   std::vector<double> gaps;
   gaps.reserve(corners.size());
-  for (const Vec2& corner : corners) {
-    double best = std::numeric_limits<double>::infinity();
-    for (const Ring& ring : contour)
-      for (std::size_t k = 0; k < ring.size(); ++k)
-        best = std::min(best, squared_distance_to_segment(corner, ring[k], ring[(k + 1) % ring.size()]));
-    gaps.push_back(std::sqrt(best));
-  }
+  for (const Vec2& corner : corners) gaps.push_back(std::sqrt(nearest(corner, 0.0)));
   const auto middle = gaps.begin() + long(gaps.size() / 2);
   std::nth_element(gaps.begin(), middle, gaps.end());
   return std::isfinite(*middle) ? *middle : 0.0;  // (a contour without a segment)

@@ -482,7 +482,8 @@ void ModelChoice::square_and_clean() {
   // walls at least two pixels and the noise's correlation length long, whose directions the
   // noise leaves defined.) Measured on the outline as chosen.
   const bool squarable = on_lattice && !has_arc(result.footprint);
-  const double min_wall = std::max(2 * pixel_size, noise_correlation_m(o.corners, pixel_size));
+  const double correlation = noise_correlation_m(o.corners, pixel_size);
+  const double min_wall = std::max(2 * pixel_size, correlation);
   double rounding_radius = 0;
   if (squarable && o.models.rounding_noise > 0)
     rounding_radius = corner_rounding_gap(result.footprint, rings, min_wall, o.corners.max_cut_m, o.corners.parallel_angle_deg,
@@ -491,7 +492,6 @@ void ModelChoice::square_and_clean() {
   result.rounding_m = rounding_radius;
   // The short oblique walls between two walls on the lattice that the noise does not tell from it:
   // square steps and corners (models.square_noise).
-  const double correlation = noise_correlation_m(o.corners, pixel_size);
   if (squarable && o.models.square_noise > 0)
     if (std::optional<PolygonWithHoles> squared = square_connectors(result.footprint, context.lattice, o.models.merge_parallel_deg,
                                                                    context.noise, correlation, o.models.square_noise, 0.0, min_wall))
