@@ -331,6 +331,45 @@ TEST(Corners, ABowOnAStraightWallIsItsOwnCurve) {
   EXPECT_GT(iou_with, iou_without + 0.02) << iou_without;
 }
 
+// A building with a round end (a stadium: a 30 x 20 m box, then a half disc of 10 m), traced at
+// 0.25 m, whose round end the labeling gave, for its first and last 30 degrees, to the walls on
+// either side of it. The walls' lines run on past where their contour leaves them; at the curve
+// the wall ends at the foot of its last vertex within 2 px of its line, and its contour leads on
+// to the curve: every vertex lies within those 2 px of the contour. (The feet of the curve's ends
+// on the walls' lines lie 1.1 m off it, beyond the round end.)
+TEST(Corners, AWallRunningIntoACurveEndsWhereItsContourLeavesIt) {
+  const double px = 0.25, radius = 10;
+  const Vec2 centre(30, 10);
+  Ring ring;
+  std::vector<int> labels;
+  for (int k = 0; k < 120; ++k) { ring.emplace_back(k * px, 0); labels.push_back(0); }
+  const int arc = int(std::lround(M_PI * radius / px));
+  for (int k = 0; k < arc; ++k) {
+    const double theta = -M_PI / 2 + M_PI * k / arc;
+    ring.push_back(centre + radius * Vec2(std::cos(theta), std::sin(theta)));
+    labels.push_back(theta < -M_PI / 3 ? 0 : theta > M_PI / 3 ? 2 : 1);
+  }
+  for (int k = 120; k > 0; --k) { ring.emplace_back(k * px, 20); labels.push_back(2); }
+  for (int k = 80; k > 0; --k) { ring.emplace_back(0, k * px); labels.push_back(3); }
+  CornerContext context;
+  context.noise = 0.05;
+  CornerOptions o;
+  o.split_px = 0;  // (the wall's stretch along the curve is not cut off as a step of its own)
+  std::string problem;
+  const Ring out = extract_corners(ring, labels, axis_normals, px, o, &problem, context);
+  ASSERT_FALSE(out.empty()) << problem;
+  for (const Vec2& v : out) {
+    double nearest = 1e9;
+    for (std::size_t i = 0; i < ring.size(); ++i) nearest = std::min(nearest, distance_to_segment(v, ring[i], ring[(i + 1) % ring.size()]));
+    EXPECT_LE(nearest, 2 * px) << v.transpose();
+  }
+  PolygonWithHoles truth{{{0, 0}, {30, 0}}, {}};
+  for (int k = 1; k < 36; ++k) truth.outer.push_back(centre + radius * Vec2(std::sin(M_PI * k / 36), -std::cos(M_PI * k / 36)));
+  for (const Vec2& p : {Vec2(30, 20), Vec2(0, 20)}) truth.outer.push_back(p);
+  EXPECT_GT(test::iou({out, {}}, truth), 0.99);  // (0.9855 with the feet)
+  EXPECT_LE(out.size(), 24u);  // the box's corners and a few vertices along the round end
+}
+
 TEST(Corners, TooFewRunsIsAProblem) {
   Ring ring = {{0, 0}, {1, 0}, {1, 1}, {0, 1}};
   std::string problem;

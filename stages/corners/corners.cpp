@@ -535,6 +535,7 @@ Ring extract_corners(const Ring& ring, const std::vector<int>& labels, const std
       lines[r] = trimmed_fit(ring, runs[r].first, runs[r].second, lines[r], std::max(2 * pixel_size, 3 * noise));
   const double square_sin = std::cos(o.parallel_angle_deg * M_PI / 180.0);  // within that of 90 degrees
   const double curve_tolerance = std::max(pixel_size, o.curve_tolerance_noise * noise);
+  const double off_line = std::max(2 * pixel_size, 3 * noise);  // (as trimmed_fit's: beyond the noise)
   const double curve_window = std::max(o.curve_window_px * pixel_size, o.curve_window_m);
   Ring out;
   for (int r = 0; r < n; ++r) {
@@ -548,10 +549,40 @@ Ring extract_corners(const Ring& ring, const std::vector<int>& labels, const std
     const Line& a = lines[r];
     const Line& b = lines[(r + 1) % n];
     const Vec2 junction = ring[runs[(r + 1) % n].first];  // where run r ends and r+1 starts
-    // Next to a curve, the junction itself, or its foot on the straight neighbour's line.
+    // Next to a curve, the junction itself, or its foot on the straight neighbour's line; where
+    // the straight run's contour leaves its line before the junction (the labeling gave the
+    // curve's first stretch the wall's direction), the wall ends at the foot of the last of its
+    // contour's vertices within off_line of the line, and that contour, simplified, leads on to
+    // the junction (the foot of the junction there would lie off the contour, beyond the curve).
     const bool curve_before = curved[r], curve_after = curved[(r + 1) % n];
+    if (curve_before && curve_after) {
+      out.push_back(junction);
+      continue;
+    }
     if (curve_before || curve_after) {
-      out.push_back(curve_before && curve_after ? junction : curve_before ? b.project(junction) : a.project(junction));
+      const Line& wall = curve_after ? a : b;
+      const int run = curve_after ? r : (r + 1) % n;
+      const int count = runs[run].second;
+      const auto vertex = [&](int k) { return ring[std::size_t(runs[run].first + k) % ring.size()]; };
+      const auto off = [&](int k) { return std::abs(wall.normal.dot(vertex(k)) - wall.offset) > off_line; };
+      // The run's vertices k = 0 .. count (0 and count its ends); the stretch off the line next to the curve.
+      int end = curve_after ? count : 0;
+      if (curve_after) { while (end > 0 && off(end)) --end; }
+      else { while (end < count && off(end)) ++end; }
+      if (end == (curve_after ? count : 0)) {
+        out.push_back(wall.project(junction));
+        continue;
+      }
+      // The stretch off the line, in the ring's order: the foot of its vertex on the wall's side,
+      // then its vertices kept by the simplification (its ends always), the junction included.
+      std::vector<Vec2> stretch;
+      for (int k = curve_after ? end : 0; k <= (curve_after ? count : end); ++k) stretch.push_back(vertex(k));
+      const std::vector<char> keep = douglas_peucker_open(stretch, curve_tolerance);
+      const std::size_t first = curve_after ? 1 : 0, last = curve_after ? stretch.size() : stretch.size() - 1;
+      if (curve_after) out.push_back(wall.project(stretch.front()));
+      for (std::size_t k = first; k < last; ++k)
+        if (keep[k]) out.push_back(stretch[k]);
+      if (curve_before) out.push_back(wall.project(stretch.back()));
       continue;
     }
     const double det = cross(a.normal, b.normal);
