@@ -358,6 +358,7 @@ TEST(Corners, AWallRunningIntoACurveEndsWhereItsContourLeavesIt) {
   std::string problem;
   const Ring out = extract_corners(ring, labels, axis_normals, px, o, &problem, context);
   ASSERT_FALSE(out.empty()) << problem;
+  EXPECT_TRUE(ring_problem(out).empty()) << ring_problem(out);
   for (const Vec2& v : out) {
     double nearest = 1e9;
     for (std::size_t i = 0; i < ring.size(); ++i) nearest = std::min(nearest, distance_to_segment(v, ring[i], ring[(i + 1) % ring.size()]));

@@ -569,7 +569,9 @@ Ring extract_corners(const Ring& ring, const std::vector<int>& labels, const std
       int end = curve_after ? count : 0;
       if (curve_after) { while (end > 0 && off(end)) --end; }
       else { while (end < count && off(end)) ++end; }
-      if (end == (curve_after ? count : 0)) {
+      // (A run off its line to its other end, whose contour would be drawn from both of its ends
+      // when a curve lies there too, ends as before.)
+      if (end == (curve_after ? count : 0) || end == (curve_after ? 0 : count)) {
         out.push_back(wall.project(junction));
         continue;
       }
