@@ -1430,6 +1430,14 @@ TEST(Staircases, ACutCornerUnderAWobbleIsAnObliqueWall) {
   EXPECT_GT(oblique_on, oblique_off);
   EXPECT_GE(iou_on, iou_off);
 }
+// How many of the ring's edges (from a vertex to the next) pass the test.
+template <class Test>
+int edges_where(const Ring& ring, const Test& test) {
+  int count = 0;
+  for (std::size_t i = 0; i < ring.size(); ++i) count += test(ring[i], ring[(i + 1) % ring.size()]) ? 1 : 0;
+  return count;
+}
+
 // A connector a pixel or two long between two walls on the lattice, whose direction the noise
 // does not tell from the lattice's, is squared: between parallel walls it becomes a step at its
 // middle (the area kept), between square ones the corner where they meet. One long enough to
@@ -1468,12 +1476,12 @@ TEST(Squaring, AShortConnectorBecomesAStepOrACorner) {
   const std::optional<PolygonWithHoles> tilted_step = square_connectors(tilted, lattice, 2.0, 0.3, 1.0, 2.0, 0.0, 1.0);
   ASSERT_TRUE(tilted_step);
   ASSERT_EQ(tilted_step->outer.size(), 6u);
-  int along_lattice = 0;
-  for (std::size_t i = 0; i < 6; ++i) {
-    const Vec2 e = tilted_step->outer[(i + 1) % 6] - tilted_step->outer[i];
-    along_lattice += std::abs(e.x()) < 1e-9 * e.norm() && e.norm() > 0.5 && e.norm() < 1;  // the step, 0.6 m and some
-  }
-  EXPECT_EQ(along_lattice, 1);
+  EXPECT_EQ(edges_where(tilted_step->outer,
+                        [](const Vec2& a, const Vec2& b) {
+                          const Vec2 e = b - a;
+                          return std::abs(e.x()) < 1e-9 * e.norm() && e.norm() > 0.5 && e.norm() < 1;  // the step, 0.6 m and some
+                        }),
+            1);
   const Ring hole(stepped.outer.rbegin(), stepped.outer.rend());
   const PolygonWithHoles holed{{{-10, -10}, {30, -10}, {30, 30}, {-10, 30}}, {hole}};
   const std::optional<PolygonWithHoles> in_hole = square_connectors(holed, lattice, 2.0, 0.3, 1.0, 2.0, 0.0, 1.0);
@@ -1547,12 +1555,12 @@ TEST(Squaring, AChainShorterThanTheRoundingBecomesAStepOrACorner) {
   EXPECT_NEAR(std::abs(signed_area(step->outer)), std::abs(signed_area(stepped.outer)), 1e-9);
   // The riser where the area stays: 12.5 - (area under the chain) / 1.5, the area 0.5 * 0.4 * 1
   // + 0.5 * (0.4 + 1.5) * 1.5 = 1.625, at x = 11.4167.
-  int riser = 0;
-  for (std::size_t i = 0; i < 6; ++i) {
-    const Vec2 a = step->outer[i], b = step->outer[(i + 1) % 6];
-    riser += std::abs(a.x() - b.x()) < 1e-9 && std::abs(a.x() - (12.5 - 1.625 / 1.5)) < 1e-9 && std::abs(std::abs(a.y() - b.y()) - 1.5) < 1e-9;
-  }
-  EXPECT_EQ(riser, 1);
+  EXPECT_EQ(edges_where(step->outer,
+                        [](const Vec2& a, const Vec2& b) {
+                          return std::abs(a.x() - b.x()) < 1e-9 && std::abs(a.x() - (12.5 - 1.625 / 1.5)) < 1e-9 &&
+                                 std::abs(std::abs(a.y() - b.y()) - 1.5) < 1e-9;
+                        }),
+            1);
   // A corner rounded by three walls, 2.4 m together: the corner.
   const PolygonWithHoles rounded{{{0, 0}, {18.8, 0}, {19.6, 0.2}, {19.9, 0.5}, {20, 1.2}, {20, 10}, {0, 10}}, {}};
   const std::optional<PolygonWithHoles> corner = square_connectors(rounded, lattice, 2.0, 0.05, 1.0, 2.0, 3.0, 1.0);
@@ -1651,13 +1659,9 @@ TEST(CleanMasks, StepsRoundedByTwoMetresComeBackSquare) {
         const BuildingResult without = regularize_building(mask.buildings[0].rings, pixel, off);
         ASSERT_TRUE(on.ok && without.ok) << angle << ": " << on.reason << without.reason;
         const auto count = [](const PolygonWithHoles& p, int& all, int& square) {
-          const Ring& ring = p.outer;
-          for (std::size_t i = 0; i < ring.size(); ++i) {
-            const double turn = turn_deg(edge_vector(ring, (i + ring.size() - 1) % ring.size()), edge_vector(ring, i));
-            if (turn <= 5) continue;
-            ++all;
-            square += std::abs(turn - 90) <= 5 || std::abs(turn - 180) <= 5;  // (as eval counts them)
-          }
+          const auto [right_corners, turning] = right_angle_corners(p);  // (as eval counts them)
+          all += int(turning);
+          square += int(right_corners);
         };
         count(on.footprint, corners, right);
         count(without.footprint, corners_off, right_off);

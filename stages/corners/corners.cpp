@@ -564,27 +564,24 @@ Ring extract_corners(const Ring& ring, const std::vector<int>& labels, const std
       const int run = curve_after ? r : (r + 1) % n;
       const int count = runs[run].second;
       const auto vertex = [&](int k) { return ring[std::size_t(runs[run].first + k) % ring.size()]; };
-      const auto off = [&](int k) { return std::abs(wall.normal.dot(vertex(k)) - wall.offset) > off_line; };
-      // The run's vertices k = 0 .. count (0 and count its ends); the stretch off the line next to the curve.
-      int end = curve_after ? count : 0;
-      if (curve_after) { while (end > 0 && off(end)) --end; }
-      else { while (end < count && off(end)) ++end; }
-      // (A run off its line to its other end, whose contour would be drawn from both of its ends
-      // when a curve lies there too, ends as before.)
-      if (end == (curve_after ? count : 0) || end == (curve_after ? 0 : count)) {
+      // The run's vertices k = 0 .. count off the line next to the curve, counted from its end there.
+      const auto from_curve = [&](int j) { return curve_after ? count - j : j; };
+      int off = 0;
+      while (off < count && std::abs(wall.normal.dot(vertex(from_curve(off))) - wall.offset) > off_line) ++off;
+      // (None, or the whole run, whose contour would be drawn from both of its ends when a curve
+      // lies there too: the foot of the junction, as before.)
+      if (off == 0 || off == count) {
         out.push_back(wall.project(junction));
         continue;
       }
-      // The stretch off the line, in the ring's order: the foot of its vertex on the wall's side,
-      // then its vertices kept by the simplification (its ends always), the junction included.
+      // The stretch off the line, in the ring's order, its vertices kept by the simplification (its
+      // ends always, the junction one of them), the one on the wall's side as its foot on the line.
       std::vector<Vec2> stretch;
-      for (int k = curve_after ? end : 0; k <= (curve_after ? count : end); ++k) stretch.push_back(vertex(k));
+      for (int k = std::min(from_curve(off), from_curve(0)); k <= std::max(from_curve(off), from_curve(0)); ++k) stretch.push_back(vertex(k));
       const std::vector<char> keep = douglas_peucker_open(stretch, curve_tolerance);
-      const std::size_t first = curve_after ? 1 : 0, last = curve_after ? stretch.size() : stretch.size() - 1;
-      if (curve_after) out.push_back(wall.project(stretch.front()));
-      for (std::size_t k = first; k < last; ++k)
-        if (keep[k]) out.push_back(stretch[k]);
-      if (curve_before) out.push_back(wall.project(stretch.back()));
+      const std::size_t on_wall = curve_after ? 0 : stretch.size() - 1;
+      for (std::size_t k = 0; k < stretch.size(); ++k)
+        if (keep[k]) out.push_back(k == on_wall ? wall.project(stretch[k]) : stretch[k]);
       continue;
     }
     const double det = cross(a.normal, b.normal);
