@@ -1708,6 +1708,78 @@ TEST(CleanMasks, CornersRoundedByTwoMetresComeBackSquare) {
   EXPECT_GT(iou, iou_without + 0.002) << "without the rule: " << iou_without;
 }
 
+// The corner rounding pooled over a mask (models.pooled_rounding_share): the median of the
+// roundings measured above 0, where at least that share of those measured are, and three.
+TEST(PooledRounding, IsTheMedianOfTheRoundedWhereEnoughAreRounded) {
+  const CoreOptions o;
+  EXPECT_DOUBLE_EQ(pooled_rounding({2.0, 1.0, 0.0, 3.0, 0.0}, o), 2.0);       // 3 of 5 rounded
+  EXPECT_DOUBLE_EQ(pooled_rounding({2.0, 1.0, 0.0, 3.0, 0.0, 0.0}, o), 2.0);  // 3 of 6: half
+  EXPECT_DOUBLE_EQ(pooled_rounding({2.0, 1.0, 0.0, 3.0, 0.0, 0.0, 0.0}, o), 0.0);  // 3 of 7
+  EXPECT_DOUBLE_EQ(pooled_rounding({2.0, 1.0, 4.0, 3.0}, o), 3.0);            // (the upper median)
+  EXPECT_DOUBLE_EQ(pooled_rounding({2.0, 1.0}, o), 0.0);                      // fewer than three
+  EXPECT_DOUBLE_EQ(pooled_rounding({}, o), 0.0);
+  CoreOptions off = o;
+  off.models.pooled_rounding_share = 0;
+  EXPECT_DOUBLE_EQ(pooled_rounding({2.0, 1.0, 3.0}, off), 0.0);
+  off = o;
+  off.models.rounding_noise = 0;
+  EXPECT_DOUBLE_EQ(pooled_rounding({2.0, 1.0, 3.0}, off), 0.0);
+}
+
+// A clean mask whose corners the segmentation rounded by 2 m, at 0.1 m: four houses measure the
+// rounding on their square corners, and an L of the synthetic city measures none (its outline
+// draws its rounded corners as staircases, longer than corners.max_cut_m, through which no square
+// corner is counted: two are left, fewer than three). Regularized together, the L takes the
+// houses' rounding, and its rounded corners come back square: 6 vertices against 40, IoU 0.991
+// against 0.982.
+TEST(CleanMasks, ABuildingThatMeasuresNoRoundingTakesItsMasks) {
+  const double pixel = 0.1;
+  std::vector<BuildingContour> buildings;
+  std::vector<PolygonWithHoles> truths;
+  const auto add = [&](const PolygonWithHoles& shape, double angle, const Vec2& shift) {
+    PolygonWithHoles truth = test::rotated(shape, angle);
+    const test::RasterizedShape mask = test::rasterize_shape_m(truth, pixel, 0.0, 8.0, 2.0, 1);
+    ASSERT_EQ(mask.buildings.size(), 1u);
+    BuildingContour b = mask.buildings[0];
+    for (Ring& r : b.rings) for (Vec2& p : r) p += shift;
+    for (Vec2& p : truth.outer) p += shift;
+    buildings.push_back(std::move(b));
+    truths.push_back(std::move(truth));
+  };
+  add(PolygonWithHoles{{{0, 0}, {31.3, 0}, {31.3, 8.84}, {11.1, 8.84}, {11.1, 24.27}, {0, 24.27}}, {}}, 0.0, Vec2(0, 0));
+  for (int k = 0; k < 4; ++k) add(PolygonWithHoles{{{0, 0}, {24, 0}, {24, 14}, {0, 14}}, {}}, 20.0 * k, Vec2(50.0 * (k + 1), 0));
+  CoreOptions off;
+  off.models.pooled_rounding_share = 0;
+  const RegularizedBatch on = regularize_batch("deformation", buildings, pixel, CoreOptions{});
+  const RegularizedBatch without = regularize_batch("deformation", buildings, pixel, off);
+  for (std::size_t i = 1; i < buildings.size(); ++i) {
+    EXPECT_TRUE(measured_rounding(on.results[i])) << i;
+    EXPECT_NEAR(on.results[i].rounding_m, 2.0, 0.4) << i;
+    EXPECT_FALSE(on.results[i].rounding_pooled) << i;
+  }
+  EXPECT_EQ(on.rounding_samples, 4u);
+  EXPECT_NEAR(on.rounding_m, 2.0, 0.4);
+  EXPECT_EQ(without.rounding_m, 0.0);
+  const BuildingResult& l = on.results[0];
+  const BuildingResult& l_alone = without.results[0];
+  ASSERT_TRUE(l.ok && l_alone.ok) << l.reason << l_alone.reason;
+  EXPECT_LT(l.rounding_corners, 3);
+  EXPECT_EQ(l.rounding_m, 0.0);
+  EXPECT_TRUE(l.rounding_pooled);
+  EXPECT_FALSE(l_alone.rounding_pooled);
+  const auto [right, turning] = right_angle_corners(l.footprint);
+  const auto [right_alone, turning_alone] = right_angle_corners(l_alone.footprint);
+  std::cout << "the L: " << l.footprint.outer.size() << " vertices, right angles " << right << " of " << turning << ", IoU "
+            << test::iou(l.footprint, truths[0]) << "; alone " << l_alone.footprint.outer.size() << ", " << right_alone << " of "
+            << turning_alone << ", " << test::iou(l_alone.footprint, truths[0]) << "; its square corners " << l.rounding_corners << '\n';
+  EXPECT_EQ(l.footprint.outer.size(), 6u);
+  EXPECT_EQ(right, 6u);
+  EXPECT_GT(l_alone.footprint.outer.size(), 6u);
+  EXPECT_GE(test::iou(l.footprint, truths[0]), test::iou(l_alone.footprint, truths[0]));
+  // The houses are the same either way.
+  for (std::size_t i = 1; i < buildings.size(); ++i) EXPECT_EQ(on.results[i].footprint.outer, without.results[i].footprint.outer) << i;
+}
+
 // A quadrilateral that is not a rectangle competes with the building's rectangle as any other
 // outline does (models.rectangle_tolerance): a 24 x 15 m house at 33 degrees, 2 m pixels, under a
 // metre of wobble (a mask's noise of 0.6 m given), was drawn as a quadrilateral 6 degrees off square.

@@ -100,6 +100,7 @@ void expect_run_is_regularize(const nlohmann::json& report, const nlohmann::json
                               std::size_t least) {
   EXPECT_DOUBLE_EQ(report.at("noise_floor_m").get<double>(), stats.at("noise_floor_m").get<double>());
   EXPECT_DOUBLE_EQ(report.at("noise_smoothing_m").get<double>(), stats.at("noise_smoothing_m").get<double>());
+  EXPECT_DOUBLE_EQ(report.at("corner_rounding_m").get<double>(), stats.at("corner_rounding").at("pooled_m").get<double>());
   const std::multiset<std::string> run = run_outlines(run_out), regularized = gpkg_outlines(gpkg);
   EXPECT_GT(run.size(), least);
   EXPECT_TRUE(run == regularized) << run.size() << " against " << regularized.size();
@@ -508,6 +509,46 @@ TEST_F(Run, AFastMetreWobbleAtFinePixelsIsMeasuredAtTwiceThePixel) {
   EXPECT_NE(r.output.find("of the mask averaged to twice its pixel"), std::string::npos) << r.output;
   EXPECT_NE(r.output.find("the raster's noise"), std::string::npos) << r.output;
   expect_run_is_regularize(report_of(dir / "fast_out" / "report.json"), coarse, dir / "fast_out", dir / "c.gpkg", 5);
+}
+
+// A mask whose corners the segmentation rounded by 2 m (0.1 m pixels, no wobble): most buildings
+// measure that rounding on their own square corners; a few (an L whose rounded corners the outline
+// draws with more walls than a corner counts) measure none and take the mask's
+// (models.pooled_rounding_share). A run pools it over the noise survey's windows: the same for
+// every tiling; surveyed in one window over the whole raster, regularize's, outline for outline.
+TEST_F(Run, ACornerRoundingIsPooledAlikeInARunAndInRegularize) {
+  const Result made = lodforge("synth --out " + (dir / "rounded").string() +
+                               " --size-m 200 --pixel-size 0.1 --seed 7 --set boundary_noise_m=0 --set corner_radius_m=2");
+  ASSERT_EQ(made.code, 0) << made.output;
+  const std::string seg = (dir / "rounded" / "seg_class.tif").string();
+  Result r = lodforge("regularize --mask " + seg + " --out " + (dir / "r.gpkg").string() + " --stats " + (dir / "r.json").string());
+  ASSERT_EQ(r.code, 0) << r.output;
+  const nlohmann::json stats = report_of(dir / "r.json");
+  const nlohmann::json& rounding = stats.at("corner_rounding");
+  std::cout << rounding << '\n';
+  EXPECT_GT(rounding.at("pooled_m").get<double>(), 1.5) << rounding;
+  EXPECT_LT(rounding.at("pooled_m").get<double>(), 2.5) << rounding;
+  EXPECT_GE(rounding.at("took_pooled").get<int>(), 1) << rounding;
+  EXPECT_GE(2 * rounding.at("buildings").get<int>(), rounding.at("measured").get<int>()) << rounding;  // (models.pooled_rounding_share)
+  // Off: none pooled, and the buildings that took it come out otherwise.
+  r = lodforge("regularize --mask " + seg + " --out " + (dir / "off.gpkg").string() + " --stats " + (dir / "off.json").string() +
+               " --set models.pooled_rounding_share=0");
+  ASSERT_EQ(r.code, 0) << r.output;
+  EXPECT_EQ(report_of(dir / "off.json").at("corner_rounding").at("pooled_m").get<double>(), 0.0);
+  EXPECT_FALSE(gpkg_outlines(dir / "r.gpkg") == gpkg_outlines(dir / "off.gpkg"));
+  // The run, in one survey window: regularize's.
+  r = lodforge("run " + job("whole", seg, 100).string() + " --set tiling.noise_survey_window_m=400");
+  ASSERT_EQ(r.code, 0) << r.output;
+  EXPECT_NE(r.output.find("corner rounding pooled over the"), std::string::npos) << r.output;
+  expect_run_is_regularize(report_of(dir / "whole_out" / "report.json"), stats, dir / "whole_out", dir / "r.gpkg", 10);
+  // In windows of 50 m, the same in tiles of 60 and 100 m.
+  for (const int tile : {60, 100}) {
+    r = lodforge("run " + job("t" + std::to_string(tile), seg, tile).string() + " --set tiling.noise_survey_window_m=50");
+    ASSERT_EQ(r.code, 0) << r.output;
+  }
+  const double t60 = report_of(dir / "t60_out" / "report.json").at("corner_rounding_m").get<double>();
+  EXPECT_GT(t60, 1.5);
+  EXPECT_EQ(t60, report_of(dir / "t100_out" / "report.json").at("corner_rounding_m").get<double>());
 }
 
 // A mask averaged over 2 x 2 blocks whole and window by window (as a survey reads it) agree,

@@ -164,7 +164,7 @@ int run_regularize(int argc, char** argv) {
 
   std::vector<FootprintRecord> records(count);
   std::map<std::string, int> failures, models;
-  int failed = 0, rerouted = 0, lent = 0;
+  int failed = 0, rerouted = 0, lent = 0, took_rounding = 0;
   std::vector<double> roundings;  // of the buildings whose corners the segmentation rounded (BuildingResult::rounding_m)
   for (std::size_t i = 0; i < count; ++i) {
     const BuildingResult& r = results[i];
@@ -180,6 +180,7 @@ int run_regularize(int argc, char** argv) {
     if (r.ok && !r.note.empty()) ++rerouted;
     if (r.ok && r.lattice_lent) ++lent;
     if (r.ok && r.rounding_m > 0) roundings.push_back(r.rounding_m);
+    if (r.ok && r.rounding_pooled) ++took_rounding;
     if (!r.ok) {
       ++failed;
       ++failures[r.failed_stage];
@@ -201,6 +202,10 @@ int run_regularize(int argc, char** argv) {
     spdlog::info("{} building(s) with corners the segmentation rounded by more than their noise explains (median radius {:.2f} m): "
                  "their short oblique walls squared (stages.models.rounding_noise)",
                  roundings.size(), rounding_median);
+  if (batch.rounding_m > 0)
+    spdlog::info("{} building(s) measuring no rounding of their own took the mask's, a radius of {:.2f} m pooled over the {} that "
+                 "measured theirs (stages.models.pooled_rounding_share)",
+                 took_rounding, batch.rounding_m, batch.rounding_samples);
   if (rerouted > 0)
     spdlog::info("{} building(s) took the original corner route instead of the deformed one (over a budget; the reason is in their 'reason' field)", rerouted);
   if (auto stats = args.get("stats")) {
@@ -251,7 +256,11 @@ int run_regularize(int argc, char** argv) {
     out["fallback"] = failed;
     out["original_route"] = rerouted;
     out["lattice_lent"] = lent;
-    out["corner_rounding"] = {{"buildings", roundings.size()}, {"radius_m_median", rounding_median}};
+    out["corner_rounding"] = {{"buildings", roundings.size()},
+                              {"radius_m_median", rounding_median},
+                              {"measured", batch.rounding_samples},
+                              {"pooled_m", batch.rounding_m},
+                              {"took_pooled", took_rounding}};
     out["noise_floor_m"] = batch.noise_floor_m;
     out["noise_smoothing_m"] = batch.noise_smoothing_m;
     out["noise_samples"] = batch.noise_samples;

@@ -295,7 +295,21 @@ int run_job(int argc, char** argv) {
       spdlog::info("boundary noise pooled over {} buildings in {} window(s) of {} m: {:.3f} m, normals smoothed for {:.3f} m ({:.1f} s)",
                    survey.buildings, survey.windows, job.tiling.noise_survey_window_m, survey.noise.floor_m, survey.noise.smoothing_m,
                    seconds_since(surveying));
+    // The corner rounding a building measuring none of its own takes, from the same windows at the
+    // raster's pixel, the buildings regularized with that noise.
+    if (survey.buildings > 0 && pools_rounding(job.regularizer, job.stages.core)) {
+      const auto rounding = Clock::now();
+      const RoundingSurvey r = survey_rounding(reader, seg.size, seg.transform, job.stages.contour, job.stages.core, survey_px,
+                                               job.tiling.noise_survey_windows, survey.noise);
+      survey.noise.rounding_m = r.rounding_m;
+      spdlog::info("corner rounding pooled over the {} surveyed buildings that measured theirs: {} rounded, {} "
+                   "(stages.models.pooled_rounding_share {}) ({:.1f} s)",
+                   r.measured, r.rounded,
+                   r.rounding_m > 0 ? fmt::format("a radius of {:.2f} m taken by the buildings measuring none", r.rounding_m) : std::string("none taken"),
+                   job.stages.core.models.pooled_rounding_share, seconds_since(rounding));
+    }
   }
+  if (!survey.noise.rounding_m) survey.noise.rounding_m = 0.0;  // (no survey: none, never pooled per tile)
 
   // Keys: everything an output depends on.
   Job key_job = job;
@@ -311,8 +325,9 @@ int run_job(int argc, char** argv) {
   const std::string heights_options = options_text(key_job.stages.heights) + file_identity(job.inputs.dsm.path) + file_identity(job.inputs.dtm.path) +
                                       (cadastre ? options_text(key_job.stages.footprints) : "") + options_text(key_job.stages.parts) + program;
   // Building ids are first-pixel indices, so the footprints also depend on the raster's width.
-  char floor_text[80];
-  std::snprintf(floor_text, sizeof floor_text, "\nnoise floor %.17g smoothed for %.17g", survey.noise.floor_m, survey.noise.smoothing_m);
+  char floor_text[120];
+  std::snprintf(floor_text, sizeof floor_text, "\nnoise floor %.17g smoothed for %.17g rounding %.17g", survey.noise.floor_m,
+                survey.noise.smoothing_m, *survey.noise.rounding_m);
   const std::string core_options = job.regularizer + "\n" + options_text(key_job.stages.core) + "\nwidth " + std::to_string(seg.size.width) + floor_text + program;
   const std::uint64_t job_key = fnv1a(gpkg_time + "\n" + file_identity(job.inputs.segmentation.path) + "\n" + file_identity(job.inputs.dsm.path) + "\n" +
                                       file_identity(job.inputs.dtm.path) + "\n" + file_identity(job.inputs.orthophoto.path) + "\n" + options_text(key_job) + cadastre_text + "\n" +

@@ -75,7 +75,8 @@ double pooled_at(const std::vector<NoiseSample>& samples, const std::vector<std:
 template <class Judge, class KeepJudged, class Finish>
 MaskNoise pool_in_rounds(std::vector<NoiseSample>& samples, const std::vector<std::size_t>& judged, double pixel_size,
                          const CoreOptions& options, const Judge& judge, const KeepJudged& keep_judged, const Finish& finish) {
-  MaskNoise noise{pooled_noise_floor(samples, options), 0.0};
+  MaskNoise noise;
+  noise.floor_m = pooled_noise_floor(samples, options);
   const auto neighbourhood = [&](double noise_m) { return smoothing_neighbourhood_m(pixel_size, options.smoothing, noise_m); };
   std::vector<std::size_t> order(judged.size());
   std::iota(order.begin(), order.end(), std::size_t(0));
@@ -201,6 +202,10 @@ bool pools_noise(const std::string& regularizer, const CoreOptions& options) {
   return regularizer == "deformation" && options.noise.pooled_floor > 0;
 }
 
+bool pools_rounding(const std::string& regularizer, const CoreOptions& options) {
+  return regularizer == "deformation" && options.models.pooled_rounding_share > 0 && options.models.rounding_noise > 0;
+}
+
 RegularizedBatch regularize_batch(const std::string& regularizer, const std::vector<BuildingContour>& buildings,
                                   double pixel_size, const CoreOptions& options, std::optional<MaskNoise> noise,
                                   const Lenders& lenders, const std::function<void()>& on_done) {
@@ -226,11 +231,49 @@ RegularizedBatch regularize_batch(const std::string& regularizer, const std::vec
   // The neighbours' lattices.
   if (lenders.from != Lenders::From::none && regularizer == "deformation" && options.lattice.neighbour_radius_m > 0)
     lend_neighbour_lattices(buildings, pixel_size, lenders, options, batch.noise_smoothing_m, starts);
+  // The mask's corner rounding, given; or pooled after the chains, which keep their starts for
+  // the buildings regularized again.
+  const bool rounds = pools_rounding(regularizer, options);
+  const bool pool_rounding = rounds && !(noise && noise->rounding_m);
+  if (rounds && noise && noise->rounding_m && *noise->rounding_m > 0) {
+    batch.rounding_m = *noise->rounding_m;
+    if (starts.empty()) {
+      starts.resize(buildings.size());
+      for (BuildingStart& s : starts) s.smoothing_noise_m = batch.noise_smoothing_m;
+    }
+    for (BuildingStart& s : starts) s.mask_rounding_m = batch.rounding_m;
+  }
+  const auto start_of = [&](std::size_t i) -> BuildingStart {
+    if (starts.empty()) return {};
+    return pool_rounding ? starts[i] : std::move(starts[i]);
+  };
   tbb::parallel_for(std::size_t(0), buildings.size(), [&](std::size_t i) {
-    batch.results[i] = regularize_with(regularizer, buildings[i].rings, pixel_size, options, batch.noise_floor_m,
-                                       starts.empty() ? BuildingStart{} : std::move(starts[i]));
+    batch.results[i] = regularize_with(regularizer, buildings[i].rings, pixel_size, options, batch.noise_floor_m, start_of(i));
     if (!start_seconds.empty()) batch.results[i].add_start_seconds(start_seconds[i]);
     if (on_done) on_done();
+  });
+  if (!pool_rounding) return batch;
+  std::vector<double> measured_m;
+  for (const BuildingResult& r : batch.results)
+    if (measured_rounding(r)) measured_m.push_back(r.rounding_m);
+  batch.rounding_samples = measured_m.size();
+  batch.rounding_m = pooled_rounding(measured_m, options);
+  if (batch.rounding_m <= 0) return batch;
+  // Those that measured none of their own where they could take one (a squarable outline).
+  std::vector<std::size_t> again;
+  for (std::size_t i = 0; i < buildings.size(); ++i)
+    if (batch.results[i].ok && batch.results[i].rounding_corners >= 0 && batch.results[i].rounding_m == 0) again.push_back(i);
+  tbb::parallel_for(std::size_t(0), again.size(), [&](std::size_t k) {
+    const std::size_t i = again[k];
+    BuildingStart start = starts.empty() ? BuildingStart{} : std::move(starts[i]);
+    start.mask_rounding_m = batch.rounding_m;
+    BuildingResult result = regularize_with(regularizer, buildings[i].rings, pixel_size, options, batch.noise_floor_m, std::move(start));
+    const BuildingResult& first = batch.results[i];
+    result.seconds += first.seconds;
+    result.chain_seconds.start += first.chain_seconds.start;
+    result.chain_seconds.labeling += first.chain_seconds.labeling;
+    result.chain_seconds.outline += first.chain_seconds.outline;
+    batch.results[i] = std::move(result);
   });
   return batch;
 }
@@ -334,6 +377,31 @@ std::vector<cv::Rect> survey_cells(cv::Size raster, int window_px, int windows) 
   return cells;
 }
 
+namespace {
+
+// visit(first, buildings) for each survey cell's buildings, in the cells' order (first: how many
+// came before): those whose first pixel lies in the cell, traced in its window (the cell with a
+// margin of a quarter of window_px, cut by the raster) and whole in it. The count of them all.
+using SurveyVisit = std::function<void(std::size_t first, std::vector<BuildingContour>& buildings)>;
+std::size_t visit_survey_cells(const std::function<cv::Mat(const cv::Rect&)>& read, cv::Size raster, const GeoTransform& transform,
+                               const ContourOptions& contour, const std::vector<cv::Rect>& cells, int window_px, const SurveyVisit& visit) {
+  const int margin = std::max(1, window_px / 4);
+  std::size_t first = 0;
+  for (const cv::Rect& cell : cells) {
+    const cv::Rect window = cv::Rect(cell.x - margin, cell.y - margin, cell.width + 2 * margin, cell.height + 2 * margin) &
+                            cv::Rect(0, 0, raster.width, raster.height);
+    ContourResult traced =
+        extract_contours(read(window), transform.window(window.x, window.y), contour, [&](const cv::Rect& box, const cv::Point& at) {
+          return cell.contains(at + window.tl()) && !touches_inner_border(box, window, raster);
+        });
+    visit(first, traced.buildings);
+    first += traced.buildings.size();
+  }
+  return first;
+}
+
+}  // namespace
+
 NoiseSurvey survey_noise(const MaskWindowReader& mask, cv::Size fine_raster, const GeoTransform& fine_transform, const ContourOptions& contour,
                          const CoreOptions& options, int fine_window_px, int windows, int factor) {
   NoiseSurvey survey;
@@ -349,27 +417,13 @@ NoiseSurvey survey_noise(const MaskWindowReader& mask, cv::Size fine_raster, con
     const cv::Rect fine = cv::Rect(window.x * f, window.y * f, window.width * f, window.height * f) & cv::Rect(cv::Point(0, 0), fine_raster);
     return average_blocks(mask.read(fine), window.size(), f);
   };
-  const int margin = std::max(1, window_px / 4);
   const std::vector<cv::Rect> cells = survey_cells(raster, window_px, windows);
   survey.windows = int(cells.size());
   const double pixel_size = transform.pixel_size();
   // The rounds of pool_starts, with the same samples, over the windows read again for each pass:
   // a survey holds one window's contours at a time (and the rings of the buildings a round is
-  // judged on), not every surveyed building's. visit(index, rings) for each building, in order.
-  const auto each_window = [&](const std::function<void(std::size_t first, std::vector<BuildingContour>& buildings)>& visit) {
-    std::size_t first = 0;
-    for (const cv::Rect& cell : cells) {
-      const cv::Rect window = cv::Rect(cell.x - margin, cell.y - margin, cell.width + 2 * margin, cell.height + 2 * margin) &
-                              cv::Rect(0, 0, raster.width, raster.height);
-      ContourResult traced =
-          extract_contours(read(window), transform.window(window.x, window.y), contour, [&](const cv::Rect& box, const cv::Point& at) {
-            return cell.contains(at + window.tl()) && !touches_inner_border(box, window, raster);
-          });
-      visit(first, traced.buildings);
-      first += traced.buildings.size();
-    }
-    return first;
-  };
+  // judged on), not every surveyed building's.
+  const auto each_window = [&](const SurveyVisit& visit) { return visit_survey_cells(read, raster, transform, contour, cells, window_px, visit); };
   // Every building's sample, its normals smoothed for smoothing_noise_m.
   const auto measure_all = [&](double smoothing_noise_m) {
     std::vector<NoiseSample> samples;
@@ -405,6 +459,27 @@ NoiseSurvey survey_noise(const MaskWindowReader& mask, cv::Size fine_raster, con
   };
   survey.noise = pool_in_rounds(samples, judged, pixel_size, options, judge, [] {}, measure_all);
   survey.buildings = measured(samples);
+  return survey;
+}
+
+RoundingSurvey survey_rounding(const MaskWindowReader& mask, cv::Size raster, const GeoTransform& transform, const ContourOptions& contour,
+                               const CoreOptions& options, int window_px, int windows, const MaskNoise& noise) {
+  RoundingSurvey survey;
+  if (!pools_rounding("deformation", options)) return survey;
+  window_px = std::max(1, window_px);
+  MaskNoise given = noise;
+  given.rounding_m = 0.0;  // (each measures its own)
+  std::vector<double> measured_m;
+  visit_survey_cells([&](const cv::Rect& window) { return mask.read(window); }, raster, transform, contour,
+                     survey_cells(raster, window_px, windows), window_px, [&](std::size_t, std::vector<BuildingContour>& buildings) {
+                       const RegularizedBatch batch = regularize_batch("deformation", buildings, transform.pixel_size(), options, given,
+                                                                       Lenders{Lenders::From::batch, {}});
+                       for (const BuildingResult& r : batch.results)
+                         if (measured_rounding(r)) measured_m.push_back(r.rounding_m);
+                     });
+  survey.measured = measured_m.size();
+  survey.rounded = std::size_t(std::count_if(measured_m.begin(), measured_m.end(), [](double r) { return r > 0; }));
+  survey.rounding_m = pooled_rounding(measured_m, options);
   return survey;
 }
 

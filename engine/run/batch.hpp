@@ -19,12 +19,18 @@ class MaskWindowReader;
 // Whether buildings regularized together pool their noise: the deformation chain with
 // noise.pooled_floor above 0 (the peers use no noise).
 bool pools_noise(const std::string& regularizer, const CoreOptions& options);
+// ... and their corner rounding: the deformation chain with models.pooled_rounding_share and
+// rounding_noise above 0.
+bool pools_rounding(const std::string& regularizer, const CoreOptions& options);
 
 // The boundary noise pooled over a mask's buildings: the floor every building allows for, and the
 // noise their normals are smoothed for (smoothing.noise_neighbourhood; 0: the narrowest smoothing).
+// With them, the corner rounding of the mask (pooled_rounding) that a building measuring none of
+// its own takes: none given, regularize_batch pools it over its own buildings (a whole mask).
 struct MaskNoise {
   double floor_m = 0;
   double smoothing_m = 0;
+  std::optional<double> rounding_m;
 };
 
 // The noise pooled over these buildings (in rounds, as regularize_batch pools it), alone; *samples
@@ -44,6 +50,8 @@ struct RegularizedBatch {
   double noise_floor_m = 0;             // the noise floor they were regularized with
   double noise_smoothing_m = 0;         // ... and the noise their normals were smoothed for
   std::size_t noise_samples = 0;        // how many of them it was pooled over (0: given, or none)
+  double rounding_m = 0;                // the corner rounding those measuring none of their own took (0: none)
+  std::size_t rounding_samples = 0;     // how many measured theirs, that it was pooled over (0: given, or none)
 };
 
 // Whose lattices a batch's buildings may take (lattice.neighbour_radius_m, neighbour_lattices):
@@ -64,8 +72,11 @@ std::int64_t contour_id(const BuildingContour& building);
 // the round before pooled and kept only where that measures more noise (smoothing.noise_rounds,
 // noise_gain), and each regularized from its start. The same results
 // whatever the thread count: samples are pooled in the buildings' order. Each building is also
-// lent its neighbours' lattice from `lenders` (the deformation chain only). A building's seconds
-// count its start's. on_done is called after each building (from any thread).
+// lent its neighbours' lattice from `lenders` (the deformation chain only). The mask's corner
+// rounding: given with the noise, or else pooled over these buildings' results (pooled_rounding),
+// and those that measured none of their own and can take one regularized again with it (their
+// seconds count both). A building's seconds count its start's. on_done is called after each
+// building's first regularization (from any thread).
 RegularizedBatch regularize_batch(const std::string& regularizer, const std::vector<BuildingContour>& buildings,
                                   double pixel_size, const CoreOptions& options, std::optional<MaskNoise> noise = std::nullopt,
                                   const Lenders& lenders = {}, const std::function<void()>& on_done = {});
@@ -114,5 +125,18 @@ struct NoiseSurvey {
 // whole mask), the survey's cells and windows in blocks (as many metres), the noise at that pixel.
 NoiseSurvey survey_noise(const MaskWindowReader& mask, cv::Size raster, const GeoTransform& transform, const ContourOptions& contour,
                          const CoreOptions& options, int window_px, int windows, int factor = 1);
+
+// The corner rounding of such a raster (pools_rounding): pooled over the buildings of the same
+// survey's cells (survey_cells, each read with the same margin, at the mask's pixel), each
+// regularized with the noise the survey pooled (`noise`), its cell's buildings lending their
+// lattices to each other. The same for every tiling and shard of the raster; with one cell over the
+// whole raster, regularize's.
+struct RoundingSurvey {
+  double rounding_m = 0;
+  std::size_t measured = 0;  // buildings whose rounding was measured (measured_rounding)
+  std::size_t rounded = 0;   // ... and found above 0
+};
+RoundingSurvey survey_rounding(const MaskWindowReader& mask, cv::Size raster, const GeoTransform& transform, const ContourOptions& contour,
+                               const CoreOptions& options, int window_px, int windows, const MaskNoise& noise);
 
 }  // namespace lodforge

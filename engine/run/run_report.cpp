@@ -244,6 +244,7 @@ void write_index_and_report(const Totals& totals, const RunPlan& plan, const std
                     {"seconds", elapsed},
                     {"noise_floor_m", plan.noise.floor_m},
                     {"noise_smoothing_m", plan.noise.smoothing_m},
+                    {"corner_rounding_m", plan.noise.rounding_m.value_or(0.0)},
                     {"core_seconds", totals.core_seconds},
                     {"stage_seconds", {{"contours", totals.contour_seconds}, {"regularization", totals.core_seconds},
                                        {"heights", totals.heights_seconds}, {"writing", totals.write_seconds}}},
@@ -333,12 +334,12 @@ void merge_run_reports(const std::vector<fs::path>& parts, const fs::path& targe
       for (const char* list : {"failed_buildings", "too_large_buildings", "per_tile"})
         if (!report.at(list).is_array()) throw std::runtime_error(std::string("'") + list + "' is not a list");
       // (Every shard's the same, the survey of the whole raster: not a count.)
-      for (const char* noise : {"noise_floor_m", "noise_smoothing_m"})
+      for (const char* noise : {"noise_floor_m", "noise_smoothing_m", "corner_rounding_m"})
         if (!merged.is_null() && merged.value(noise, 0.0) != report.value(noise, 0.0))
           throw std::runtime_error(std::string("its ") + noise + " differs from the other shards': a run with other inputs or options");
       if (merged.is_null()) merged = report;
       else add_numbers(merged, report);
-      for (const char* noise : {"noise_floor_m", "noise_smoothing_m"})
+      for (const char* noise : {"noise_floor_m", "noise_smoothing_m", "corner_rounding_m"})
         if (report.contains(noise)) merged[noise] = report.at(noise);
       for (const Json& f : report.at("failed_buildings")) failed.emplace_back(f.at("tile").get<std::string>(), f);
       for (const Json& t : report.at("per_tile")) per_tile.emplace_back(t.at("tile").get<std::string>(), t);

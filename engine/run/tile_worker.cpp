@@ -58,7 +58,9 @@ std::vector<BuildingOutput> regularize_tile(const TileBuildings& tile, const Job
                                             const MaskNoise& noise, const Lenders& lenders) {
   std::vector<BuildingOutput> out(tile.buildings.size());
   RegularizedBatch batch;
-  within_tile([&] { batch = regularize_batch(job.regularizer, tile.buildings, pixel_size, job.stages.core, noise, lenders); });
+  MaskNoise given = noise;
+  if (!given.rounding_m) given.rounding_m = 0.0;  // (a tile never pools its own: the tiling would change it)
+  within_tile([&] { batch = regularize_batch(job.regularizer, tile.buildings, pixel_size, job.stages.core, given, lenders); });
   for (std::size_t i = 0; i < tile.buildings.size(); ++i) {
     const BuildingContour& b = tile.buildings[i];
     BuildingResult& r = batch.results[i];

@@ -340,13 +340,14 @@ std::optional<PolygonWithHoles> sharpen_rounded_corners(const PolygonWithHoles& 
 }
 
 double corner_rounding_gap(const PolygonWithHoles& outline, const std::vector<Ring>& contour, double min_wall, double max_cut,
-                           double square_deg, double least_gap) {
+                           double square_deg, double least_gap, std::size_t* count) {
   const double square_cos = std::sin(square_deg * M_PI / 180.0);
   std::vector<Vec2> corners;
   for (const Ring* ring : rings_of(outline)) {
     std::size_t square = 0;
     rounded_corners(*ring, min_wall, max_cut, square_cos, &square, &corners);
   }
+  if (count) *count = corners.size();
   if (corners.size() < 3) return 0.0;
   // The squared distance from p to the contour, the scan stopped at the first segment within
   // `stop` (each ring scanned from where the scan before stopped: the corners come in the order

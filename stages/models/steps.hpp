@@ -53,9 +53,9 @@ std::optional<PolygonWithHoles> square_connectors(const PolygonWithHoles& polygo
 // inside the corner (as sharpen_rounded_corners finds them, there with walls at least max_cut
 // long), each the point where the two walls' lines meet. A segmentation that rounds corners by a radius R leaves them R (sqrt 2 - 1) off the
 // contour; a sharp corner lies within the boundary noise of it. 0 with fewer than three such
-// corners.
+// corners. *corners (when given): how many there are.
 double corner_rounding_gap(const PolygonWithHoles& outline, const std::vector<Ring>& contour, double min_wall, double max_cut,
-                           double square_deg, double least_gap);
+                           double square_deg, double least_gap, std::size_t* corners = nullptr);
 
 // The corners the segmentation rounded made sharp, on rings where most square corners are: a
 // square corner is two walls at least max_cut long meeting within square_deg of a right angle,

@@ -197,6 +197,7 @@ void run_chain(const std::vector<Ring>& rings, double pixel_size, const CoreOpti
   bool started = start.normals.size() == rings.size();
   for (std::size_t r = 0; started && r < rings.size(); ++r) started = start.normals[r].size() == rings[r].size();
   const NeighbourLattice neighbour_lattice = start.neighbour_lattice;  // (a start made here has none)
+  const double mask_rounding = start.mask_rounding_m;                 // (nor this)
   // Each stage's time, charged as it ends, or as the chain leaves it (a stage that throws).
   struct Laps {
     double* stage;
@@ -268,6 +269,7 @@ void run_chain(const std::vector<Ring>& rings, double pixel_size, const CoreOpti
                                       neighbour_lattice, o.lattice, result);
   context.noise = noise;
   context.mask_noise = noise_floor_m;
+  context.mask_rounding = mask_rounding;
   const chain::LabeledBuilding labeled{rings, fit_rings, origin, pixel_size, labels, input, context, on_lattice, follow_chords, fitted.spread};
   chain::choose_outline(labeled, o, over_budget, result);
 }
@@ -321,6 +323,21 @@ double pooled_noise_floor(const std::vector<NoiseSample>& samples, const CoreOpt
   for (const NoiseSample& s : samples)
     if (s.weight_m > 0) weighted.emplace_back(s.noise_m, s.weight_m);
   return o.noise.pooled_floor * weighted_quantile(std::move(weighted), 0.5);
+}
+
+bool measured_rounding(const BuildingResult& result) {
+  return result.ok && result.rounding_corners >= 3;
+}
+
+double pooled_rounding(const std::vector<double>& measured_m, const CoreOptions& o) {
+  if (o.models.pooled_rounding_share <= 0 || o.models.rounding_noise <= 0) return 0.0;
+  std::vector<double> rounded;
+  for (double r : measured_m)
+    if (r > 0) rounded.push_back(r);
+  if (rounded.size() < 3 || double(rounded.size()) < o.models.pooled_rounding_share * double(measured_m.size())) return 0.0;
+  const auto middle = rounded.begin() + long(rounded.size() / 2);  // (the upper median of an even count)
+  std::nth_element(rounded.begin(), middle, rounded.end());
+  return *middle;
 }
 
 BuildingResult regularize_building(const std::vector<Ring>& rings, double pixel_size, const CoreOptions& o, double noise_floor_m,

@@ -33,6 +33,9 @@ struct BuildingResult {
   bool lattice_lent = false;    // its walls held to its neighbours' lattice (BuildingStart::neighbour_lattice)
   double rounding_m = 0;        // the radius the segmentation rounded its corners by, where its outline's square corners
                                 // lie farther off the contour than its noise explains (models.rounding_noise; m), else 0
+  int rounding_corners = -1;    // the square corners that rounding was measured on; -1: none measured (an outline off the
+                                // lattice or drawing an arc, or rounding_noise 0). Three or more: rounding_m is a measure
+  bool rounding_pooled = false;  // it measured no rounding of its own and took its mask's (BuildingStart::mask_rounding_m)
   std::string route;            // the chain's corner route taken: "original" or "deformed"; empty otherwise
   std::string note;             // when ok: why the route taken is not the one asked for (a budget), else empty
   double seconds = 0;
@@ -74,6 +77,8 @@ struct BuildingStart {
   double chord_noise_m = -1, chord_arc_noise_m = 0;
   double smoothing_noise_m = 0;  // the noise its normals are smoothed for; of an empty start, the noise the chain smooths for
   NeighbourLattice neighbour_lattice;  // the lattice of the buildings around it (neighbour_lattices)
+  double mask_rounding_m = 0;  // the corner rounding pooled over its mask (pooled_rounding), which it takes where it
+                               // measures none of its own (models.pooled_rounding_share; 0: none)
 };
 // smoothing_noise_m: the boundary noise pooled over the mask that the normals are smoothed for
 // (smoothing.noise_neighbourhood; 0: none known).
@@ -96,6 +101,16 @@ BuildingResult regularize_building(const std::vector<Ring>& rings, double pixel_
 // The noise floor of buildings regularized together: noise.pooled_floor times the weighted
 // median of their samples (0 when there are none, or noise.pooled_floor is 0).
 double pooled_noise_floor(const std::vector<NoiseSample>& samples, const CoreOptions& options);
+
+// Whether the building's result measured its corner rounding (models.rounding_noise on at least
+// three square corners of its outline): a sample of pooled_rounding, rounding_m (0: its corners
+// sharp within its noise; its own, whether it took its mask's or not).
+bool measured_rounding(const BuildingResult& result);
+
+// The corner rounding of buildings regularized together, from the roundings they measured
+// (measured_rounding; 0 for sharp corners): the median of those above 0 where at least
+// models.pooled_rounding_share of them are, and three; else 0 (or pooled_rounding_share 0).
+double pooled_rounding(const std::vector<double>& measured_m, const CoreOptions& options);
 
 // The regularizers the core offers, by name: "deformation" (the chain above, corner route in
 // options.corners.route), "cgal" (CGAL Shape_regularization, options.cgal; the fallback when it

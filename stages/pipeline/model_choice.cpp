@@ -485,11 +485,20 @@ void ModelChoice::square_and_clean() {
   const double correlation = noise_correlation_m(o.corners, pixel_size);
   const double min_wall = std::max(2 * pixel_size, correlation);
   double rounding_radius = 0;
-  if (squarable && o.models.rounding_noise > 0)
+  if (squarable && o.models.rounding_noise > 0) {
+    std::size_t corners = 0;
     rounding_radius = corner_rounding_gap(result.footprint, rings, min_wall, o.corners.max_cut_m, o.corners.parallel_angle_deg,
-                                          o.models.rounding_noise * context.noise) /
+                                          o.models.rounding_noise * context.noise, &corners) /
                       (std::sqrt(2.0) - 1);
+    result.rounding_corners = int(corners);
+  }
   result.rounding_m = rounding_radius;
+  // None of its own (too few square corners, or sharp within its noise): its mask's, where the
+  // mask's buildings measured one (models.pooled_rounding_share; a network rounds them alike).
+  if (squarable && rounding_radius == 0 && context.mask_rounding > 0 && o.models.rounding_noise > 0) {
+    rounding_radius = context.mask_rounding;
+    result.rounding_pooled = true;
+  }
   // The short oblique walls between two walls on the lattice that the noise does not tell from it:
   // square steps and corners (models.square_noise).
   if (squarable && o.models.square_noise > 0)
