@@ -231,24 +231,21 @@ RegularizedBatch regularize_batch(const std::string& regularizer, const std::vec
   // The neighbours' lattices.
   if (lenders.from != Lenders::From::none && regularizer == "deformation" && options.lattice.neighbour_radius_m > 0)
     lend_neighbour_lattices(buildings, pixel_size, lenders, options, batch.noise_smoothing_m, starts);
-  // The mask's corner rounding, given; or pooled after the chains, which keep their starts for
-  // the buildings regularized again.
+  // The mask's corner rounding: given, or pooled after the chains (which keep the outlines that
+  // may take it unsquared: mask_rounding_m negative).
   const bool rounds = pools_rounding(regularizer, options);
   const bool pool_rounding = rounds && !(noise && noise->rounding_m);
-  if (rounds && noise && noise->rounding_m && *noise->rounding_m > 0) {
-    batch.rounding_m = *noise->rounding_m;
+  if (rounds && noise && noise->rounding_m) batch.rounding_m = std::max(0.0, *noise->rounding_m);
+  if (pool_rounding || batch.rounding_m > 0) {
     if (starts.empty()) {
       starts.resize(buildings.size());
       for (BuildingStart& s : starts) s.smoothing_noise_m = batch.noise_smoothing_m;
     }
-    for (BuildingStart& s : starts) s.mask_rounding_m = batch.rounding_m;
+    for (BuildingStart& s : starts) s.mask_rounding_m = pool_rounding ? -1.0 : batch.rounding_m;
   }
-  const auto start_of = [&](std::size_t i) -> BuildingStart {
-    if (starts.empty()) return {};
-    return pool_rounding ? starts[i] : std::move(starts[i]);
-  };
   tbb::parallel_for(std::size_t(0), buildings.size(), [&](std::size_t i) {
-    batch.results[i] = regularize_with(regularizer, buildings[i].rings, pixel_size, options, batch.noise_floor_m, start_of(i));
+    batch.results[i] = regularize_with(regularizer, buildings[i].rings, pixel_size, options, batch.noise_floor_m,
+                                       starts.empty() ? BuildingStart{} : std::move(starts[i]));
     if (!start_seconds.empty()) batch.results[i].add_start_seconds(start_seconds[i]);
     if (on_done) on_done();
   });
@@ -258,22 +255,8 @@ RegularizedBatch regularize_batch(const std::string& regularizer, const std::vec
     if (measured_rounding(r)) measured_m.push_back(r.rounding_m);
   batch.rounding_samples = measured_m.size();
   batch.rounding_m = pooled_rounding(measured_m, options);
-  if (batch.rounding_m <= 0) return batch;
-  // Those that measured none of their own where they could take one (a squarable outline).
-  std::vector<std::size_t> again;
-  for (std::size_t i = 0; i < buildings.size(); ++i)
-    if (batch.results[i].ok && batch.results[i].rounding_corners >= 0 && batch.results[i].rounding_m == 0) again.push_back(i);
-  tbb::parallel_for(std::size_t(0), again.size(), [&](std::size_t k) {
-    const std::size_t i = again[k];
-    BuildingStart start = starts.empty() ? BuildingStart{} : std::move(starts[i]);
-    start.mask_rounding_m = batch.rounding_m;
-    BuildingResult result = regularize_with(regularizer, buildings[i].rings, pixel_size, options, batch.noise_floor_m, std::move(start));
-    const BuildingResult& first = batch.results[i];
-    result.seconds += first.seconds;
-    result.chain_seconds.start += first.chain_seconds.start;
-    result.chain_seconds.labeling += first.chain_seconds.labeling;
-    result.chain_seconds.outline += first.chain_seconds.outline;
-    batch.results[i] = std::move(result);
+  tbb::parallel_for(std::size_t(0), buildings.size(), [&](std::size_t i) {
+    take_mask_rounding(buildings[i].rings, pixel_size, options, batch.rounding_m, batch.results[i]);
   });
   return batch;
 }

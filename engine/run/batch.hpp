@@ -73,10 +73,9 @@ std::int64_t contour_id(const BuildingContour& building);
 // noise_gain), and each regularized from its start. The same results
 // whatever the thread count: samples are pooled in the buildings' order. Each building is also
 // lent its neighbours' lattice from `lenders` (the deformation chain only). The mask's corner
-// rounding: given with the noise, or else pooled over these buildings' results (pooled_rounding),
-// and those that measured none of their own and can take one regularized again with it (their
-// seconds count both). A building's seconds count its start's. on_done is called after each
-// building's first regularization (from any thread).
+// rounding: given with the noise, or else pooled over these buildings' results (pooled_rounding)
+// and taken by those that measured none of their own (take_mask_rounding). A building's seconds
+// count its start's. on_done is called after each building's chain (from any thread).
 RegularizedBatch regularize_batch(const std::string& regularizer, const std::vector<BuildingContour>& buildings,
                                   double pixel_size, const CoreOptions& options, std::optional<MaskNoise> noise = std::nullopt,
                                   const Lenders& lenders = {}, const std::function<void()>& on_done = {});

@@ -100,7 +100,7 @@ void absorb_short_runs(const Ring& ring, std::vector<int>& labels, double min_le
 struct CornerContext {
   double noise = 0;                // its boundary noise (see boundary_noise)
   double mask_noise = 0;           // the noise pooled over its mask's buildings (0: unknown)
-  double mask_rounding = 0;        // the corner rounding pooled over its mask's buildings (0: none)
+  double mask_rounding = 0;        // the corner rounding pooled over its mask's buildings (0: none; negative: not known yet)
   Vec2 lattice = Vec2::Zero();     // its main wall direction (unit normal); zero: no lattice snap
 };
 

@@ -340,6 +340,21 @@ double pooled_rounding(const std::vector<double>& measured_m, const CoreOptions&
   return *middle;
 }
 
+void take_mask_rounding(const std::vector<Ring>& rings, double pixel_size, const CoreOptions& o, double mask_rounding_m,
+                        BuildingResult& result) {
+  if (!result.unsquared) return;
+  BuildingResult::Unsquared kept = std::move(*result.unsquared);
+  result.unsquared.reset();
+  if (!result.ok || mask_rounding_m <= 0) return;
+  const auto start = Clock::now();
+  kept.context.mask_rounding = mask_rounding_m;
+  result.footprint = std::move(kept.outline);
+  chain::square_and_clean(rings, pixel_size, true, kept.context, o, result);
+  const double seconds = std::chrono::duration<double>(Clock::now() - start).count();
+  result.seconds += seconds;
+  result.chain_seconds.outline += seconds;
+}
+
 BuildingResult regularize_building(const std::vector<Ring>& rings, double pixel_size, const CoreOptions& o, double noise_floor_m,
                                    BuildingStart started) {
   BuildingResult result;

@@ -1,6 +1,7 @@
 // The per-building chain: contour rings in, LOD0 polygon with a status out. Pure computation:
 // no I/O, no threads. Every failure is caught here and becomes a status with the fallback.
 #pragma once
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -36,6 +37,14 @@ struct BuildingResult {
   int rounding_corners = -1;    // the square corners that rounding was measured on; -1: none measured (an outline off the
                                 // lattice or drawing an arc, or rounding_noise 0). Three or more: rounding_m is a measure
   bool rounding_pooled = false;  // it measured no rounding of its own and took its mask's (BuildingStart::mask_rounding_m)
+  // Where its mask's rounding was not known yet (BuildingStart::mask_rounding_m < 0) and it
+  // measured none of its own on an outline that can take one: the outline chosen before its last
+  // step squared it, and what that step squared it with (take_mask_rounding); else none.
+  struct Unsquared {
+    PolygonWithHoles outline;
+    CornerContext context;
+  };
+  std::optional<Unsquared> unsquared;
   std::string route;            // the chain's corner route taken: "original" or "deformed"; empty otherwise
   std::string note;             // when ok: why the route taken is not the one asked for (a budget), else empty
   double seconds = 0;
@@ -78,7 +87,8 @@ struct BuildingStart {
   double smoothing_noise_m = 0;  // the noise its normals are smoothed for; of an empty start, the noise the chain smooths for
   NeighbourLattice neighbour_lattice;  // the lattice of the buildings around it (neighbour_lattices)
   double mask_rounding_m = 0;  // the corner rounding pooled over its mask (pooled_rounding), which it takes where it
-                               // measures none of its own (models.pooled_rounding_share; 0: none)
+                               // measures none of its own (models.pooled_rounding_share; 0: none; negative: not known
+                               // yet, BuildingResult::unsquared kept for take_mask_rounding)
 };
 // smoothing_noise_m: the boundary noise pooled over the mask that the normals are smoothed for
 // (smoothing.noise_neighbourhood; 0: none known).
@@ -111,6 +121,14 @@ bool measured_rounding(const BuildingResult& result);
 // (measured_rounding; 0 for sharp corners): the median of those above 0 where at least
 // models.pooled_rounding_share of them are, and three; else 0 (or pooled_rounding_share 0).
 double pooled_rounding(const std::vector<double>& measured_m, const CoreOptions& options);
+
+// The building's outline squared again under its mask's rounding, pooled after the chain
+// (pooled_rounding; BuildingStart::mask_rounding_m was negative), where it measured none of its
+// own and kept its outline for it (result.unsquared, then cleared; rounding_pooled set where
+// mask_rounding_m is above 0). The same outline as the chain given that rounding draws; its time
+// added to the result's.
+void take_mask_rounding(const std::vector<Ring>& rings, double pixel_size, const CoreOptions& options, double mask_rounding_m,
+                        BuildingResult& result);
 
 // The regularizers the core offers, by name: "deformation" (the chain above, corner route in
 // options.corners.route), "cgal" (CGAL Shape_regularization, options.cgal; the fallback when it

@@ -264,7 +264,6 @@ struct ModelChoice : LabeledBuilding {
   bool offer_coarse_lattices(Criterion& criterion);
   bool offer_staircase_lines(Criterion& criterion);
   void walk_merged_steps(StepPath& path, bool outline_replaced, Criterion& criterion);
-  void square_and_clean();
 };
 
 // Two outlines from the same labels: the regular one (runs shorter than min_run_noise times the
@@ -475,8 +474,27 @@ void ModelChoice::walk_merged_steps(StepPath& path, bool outline_replaced, Crite
   }
 }
 
-// Last, the short connectors squared and the needles taken away.
-void ModelChoice::square_and_clean() {
+}  // namespace
+
+void choose_outline(const LabeledBuilding& b, const CoreOptions& o, const std::function<bool()>& over_budget,
+                    BuildingResult& result) {
+  ModelChoice choice(b, o, over_budget, result);
+  choice.first_outline();
+  if (b.on_lattice)  // (a round shape is no rectangle)
+    choose_rectangle(b.rings, b.pixel_size, o, result, result.lattice_lent ? &b.context.lattice : nullptr);
+  choice.redraw_stretches();
+  choice.simplify_by_criterion();
+  // (Its mask's rounding not known yet: the outline kept for take_mask_rounding, where it measures
+  // none of its own and could take one.)
+  std::optional<PolygonWithHoles> chosen;
+  if (b.context.mask_rounding < 0 && b.on_lattice) chosen = result.footprint;
+  square_and_clean(b.rings, b.pixel_size, b.on_lattice, b.context, o, result);
+  if (chosen && result.rounding_corners >= 0 && result.rounding_m == 0)
+    result.unsquared = BuildingResult::Unsquared{std::move(*chosen), b.context};
+}
+
+void square_and_clean(const std::vector<Ring>& rings, double pixel_size, bool on_lattice, const CornerContext& context,
+                      const CoreOptions& o, BuildingResult& result) {
   // How far the segmentation rounded the building's corners, where more than its noise explains
   // (models.rounding_noise): its square corners lie R (sqrt 2 - 1) off the contour. (Corners of
   // walls at least two pixels and the noise's correlation length long, whose directions the
@@ -531,17 +549,5 @@ void ModelChoice::square_and_clean() {
   }
 }
 
-}  // namespace
-
-void choose_outline(const LabeledBuilding& b, const CoreOptions& o, const std::function<bool()>& over_budget,
-                    BuildingResult& result) {
-  ModelChoice choice(b, o, over_budget, result);
-  choice.first_outline();
-  if (b.on_lattice)  // (a round shape is no rectangle)
-    choose_rectangle(b.rings, b.pixel_size, o, result, result.lattice_lent ? &b.context.lattice : nullptr);
-  choice.redraw_stretches();
-  choice.simplify_by_criterion();
-  choice.square_and_clean();
-}
 
 }  // namespace lodforge::chain

@@ -37,4 +37,12 @@ struct LabeledBuilding {
 void choose_outline(const LabeledBuilding& building, const CoreOptions& o, const std::function<bool()>& over_budget,
                     BuildingResult& result);
 
+// Its last step: the chosen outline's short connectors squared and the corners the segmentation
+// rounded made sharp (under the building's rounding, measured here on the outline: rounding_m
+// and rounding_corners; or, where it measures none and can take one, its mask's,
+// context.mask_rounding above 0: rounding_pooled), then the needles taken away. on_lattice: its
+// walls held to context.lattice.
+void square_and_clean(const std::vector<Ring>& rings, double pixel_size, bool on_lattice, const CornerContext& context,
+                      const CoreOptions& o, BuildingResult& result);
+
 }  // namespace lodforge::chain
