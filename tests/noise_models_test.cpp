@@ -1572,6 +1572,34 @@ TEST(Squaring, AChainShorterThanTheRoundingBecomesAStepOrACorner) {
   EXPECT_FALSE(square_connectors(notch, lattice, 2.0, 0.05, 1.0, 2.0, 3.0, 1.0));
 }
 
+// A step is taken by how far it spreads along its walls, not by its length: a rounding of radius R
+// spreads a step of any height at most 2R along them (max_chain), and draws a step of 3 m rounded
+// by 2 m as one oblique wall 4.2 m long, 3 m along. Squared where the area stays; one spreading
+// 4.5 m along stays, one higher than 2R and min_wall stays (a rounding leaves its riser on the
+// lattice), and so does a cut of the same 4.2 m between square walls (a corner's rounding is at
+// most max_chain long).
+TEST(Squaring, AStepIsTakenByHowFarItSpreadsAlongItsWalls) {
+  const Vec2 lattice(1, 0);
+  const PolygonWithHoles stepped{{{0, 0}, {10, 0}, {13, 3}, {24, 3}, {24, 16}, {0, 16}}, {}};
+  const std::optional<PolygonWithHoles> step = square_connectors(stepped, lattice, 2.0, 0.05, 1.0, 2.0, 4.0, 1.0);
+  ASSERT_TRUE(step);
+  ASSERT_EQ(step->outer.size(), 6u);
+  EXPECT_TRUE(polygon_problem(*step).empty());
+  EXPECT_NEAR(std::abs(signed_area(step->outer)), std::abs(signed_area(stepped.outer)), 1e-9);
+  EXPECT_EQ(edges_where(step->outer,
+                        [](const Vec2& a, const Vec2& b) {
+                          return std::abs(a.x() - b.x()) < 1e-9 && std::abs(a.x() - 11.5) < 1e-9 && std::abs(std::abs(a.y() - b.y()) - 3) < 1e-9;
+                        }),
+            1);
+  const PolygonWithHoles wide{{{0, 0}, {10, 0}, {14.5, 3}, {24, 3}, {24, 16}, {0, 16}}, {}};
+  EXPECT_FALSE(square_connectors(wide, lattice, 2.0, 0.05, 1.0, 2.0, 4.0, 1.0));
+  const PolygonWithHoles high{{{0, 0}, {10, 0}, {13, 5.5}, {24, 5.5}, {24, 16}, {0, 16}}, {}};
+  EXPECT_FALSE(square_connectors(high, lattice, 2.0, 0.05, 1.0, 2.0, 4.0, 1.0));
+  EXPECT_TRUE(square_connectors(high, lattice, 2.0, 0.05, 1.0, 2.0, 4.0, 2.0));  // (under 4 + 2 m across)
+  const PolygonWithHoles cut{{{0, 0}, {17, 0}, {20, 3}, {20, 16}, {0, 16}}, {}};
+  EXPECT_FALSE(square_connectors(cut, lattice, 2.0, 0.05, 1.0, 2.0, 4.0, 1.0));
+}
+
 // Under a measured rounding of radius R, rounded_share's corners are taken through walls up to 2.5 R
 // long (a rounding drawn along its arc or as a staircase along it, longer than corners.max_cut_m),
 // where the corner moves no more area than R^2 / 2: a 30 x 20 m rectangle whose corners are drawn as

@@ -185,18 +185,28 @@ std::optional<Chain> chain_from(const Ring& ring, std::size_t i, double on_sin, 
   const Vec2 a = wall(i + n - 1);
   if (!(a.norm() > 0) || off_sin(a) > on_sin) return std::nullopt;
   if (max_chain > 0 && a.norm() >= min_wall) {
+    // Shorter than max_chain to a wall square to a's (a corner), or to a wall parallel to it (a
+    // step) spanning less than max_chain along a's axis and less than max_chain and min_wall
+    // across it: a rounding of radius max_chain / 2 spreads a step that far along its walls, and
+    // no farther; a step higher than that keeps a riser on the lattice between its two corners.
+    const Vec2 along = nearest_lattice_axis(a / a.norm(), axis);
+    const auto rounded_step = [&](std::size_t m) {  // the chain up to vertex i + m, as a step's
+      const Vec2 d = ring[(i + m) % n] - ring[i % n];
+      return std::abs(along.dot(d)) < max_chain && std::abs(cross(along, d)) < max_chain + min_wall;
+    };
     double length = 0;
     bool oblique = false;
     for (std::size_t m = 0; m + 3 <= n && m <= kMaxRoundingWalls; ++m) {
       const Vec2 w = wall(i + m);
       const bool on = !(w.norm() > 0) || off_sin(w) <= on_sin;  // (a wall of no length is no oblique one)
       if (on && w.norm() > 0 && w.norm() >= min_wall) {
-        if (oblique) return Chain{m, true};
+        const bool step = std::abs(along.dot(w)) > 0.5 * w.norm();
+        if (oblique && (step ? rounded_step(m) : length < max_chain)) return Chain{m, true};
         break;
       }
       oblique = oblique || !on;
       length += w.norm();
-      if (length >= max_chain) break;
+      if (length >= max_chain && !rounded_step(m + 1)) break;
     }
   }
   if (!(k > 0) || !(noise > 0)) return std::nullopt;
