@@ -549,6 +549,16 @@ TEST_F(Run, ACornerRoundingIsPooledAlikeInARunAndInRegularize) {
   const double t60 = report_of(dir / "t60_out" / "report.json").at("corner_rounding_m").get<double>();
   EXPECT_GT(t60, 1.5);
   EXPECT_EQ(t60, report_of(dir / "t100_out" / "report.json").at("corner_rounding_m").get<double>());
+  EXPECT_TRUE(run_outlines(dir / "t60_out") == run_outlines(dir / "t100_out"));
+  // The noise not pooled (each building its own): the rounding still is, in a run as in regularize.
+  r = lodforge("regularize --mask " + seg + " --out " + (dir / "own.gpkg").string() + " --stats " + (dir / "own.json").string() +
+               " --set noise.pooled_floor=0");
+  ASSERT_EQ(r.code, 0) << r.output;
+  const nlohmann::json own = report_of(dir / "own.json");
+  EXPECT_GT(own.at("corner_rounding").at("pooled_m").get<double>(), 1.5) << own;
+  r = lodforge("run " + job("own", seg, 100).string() + " --set tiling.noise_survey_window_m=400 --set stages.noise.pooled_floor=0");
+  ASSERT_EQ(r.code, 0) << r.output;
+  expect_run_is_regularize(report_of(dir / "own_out" / "report.json"), own, dir / "own_out", dir / "own.gpkg", 10);
 }
 
 // A mask averaged over 2 x 2 blocks whole and window by window (as a survey reads it) agree,

@@ -266,7 +266,9 @@ int run_job(int argc, char** argv) {
   // The boundary noise every building allows for, pooled over a survey of the raster (not per
   // tile: the same for every tiling and shard).
   NoiseSurvey survey;
-  if (pools_noise(job.regularizer, job.stages.core) && job.tiling.noise_survey_windows > 0) {
+  const bool surveys_noise = pools_noise(job.regularizer, job.stages.core) && job.tiling.noise_survey_windows > 0;
+  const bool surveys_rounding = pools_rounding(job.regularizer, job.stages.core) && job.tiling.noise_survey_windows > 0;
+  if (surveys_noise || surveys_rounding) {
     const auto surveying = Clock::now();
     // (At most the raster's side, and the largest window a tile may read.)
     const double window_px = std::min({job.tiling.noise_survey_window_m / pixel, double(std::max(seg.size.width, seg.size.height)),
@@ -275,6 +277,7 @@ int run_job(int argc, char** argv) {
     const int survey_px = std::max(16, int(std::ceil(window_px)));
     // First at twice the pixel (stages.noise.coarse_resolved_px), as regularize measures it.
     bool resolved = false;
+    if (surveys_noise) {
     if (tries_coarse_noise(pixel, job.stages.core)) {
       survey = survey_noise(reader, seg.size, seg.transform, job.stages.contour, job.stages.core, survey_px, job.tiling.noise_survey_windows, 2);
       const std::optional<MaskNoise> taken = survey.buildings > 0 ? coarse_noise_taken(survey.noise, pixel, job.stages.core) : std::nullopt;
@@ -295,9 +298,11 @@ int run_job(int argc, char** argv) {
       spdlog::info("boundary noise pooled over {} buildings in {} window(s) of {} m: {:.3f} m, normals smoothed for {:.3f} m ({:.1f} s)",
                    survey.buildings, survey.windows, job.tiling.noise_survey_window_m, survey.noise.floor_m, survey.noise.smoothing_m,
                    seconds_since(surveying));
+    }
     // The corner rounding a building measuring none of its own takes, from the same windows at the
-    // raster's pixel, the buildings regularized with that noise.
-    if (survey.buildings > 0 && pools_rounding(job.regularizer, job.stages.core)) {
+    // raster's pixel, the buildings regularized with that noise (or each with its own, where the
+    // noise is not pooled: as regularize does).
+    if (surveys_rounding && (!surveys_noise || survey.buildings > 0)) {
       const auto rounding = Clock::now();
       const RoundingSurvey r = survey_rounding(reader, seg.size, seg.transform, job.stages.contour, job.stages.core, survey_px,
                                                job.tiling.noise_survey_windows, survey.noise);
