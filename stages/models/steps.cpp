@@ -151,10 +151,21 @@ double area_off_corner(const Ring& ring, std::size_t first, std::size_t walls, c
   return 0.5 * twice;
 }
 
-// Replaces `count` vertices of the ring from `first` on (cyclically) by `points` (no more of
-// them), in place: the other vertices keep their order.
+// Replaces `count` vertices of the ring from `first` on (cyclically) by `points`, in place: the
+// other vertices keep their order (and, where there are no more points than vertices replaced,
+// their places in the ring).
 void replace_vertices(Ring& ring, std::size_t first, std::size_t count, const std::vector<Vec2>& points) {
   const std::size_t n = ring.size();
+  if (points.size() > count) {  // (more: the points where `first` was, the others dropped)
+    Ring out;
+    out.reserve(n - count + points.size());
+    for (std::size_t j = 0; j < n; ++j) {
+      if (j == first % n) out.insert(out.end(), points.begin(), points.end());
+      else if ((j + n - first % n) % n >= count) out.push_back(ring[j]);
+    }
+    ring = std::move(out);
+    return;
+  }
   std::vector<std::size_t> at;
   for (std::size_t j = 0; j < count; ++j) at.push_back((first + j) % n);
   for (std::size_t j = 0; j < points.size(); ++j) ring[at[j]] = points[j];
@@ -168,6 +179,7 @@ void replace_vertices(Ring& ring, std::size_t first, std::size_t count, const st
 struct Chain {
   std::size_t walls = 0;
   bool rounding = false;  // taken by its length (max_chain), not by the noise
+  bool knob = false;      // ... as a bump between walls on about one line (a rounded knob or notch)
 };
 
 // The chain from vertex i to square, if any: walls off the lattice between two walls on it,
@@ -189,10 +201,20 @@ std::optional<Chain> chain_from(const Ring& ring, std::size_t i, double on_sin, 
     // step) spanning less than max_chain along a's axis and less than max_chain and min_wall
     // across it: a rounding of radius max_chain / 2 spreads a step that far along its walls, and
     // no farther; a step higher than that keeps a riser on the lattice between its two corners.
+    // Or, back to a's line, a knob or a notch a rounding drew as a bump: spanning less than twice
+    // max_chain and min_wall along it (a knob narrower than max_chain and min_wall, whose top kept
+    // no wall on the lattice, and the roundings at its sides), and reaching less than max_chain
+    // and min_wall off the line.
     const Vec2 along = nearest_lattice_axis(a / a.norm(), axis);
+    double reach = 0;  // the chain's farthest vertex off a's line so far
     const auto rounded_step = [&](std::size_t m) {  // the chain up to vertex i + m, as a step's
       const Vec2 d = ring[(i + m) % n] - ring[i % n];
       return std::abs(along.dot(d)) < max_chain && std::abs(cross(along, d)) < max_chain + min_wall;
+    };
+    const auto rounded_knob = [&](std::size_t m, bool back) {  // ... as a knob's, so far (back: and back at a's line)
+      const Vec2 d = ring[(i + m) % n] - ring[i % n];
+      return std::abs(along.dot(d)) < 2 * max_chain + min_wall && reach < max_chain + min_wall &&
+             (!back || std::abs(cross(along, d)) <= 0.5 * reach);
     };
     double length = 0;
     bool oblique = false;
@@ -201,12 +223,14 @@ std::optional<Chain> chain_from(const Ring& ring, std::size_t i, double on_sin, 
       const bool on = !(w.norm() > 0) || off_sin(w) <= on_sin;  // (a wall of no length is no oblique one)
       if (on && w.norm() > 0 && w.norm() >= min_wall) {
         const bool step = std::abs(along.dot(w)) > 0.5 * w.norm();
+        if (oblique && step && rounded_knob(m, true)) return Chain{m, true, true};
         if (oblique && (step ? rounded_step(m) : length < max_chain)) return Chain{m, true};
         break;
       }
       oblique = oblique || !on;
       length += w.norm();
-      if (length >= max_chain && !rounded_step(m + 1)) break;
+      reach = std::max(reach, std::abs(cross(along, ring[(i + m + 1) % n] - ring[i % n])));
+      if (length >= max_chain && !rounded_step(m + 1) && !rounded_knob(m + 1, false)) break;
     }
   }
   if (!(k > 0) || !(noise > 0)) return std::nullopt;
@@ -217,6 +241,44 @@ std::optional<Chain> chain_from(const Ring& ring, std::size_t i, double on_sin, 
   const double uncertainty = noise * std::sqrt(3 * correlation / std::max(b.norm(), correlation));
   if (sin_turn * 0.5 * b.norm() > k * uncertainty) return std::nullopt;
   return Chain{1, false};
+}
+
+// The rectangle a bump between walls a (ending at vertex i) and c (starting at vertex i + m) on
+// about one line is drawn as, under a rounding: its four corners from a's line to c's, as deep
+// off a's line (along `across` or against it: the bump's side) as the chain's deepest vertex,
+// keeping the area between the chain and a's line and its centre along it; none where the chain
+// crosses a's line and c's (by more than a hundredth of its depth) or the rectangle does not fit
+// within the chain's span.
+std::optional<std::vector<Vec2>> knob_of(const Ring& ring, std::size_t i, std::size_t m, const Vec2& along, Vec2 across) {
+  const std::size_t n = ring.size();
+  const Vec2 p0 = ring[(i + n - 1) % n], p1 = ring[i % n], p2 = ring[(i + m) % n], p3 = ring[(i + m + 1) % n];
+  double area = 0, moment = 0;
+  for (std::size_t j = 0; j < m; ++j) {
+    const Vec2 q0 = ring[(i + j) % n] - p1, q1 = ring[(i + j + 1) % n] - p1;
+    const double u0 = along.dot(q0), u1 = along.dot(q1), h0 = across.dot(q0), h1 = across.dot(q1);
+    area += 0.5 * (h0 + h1) * (u1 - u0);
+    moment += (u1 - u0) * (h0 * (2 * u0 + u1) + h1 * (u0 + 2 * u1)) / 6;  // (the trapezoid's first moment along the line)
+  }
+  if (area < 0) across = -across, area = -area, moment = -moment;  // (the bump on the other side)
+  const double end = along.dot(p2 - p1), offset = across.dot(p2 - p1);
+  double deepest = 0, shallowest = 0;
+  for (std::size_t j = 1; j < m; ++j) {
+    const double h = across.dot(ring[(i + j) % n] - p1);
+    deepest = std::max(deepest, h), shallowest = std::min(shallowest, h);
+  }
+  if (!(area > 0) || !(end > 0) || !(deepest > std::max(0.0, offset)) || shallowest < std::min(0.0, offset) - 0.01 * deepest)
+    return std::nullopt;
+  // Under the rectangle, from its far side to the chain's end, c's line at `offset`: the area
+  // deepest * width + offset * (end - far) is the chain's, the centre taken as the chain's.
+  const double centre = moment / area;
+  const double width = (area - offset * (end - centre)) / (deepest - 0.5 * offset);
+  const double near = centre - 0.5 * width, far = centre + 0.5 * width;
+  if (!(width > 0) || near < 0 || far > end) return std::nullopt;
+  const Vec2 top_near = p1 + near * along + deepest * across, top_far = p1 + far * along + deepest * across;
+  const std::optional<Vec2> from = meet(p0, p1 - p0, top_near, across), to = meet(top_far, across, p2, p3 - p2);
+  if (!from || !to || !from->allFinite() || !to->allFinite() || (*from - p0).dot(p1 - p0) <= 0 || (p3 - *to).dot(p3 - p2) <= 0)
+    return std::nullopt;
+  return std::vector<Vec2>{*from, top_near, top_far, *to};
 }
 
 // square_connectors on one ring; true when a wall was squared.
@@ -246,6 +308,15 @@ bool square_ring(Ring& ring, const Vec2& lattice, double on_deg, double noise, d
         // lattice the two triangles it swaps are equal).
         Vec2 across(-along_a.y(), along_a.x());
         if (across.dot(p2 - p1) < 0) across = -across;
+        if (chain->knob) {
+          // A bump that reaches one way off a's line, back at it: drawn as a rectangle as deep as
+          // it reaches (its deepest vertex), keeping its area and its centre along the line.
+          const std::optional<std::vector<Vec2>> knob = knob_of(ring, i, m, along_a, across);
+          if (!knob) continue;
+          replace_vertices(ring, i, m + 1, *knob);
+          changed = any = true;
+          continue;
+        }
         Vec2 riser = 0.5 * (p1 + p2);
         if (m > 1) {
           // Along a's axis from p1 (u) and across it (the offset), the area under the chain;
