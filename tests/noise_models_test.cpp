@@ -1592,9 +1592,9 @@ TEST(Squaring, AChainShorterThanTheRoundingBecomesAStepOrACorner) {
 // A step is taken by how far it spreads along its walls, not by its length: a rounding of radius R
 // spreads a step of any height at most 2R along them (max_chain), and draws a step of 3 m rounded
 // by 2 m as one oblique wall 4.2 m long, 3 m along. Squared where the area stays; one spreading
-// 4.5 m along stays, one higher than 2R and min_wall stays (a rounding leaves its riser on the
-// lattice), and so does a cut of the same 4.2 m between square walls (a corner's rounding is at
-// most max_chain long).
+// 4.5 m along stays, one higher than 3R and min_wall stays (a rounding leaves its riser on the
+// lattice, longer than R), and so does a cut of the same 4.2 m between square walls (a corner's
+// rounding is at most max_chain long).
 TEST(Squaring, AStepIsTakenByHowFarItSpreadsAlongItsWalls) {
   const Vec2 lattice(1, 0);
   const PolygonWithHoles stepped{{{0, 0}, {10, 0}, {13, 3}, {24, 3}, {24, 16}, {0, 16}}, {}};
@@ -1607,9 +1607,9 @@ TEST(Squaring, AStepIsTakenByHowFarItSpreadsAlongItsWalls) {
             1);
   const PolygonWithHoles wide{{{0, 0}, {10, 0}, {14.5, 3}, {24, 3}, {24, 16}, {0, 16}}, {}};
   EXPECT_FALSE(square_connectors(wide, lattice, 2.0, 0.05, 1.0, 2.0, 4.0, 1.0));
-  const PolygonWithHoles high{{{0, 0}, {10, 0}, {13, 5.5}, {24, 5.5}, {24, 16}, {0, 16}}, {}};
+  const PolygonWithHoles high{{{0, 0}, {10, 0}, {13, 7.5}, {24, 7.5}, {24, 16}, {0, 16}}, {}};
   EXPECT_FALSE(square_connectors(high, lattice, 2.0, 0.05, 1.0, 2.0, 4.0, 1.0));
-  EXPECT_TRUE(square_connectors(high, lattice, 2.0, 0.05, 1.0, 2.0, 4.0, 2.0));  // (under 4 + 2 m across)
+  EXPECT_TRUE(square_connectors(high, lattice, 2.0, 0.05, 1.0, 2.0, 4.0, 2.0));  // (under 6 + 2 m across)
   const PolygonWithHoles cut{{{0, 0}, {17, 0}, {20, 3}, {20, 16}, {0, 16}}, {}};
   EXPECT_FALSE(square_connectors(cut, lattice, 2.0, 0.05, 1.0, 2.0, 4.0, 1.0));
 }

@@ -198,9 +198,11 @@ std::optional<Chain> chain_from(const Ring& ring, std::size_t i, double on_sin, 
   if (!(a.norm() > 0) || off_sin(a) > on_sin) return std::nullopt;
   if (max_chain > 0 && a.norm() >= min_wall) {
     // Shorter than max_chain to a wall square to a's (a corner), or to a wall parallel to it (a
-    // step) spanning less than max_chain along a's axis and less than max_chain and min_wall
-    // across it: a rounding of radius max_chain / 2 spreads a step that far along its walls, and
-    // no farther; a step higher than that keeps a riser on the lattice between its two corners.
+    // step) spanning less than max_chain along a's axis and less than 1.5 max_chain and min_wall
+    // across it: a rounding of radius R = max_chain / 2 spreads a step that far along its walls,
+    // and no farther; it leaves a step d high a straight riser d - 2R long, which the outline
+    // draws into the roundings' oblique wall where shorter than R and min_wall (the annex of a row
+    // house, narrower than 2R, rounded to a wedge), and keeps on the lattice where longer.
     // Or, back to a's line, a knob or a notch a rounding drew as a bump: spanning less than twice
     // max_chain and min_wall along it (a knob narrower than max_chain and min_wall, whose top kept
     // no wall on the lattice, and the roundings at its sides), and reaching less than max_chain
@@ -209,7 +211,7 @@ std::optional<Chain> chain_from(const Ring& ring, std::size_t i, double on_sin, 
     double reach = 0;  // the chain's farthest vertex off a's line so far
     const auto rounded_step = [&](std::size_t m) {  // the chain up to vertex i + m, as a step's
       const Vec2 d = ring[(i + m) % n] - ring[i % n];
-      return std::abs(along.dot(d)) < max_chain && std::abs(cross(along, d)) < max_chain + min_wall;
+      return std::abs(along.dot(d)) < max_chain && std::abs(cross(along, d)) < 1.5 * max_chain + min_wall;
     };
     const auto rounded_knob = [&](std::size_t m, bool back) {  // ... as a knob's, so far (back: and back at a's line)
       const Vec2 d = ring[(i + m) % n] - ring[i % n];
