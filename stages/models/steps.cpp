@@ -249,9 +249,10 @@ std::optional<Chain> chain_from(const Ring& ring, std::size_t i, double on_sin, 
 // about one line is drawn as, under a rounding: its four corners from a's line to c's, as deep
 // off a's line (along `across` or against it: the bump's side) as the chain's deepest vertex,
 // keeping the area between the chain and a's line and its centre along it; none where the chain
-// crosses a's line and c's (by more than a hundredth of its depth) or the rectangle does not fit
-// within the chain's span.
-std::optional<std::vector<Vec2>> knob_of(const Ring& ring, std::size_t i, std::size_t m, const Vec2& along, Vec2 across) {
+// crosses a's line and c's (by more than a hundredth of its depth), or the rectangle does not fit
+// within the chain's span or is narrower than min_wall (a needle, no knob).
+std::optional<std::vector<Vec2>> knob_of(const Ring& ring, std::size_t i, std::size_t m, const Vec2& along, Vec2 across,
+                                         double min_wall) {
   const std::size_t n = ring.size();
   const Vec2 p0 = ring[(i + n - 1) % n], p1 = ring[i % n], p2 = ring[(i + m) % n], p3 = ring[(i + m + 1) % n];
   double area = 0, moment = 0;
@@ -275,7 +276,7 @@ std::optional<std::vector<Vec2>> knob_of(const Ring& ring, std::size_t i, std::s
   const double centre = moment / area;
   const double width = (area - offset * (end - centre)) / (deepest - 0.5 * offset);
   const double near = centre - 0.5 * width, far = centre + 0.5 * width;
-  if (!(width > 0) || near < 0 || far > end) return std::nullopt;
+  if (!(width >= min_wall && width > 0) || near < 0 || far > end) return std::nullopt;
   const Vec2 top_near = p1 + near * along + deepest * across, top_far = p1 + far * along + deepest * across;
   const std::optional<Vec2> from = meet(p0, p1 - p0, top_near, across), to = meet(top_far, across, p2, p3 - p2);
   if (!from || !to || !from->allFinite() || !to->allFinite() || (*from - p0).dot(p1 - p0) <= 0 || (p3 - *to).dot(p3 - p2) <= 0)
@@ -313,7 +314,7 @@ bool square_ring(Ring& ring, const Vec2& lattice, double on_deg, double noise, d
         if (chain->knob) {
           // A bump that reaches one way off a's line, back at it: drawn as a rectangle as deep as
           // it reaches (its deepest vertex), keeping its area and its centre along the line.
-          const std::optional<std::vector<Vec2>> knob = knob_of(ring, i, m, along_a, across);
+          const std::optional<std::vector<Vec2>> knob = knob_of(ring, i, m, along_a, across, min_wall);
           if (!knob) continue;
           replace_vertices(ring, i, m + 1, *knob);
           changed = any = true;
