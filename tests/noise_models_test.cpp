@@ -1574,8 +1574,8 @@ TEST(Squaring, AChainShorterThanTheRoundingBecomesAStepOrACorner) {
   ASSERT_EQ(corner->outer.size(), 4u);
   EXPECT_NEAR(std::abs(signed_area(corner->outer)), 200, 1e-9);
   // A V-shaped notch between walls on one line is no step: under the noise it stays; under the
-  // rounding it is a notch drawn as a rectangle as deep, of the same area (1 m wide) and centre.
-  const PolygonWithHoles notch{{{0, 0}, {10, 0}, {11, 0.8}, {12, 0}, {24, 0}, {24, 14}, {0, 14}}, {}};
+  // rounding it is a notch drawn as a rectangle as deep, of the same area (1.2 m wide) and centre.
+  const PolygonWithHoles notch{{{0, 0}, {10, 0}, {11.2, 0.8}, {12.4, 0}, {24, 0}, {24, 14}, {0, 14}}, {}};
   EXPECT_FALSE(square_connectors(notch, lattice, 2.0, 0.05, 1.0, 2.0, 0.0, 1.0));
   const std::optional<PolygonWithHoles> squared_notch = square_connectors(notch, lattice, 2.0, 0.05, 1.0, 2.0, 3.0, 1.0);
   ASSERT_TRUE(squared_keeping_area(squared_notch, notch, 8));
@@ -1584,7 +1584,8 @@ TEST(Squaring, AChainShorterThanTheRoundingBecomesAStepOrACorner) {
   EXPECT_EQ(right, 8u);
   EXPECT_EQ(edges_where(squared_notch->outer,
                         [](const Vec2& a, const Vec2& b) {
-                          return std::abs(a.y() - 0.8) < 1e-9 && std::abs(b.y() - 0.8) < 1e-9 && std::abs(std::abs(a.x() - b.x()) - 1) < 1e-9;
+                          return std::abs(a.y() - 0.8) < 1e-9 && std::abs(b.y() - 0.8) < 1e-9 && std::abs(a.x() + b.x() - 22.4) < 1e-9 &&
+                                 std::abs(std::abs(a.x() - b.x()) - 1.2) < 1e-9;
                         }),
             1);
 }

@@ -247,39 +247,49 @@ std::optional<Chain> chain_from(const Ring& ring, std::size_t i, double on_sin, 
 
 // The rectangle a bump between walls a (ending at vertex i) and c (starting at vertex i + m) on
 // about one line is drawn as, under a rounding: its four corners from a's line to c's, as deep
-// off a's line (along `across` or against it: the bump's side) as the chain's deepest vertex,
-// keeping the area between the chain and a's line and its centre along it; none where the chain
-// crosses a's line and c's (by more than a hundredth of its depth), or the rectangle does not fit
-// within the chain's span or is narrower than min_wall (a needle, no knob).
+// off a's line (on the side of the chain's farthest vertex) as that vertex, keeping the area
+// between the chain and a's line and its first moment along it (the strip under c's line, where
+// c's line lies off a's, counted); none where the chain crosses a's line and c's (by more than a
+// hundredth of its depth), the bump is shallower than half min_wall, or the rectangle does not
+// fit within the chain's span or is narrower than min_wall (a needle, no knob).
 std::optional<std::vector<Vec2>> knob_of(const Ring& ring, std::size_t i, std::size_t m, const Vec2& along, Vec2 across,
                                          double min_wall) {
   const std::size_t n = ring.size();
   const Vec2 p0 = ring[(i + n - 1) % n], p1 = ring[i % n], p2 = ring[(i + m) % n], p3 = ring[(i + m + 1) % n];
-  double area = 0, moment = 0;
+  double farthest = 0;
+  for (std::size_t j = 1; j < m; ++j) {
+    const double h = across.dot(ring[(i + j) % n] - p1);
+    if (std::abs(h) > std::abs(farthest)) farthest = h;
+  }
+  if (farthest < 0) across = -across;  // (the bump on the other side)
+  double area = 0, moment = 0, deepest = 0, shallowest = 0;
   for (std::size_t j = 0; j < m; ++j) {
     const Vec2 q0 = ring[(i + j) % n] - p1, q1 = ring[(i + j + 1) % n] - p1;
     const double u0 = along.dot(q0), u1 = along.dot(q1), h0 = across.dot(q0), h1 = across.dot(q1);
     area += 0.5 * (h0 + h1) * (u1 - u0);
     moment += (u1 - u0) * (h0 * (2 * u0 + u1) + h1 * (u0 + 2 * u1)) / 6;  // (the trapezoid's first moment along the line)
+    if (j + 1 < m) deepest = std::max(deepest, h1), shallowest = std::min(shallowest, h1);
   }
-  if (area < 0) across = -across, area = -area, moment = -moment;  // (the bump on the other side)
   const double end = along.dot(p2 - p1), offset = across.dot(p2 - p1);
-  double deepest = 0, shallowest = 0;
-  for (std::size_t j = 1; j < m; ++j) {
-    const double h = across.dot(ring[(i + j) % n] - p1);
-    deepest = std::max(deepest, h), shallowest = std::min(shallowest, h);
-  }
-  if (!(area > 0) || !(end > 0) || !(deepest > std::max(0.0, offset)) || shallowest < std::min(0.0, offset) - 0.01 * deepest)
+  if (!(area > 0) || !(end > 0) || !(deepest > std::max(0.0, offset)) || deepest < 0.5 * min_wall ||
+      shallowest < std::min(0.0, offset) - 0.01 * deepest)
     return std::nullopt;
-  // Under the rectangle, from its far side to the chain's end, c's line at `offset`: the area
-  // deepest * width + offset * (end - far) is the chain's, the centre taken as the chain's.
-  const double centre = moment / area;
-  const double width = (area - offset * (end - centre)) / (deepest - 0.5 * offset);
+  // Under the rectangle (near to far, `deepest` high) and then c's line (far to end, `offset`):
+  // area deepest * width + offset * (end - far), first moment deepest * width * centre +
+  // offset * (end^2 - far^2) / 2, solved by a few substitutions from the rectangle on a's line
+  // (offset is small against deepest).
+  double width = area / deepest, centre = moment / area;
+  for (int k = 0; k < 8 && width > 0; ++k) {
+    const double far = centre + 0.5 * width;
+    width = (area - offset * (end - far)) / deepest;
+    if (width > 0) centre = (moment - 0.5 * offset * (end * end - far * far)) / (deepest * width);
+  }
   const double near = centre - 0.5 * width, far = centre + 0.5 * width;
-  if (!(width >= min_wall && width > 0) || near < 0 || far > end) return std::nullopt;
+  if (!(width >= min_wall) || near < 0 || far > end) return std::nullopt;
   const Vec2 top_near = p1 + near * along + deepest * across, top_far = p1 + far * along + deepest * across;
   const std::optional<Vec2> from = meet(p0, p1 - p0, top_near, across), to = meet(top_far, across, p2, p3 - p2);
-  if (!from || !to || !from->allFinite() || !to->allFinite() || (*from - p0).dot(p1 - p0) <= 0 || (p3 - *to).dot(p3 - p2) <= 0)
+  if (!from || !to || !from->allFinite() || !to->allFinite() || (*from - p0).dot(p1 - p0) <= 0 || (p3 - *to).dot(p3 - p2) <= 0 ||
+      across.dot(top_near - *from) <= 0 || across.dot(top_far - *to) <= 0)  // (a's or c's line tilted past the top)
     return std::nullopt;
   return std::vector<Vec2>{*from, top_near, top_far, *to};
 }
@@ -314,9 +324,13 @@ bool square_ring(Ring& ring, const Vec2& lattice, double on_deg, double noise, d
         if (chain->knob) {
           // A bump that reaches one way off a's line, back at it: drawn as a rectangle as deep as
           // it reaches (its deepest vertex), keeping its area and its centre along the line.
+          // (One that would cross the ring elsewhere is left, not the ring's other squarings.)
           const std::optional<std::vector<Vec2>> knob = knob_of(ring, i, m, along_a, across, min_wall);
           if (!knob) continue;
-          replace_vertices(ring, i, m + 1, *knob);
+          Ring with_knob = ring;
+          replace_vertices(with_knob, i, m + 1, *knob);
+          if (!ring_problem(with_knob).empty()) continue;
+          ring = std::move(with_knob);
           changed = any = true;
           continue;
         }
