@@ -275,29 +275,29 @@ int run_job(int argc, char** argv) {
                                        job.tiling.max_window_m / pixel});
     const MaskWindowReader reader(job.inputs.segmentation.path, selector);
     const int survey_px = std::max(16, int(std::ceil(window_px)));
-    // First at twice the pixel (stages.noise.coarse_resolved_px), as regularize measures it.
-    bool resolved = false;
     if (surveys_noise) {
-    if (tries_coarse_noise(pixel, job.stages.core)) {
-      survey = survey_noise(reader, seg.size, seg.transform, job.stages.contour, job.stages.core, survey_px, job.tiling.noise_survey_windows, 2);
-      const std::optional<MaskNoise> taken = survey.buildings > 0 ? coarse_noise_taken(survey.noise, pixel, job.stages.core) : std::nullopt;
-      resolved = taken.has_value();
-      if (resolved) survey.noise = *taken;
-      spdlog::info("boundary noise pooled over {} buildings of the mask averaged to twice its pixel: {:.3f} m, {} {} pixels "
-                   "(stages.noise.coarse_resolved_px): {}",
-                   survey.buildings, survey.noise.floor_m, resolved ? "at least" : "less than", job.stages.core.noise.coarse_resolved_px,
-                   resolved ? "the raster's noise" : "surveyed again at the pixel");
-    }
-    if (!resolved)
-      survey = survey_noise(reader, seg.size, seg.transform, job.stages.contour, job.stages.core, survey_px, job.tiling.noise_survey_windows);
-    if (survey.buildings == 0)
-      spdlog::warn("tiling.noise_survey_windows: no building found whole in the survey's {} window(s) of {} m; each building "
-                   "allows for its own boundary noise only (more or larger windows survey more)",
-                   survey.windows, job.tiling.noise_survey_window_m);
-    else
-      spdlog::info("boundary noise pooled over {} buildings in {} window(s) of {} m: {:.3f} m, normals smoothed for {:.3f} m ({:.1f} s)",
-                   survey.buildings, survey.windows, job.tiling.noise_survey_window_m, survey.noise.floor_m, survey.noise.smoothing_m,
-                   seconds_since(surveying));
+      // First at twice the pixel (stages.noise.coarse_resolved_px), as regularize measures it.
+      bool resolved = false;
+      if (tries_coarse_noise(pixel, job.stages.core)) {
+        survey = survey_noise(reader, seg.size, seg.transform, job.stages.contour, job.stages.core, survey_px, job.tiling.noise_survey_windows, 2);
+        const std::optional<MaskNoise> taken = survey.buildings > 0 ? coarse_noise_taken(survey.noise, pixel, job.stages.core) : std::nullopt;
+        resolved = taken.has_value();
+        if (resolved) survey.noise = *taken;
+        spdlog::info("boundary noise pooled over {} buildings of the mask averaged to twice its pixel: {:.3f} m, {} {} pixels "
+                     "(stages.noise.coarse_resolved_px): {}",
+                     survey.buildings, survey.noise.floor_m, resolved ? "at least" : "less than", job.stages.core.noise.coarse_resolved_px,
+                     resolved ? "the raster's noise" : "surveyed again at the pixel");
+      }
+      if (!resolved)
+        survey = survey_noise(reader, seg.size, seg.transform, job.stages.contour, job.stages.core, survey_px, job.tiling.noise_survey_windows);
+      if (survey.buildings == 0)
+        spdlog::warn("tiling.noise_survey_windows: no building found whole in the survey's {} window(s) of {} m; each building "
+                     "allows for its own boundary noise only (more or larger windows survey more)",
+                     survey.windows, job.tiling.noise_survey_window_m);
+      else
+        spdlog::info("boundary noise pooled over {} buildings in {} window(s) of {} m: {:.3f} m, normals smoothed for {:.3f} m ({:.1f} s)",
+                     survey.buildings, survey.windows, job.tiling.noise_survey_window_m, survey.noise.floor_m, survey.noise.smoothing_m,
+                     seconds_since(surveying));
     }
     // The corner rounding a building measuring none of its own takes, from the same windows at the
     // raster's pixel, the buildings regularized with that noise (or each with its own, where the
@@ -314,7 +314,6 @@ int run_job(int argc, char** argv) {
                    job.stages.core.models.pooled_rounding_share, seconds_since(rounding));
     }
   }
-  if (!survey.noise.rounding_m) survey.noise.rounding_m = 0.0;  // (no survey: none, never pooled per tile)
 
   // Keys: everything an output depends on.
   Job key_job = job;
@@ -332,7 +331,7 @@ int run_job(int argc, char** argv) {
   // Building ids are first-pixel indices, so the footprints also depend on the raster's width.
   char floor_text[120];
   std::snprintf(floor_text, sizeof floor_text, "\nnoise floor %.17g smoothed for %.17g rounding %.17g", survey.noise.floor_m,
-                survey.noise.smoothing_m, *survey.noise.rounding_m);
+                survey.noise.smoothing_m, survey.noise.rounding_m.value_or(0.0));  // (none surveyed: none, a tile pools none)
   const std::string core_options = job.regularizer + "\n" + options_text(key_job.stages.core) + "\nwidth " + std::to_string(seg.size.width) + floor_text + program;
   const std::uint64_t job_key = fnv1a(gpkg_time + "\n" + file_identity(job.inputs.segmentation.path) + "\n" + file_identity(job.inputs.dsm.path) + "\n" +
                                       file_identity(job.inputs.dtm.path) + "\n" + file_identity(job.inputs.orthophoto.path) + "\n" + options_text(key_job) + cadastre_text + "\n" +

@@ -256,14 +256,7 @@ RegularizedBatch regularize_batch(const std::string& regularizer, const std::vec
   batch.rounding_samples = measured_m.size();
   batch.rounding_m = pooled_rounding(measured_m, options);
   tbb::parallel_for(std::size_t(0), buildings.size(), [&](std::size_t i) {
-    // (A failure there leaves the building as its chain drew it, without the mask's rounding.)
-    BuildingResult taken = batch.results[i];
-    try {
-      take_mask_rounding(buildings[i].rings, pixel_size, options, batch.rounding_m, taken);
-      batch.results[i] = std::move(taken);
-    } catch (const std::exception&) {
-      batch.results[i].unsquared.reset();
-    }
+    take_mask_rounding(buildings[i].rings, pixel_size, options, batch.rounding_m, batch.results[i]);
   });
   return batch;
 }

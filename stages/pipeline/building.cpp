@@ -348,8 +348,17 @@ void take_mask_rounding(const std::vector<Ring>& rings, double pixel_size, const
   if (!result.ok || mask_rounding_m <= 0) return;
   const auto start = Clock::now();
   kept.context.mask_rounding = mask_rounding_m;
+  // (A failure there leaves the building as its chain drew it, without the mask's rounding.)
+  PolygonWithHoles drawn = std::move(result.footprint);
+  const double own_m = result.rounding_m;
+  const int corners = result.rounding_corners;
   result.footprint = std::move(kept.outline);
-  chain::square_and_clean(rings, pixel_size, true, kept.context, o, result);
+  try {
+    chain::square_and_clean(rings, pixel_size, true, kept.context, o, result);
+  } catch (const std::exception&) {
+    result.footprint = std::move(drawn);
+    result.rounding_m = own_m, result.rounding_corners = corners, result.rounding_pooled = false;
+  }
   const double seconds = std::chrono::duration<double>(Clock::now() - start).count();
   result.seconds += seconds;
   result.chain_seconds.outline += seconds;

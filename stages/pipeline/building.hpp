@@ -126,7 +126,7 @@ double pooled_rounding(const std::vector<double>& measured_m, const CoreOptions&
 // (pooled_rounding; BuildingStart::mask_rounding_m was negative), where it measured none of its
 // own and kept its outline for it (result.unsquared, then cleared; rounding_pooled set where
 // mask_rounding_m is above 0). The same outline as the chain given that rounding draws; its time
-// added to the result's.
+// added to the result's. Never throws: a failure leaves the outline the chain drew.
 void take_mask_rounding(const std::vector<Ring>& rings, double pixel_size, const CoreOptions& options, double mask_rounding_m,
                         BuildingResult& result);
 
