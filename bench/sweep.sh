@@ -6,7 +6,7 @@
 # Regenerates the sweep section of docs/quality.md (between its sweep markers).
 #
 #   bench/sweep.sh [--work DIR] [--sets synth,campus,delft] [--pixels 0.1,0.25,0.5,1,2]
-#                  [--wobbles 0,0.25,0.5,1] [--wavelength 8] [--seed N] [--radius R]
+#                  [--wobbles 0,0.25,0.5,1] [--wavelength 8] [--seed N] [--radius R] [--blur S]
 #                  [--methods lodforge,cgal,douglas_peucker,none] [--no-docs]
 #
 # A row (pixel size P, wobble W metres): `lodforge synth --pixel-size P --set boundary_noise_m=W
@@ -23,7 +23,11 @@
 # another synthetic city and other degradations (every set's seed N; files ROW.sN, section
 # sweep-results[-lL]-sN): a check of the defaults on data they were not measured on. --radius R
 # rounds the corners by R metres on every row, the unwobbled ones too, instead of twice the
-# wobble (files ROW[.lL][.sN].rR, section ...-rR): a mask rounded more than it wobbles.
+# wobble (files ROW[.lL][.sN].rR, section ...-rR): a mask rounded more than it wobbles. --blur S
+# degrades as a network smooths instead of with a disc: the true mask blurred by a Gaussian of S
+# metres and cut where a straight wall's blurred edge is (`blur_m`; corners cut and filled along a
+# few S, no exact arc), the wobble and speckles on top, no disc rounding (files ROW[...].bS,
+# section ...-bS).
 set -euo pipefail
 root="$(cd "$(dirname "$0")/.." && pwd)"
 lodforge="${LODFORGE:-$root/build/lodforge}"
@@ -35,6 +39,7 @@ wobbles="0,0.25,0.5,1"
 wavelength=8
 seed=""
 radius=""
+blur=""
 methods="lodforge,cgal,douglas_peucker,none"
 docs=1
 while [ $# -gt 0 ]; do
@@ -46,9 +51,10 @@ while [ $# -gt 0 ]; do
     --wavelength) wavelength="$2"; shift 2 ;;
     --seed) seed="$2"; shift 2 ;;
     --radius) radius="$2"; shift 2 ;;
+    --blur) blur="$2"; shift 2 ;;
     --methods) methods="$2"; shift 2 ;;
     --no-docs) docs=0; shift ;;
-    -h|--help) sed -n '2,26p' "$0"; exit 0 ;;
+    -h|--help) sed -n '2,30p' "$0"; exit 0 ;;
     *) echo "bench/sweep.sh: unknown argument '$1' (see --help)" >&2; exit 2 ;;
   esac
 done
@@ -72,6 +78,12 @@ if [ -n "$radius" ]; then
   /usr/bin/python3 -c "import sys; assert float(sys.argv[1]) >= 0" "$radius" 2>/dev/null ||
     { echo "bench/sweep.sh: --radius must be a number of metres, 0 or more, not '$radius'" >&2; exit 2; }
   section="$section-r$radius"
+fi
+if [ -n "$blur" ]; then
+  /usr/bin/python3 -c "import sys; assert float(sys.argv[1]) > 0" "$blur" 2>/dev/null ||
+    { echo "bench/sweep.sh: --blur must be a positive number of metres, not '$blur'" >&2; exit 2; }
+  [ -z "$radius" ] || { echo "bench/sweep.sh: --blur and --radius are two roundings; give one" >&2; exit 2; }
+  section="$section-b$blur"
 fi
 if [ "$docs" = 1 ] && ! grep -q "<!-- $section:begin -->" "$root/docs/quality.md"; then
   echo "bench/sweep.sh: docs/quality.md has no $section markers (<!-- $section:begin --> ... <!-- $section:end -->); add them or pass --no-docs" >&2
@@ -110,12 +122,15 @@ for s in "${set_list[@]}"; do
       [ "$wavelength" = 8 ] || row="$row.l$wavelength"
       [ -z "$seed" ] || row="$row.s$seed"
       [ -z "$radius" ] || row="$row.r$radius"
+      [ -z "$blur" ] || row="$row.b$blur"
       data="$work/data/$row"
       if [ ! -f "$data/seg_class.tif" ]; then
         rounding="${radius:-$(/usr/bin/python3 -c "print(2 * $w)")}"  # (0 for the unwobbled rows unless --radius)
+        [ -z "$blur" ] || rounding=0
         degrade=(--set boundary_noise_m=0 --set "corner_radius_m=$rounding" --set speckle_per_km2=0)
         [ "$w" = 0 ] || degrade=(--set "boundary_noise_m=$w" --set "noise_wavelength_m=$wavelength" --set "corner_radius_m=$rounding"
                                  --set speckle_per_km2=400 --set speckle_size_m=0.5)
+        [ -z "$blur" ] || degrade+=(--set "blur_m=$blur")
         if [ "$s" = synth ]; then
           "$lodforge" synth --size-m 500x500 --pixel-size "$p" --seed "${seed:-11}" "${degrade[@]}" --out "$data" >/dev/null 2>&1
         else
@@ -140,6 +155,7 @@ done
 table_args=("$work" --sets "$sets" --pixels "$pixels" --wobbles "$wobbles" --wavelength "$wavelength" --methods "$methods")
 [ -z "$seed" ] || table_args+=(--seed "$seed")
 [ -z "$radius" ] || table_args+=(--radius "$radius")
+[ -z "$blur" ] || table_args+=(--blur "$blur")
 if [ "$docs" = 1 ]; then
   /usr/bin/python3 "$root/bench/sweep_table.py" "${table_args[@]}" --doc "$root/docs/quality.md"
   echo "bench/sweep.sh: results written to docs/quality.md" >&2

@@ -1,6 +1,6 @@
 #!/usr/bin/python3
 """Builds the sweep tables of docs/quality.md from bench/sweep.sh's work directory.
-usage: sweep_table.py WORK --sets a,b --pixels p,q --wobbles w,v [--wavelength 8] [--seed N] [--radius R] --methods m,n [--doc DOC.md]
+usage: sweep_table.py WORK --sets a,b --pixels p,q --wobbles w,v [--wavelength 8] [--seed N] [--radius R] [--blur S] --methods m,n [--doc DOC.md]
 Rows of a wavelength other than 8 m are read from ROW.lL files and written to the sweep-results-lL section;
 rows of another seed from ROW[.lL].sN files, to the sweep-results[-lL]-sN section; rows whose corners are
 rounded by R m from ROW[.lL][.sN].rR files, to the ...-rR section."""
@@ -19,6 +19,7 @@ for key in ("sets", "pixels", "wobbles", "methods"): ap.add_argument("--" + key,
 ap.add_argument("--wavelength", default="8")
 ap.add_argument("--seed")
 ap.add_argument("--radius")
+ap.add_argument("--blur")
 ap.add_argument("--doc")
 a = ap.parse_args()
 sets, pixels, wobbles, methods = (getattr(a, k).split(",") for k in ("sets", "pixels", "wobbles", "methods"))
@@ -53,6 +54,7 @@ for s in sets:
     title = TITLES.get(s, s) + ("" if a.wavelength == "8" else f", wobble wavelength {a.wavelength} m")
     if a.seed: title = title.replace("(seed 11)", f"(seed {a.seed})").replace("(seed 1)", f"(seed {a.seed})")
     if a.radius: title += f", corners rounded by {a.radius} m"
+    if a.blur: title += f", blurred by {a.blur} m"
     out.append(f"#### {title}\n")
     head = ["pixel (m)", "wobble (m)"]
     head += [f"IoU {SHORT[m]}" for m in methods]
@@ -65,7 +67,7 @@ for s in sets:
     out.append("|---" * len(head) + "|")
     for p in pixels:
         for w in wobbles:
-            row = f"{s}.p{p}.w{w}" + ("" if a.wavelength == "8" else f".l{a.wavelength}") + (f".s{a.seed}" if a.seed else "") + (f".r{a.radius}" if a.radius else "")
+            row = f"{s}.p{p}.w{w}" + ("" if a.wavelength == "8" else f".l{a.wavelength}") + (f".s{a.seed}" if a.seed else "") + (f".r{a.radius}" if a.radius else "") + (f".b{a.blur}" if a.blur else "")
             try:
                 r = {m: load(row, m) for m in methods}
             except FileNotFoundError:
@@ -96,6 +98,7 @@ else:
     section, wavelength = ("sweep-results", "") if a.wavelength == "8" else (f"sweep-results-l{a.wavelength}", f" --wavelength {a.wavelength}")
     if a.seed: section, wavelength = f"{section}-s{a.seed}", f"{wavelength} --seed {a.seed}"
     if a.radius: section, wavelength = f"{section}-r{a.radius}", f"{wavelength} --radius {a.radius}"
+    if a.blur: section, wavelength = f"{section}-b{a.blur}", f"{wavelength} --blur {a.blur}"
     write_section(a.doc, section,
                   f"bench/sweep.sh --sets {a.sets} --pixels {a.pixels} --wobbles {a.wobbles}{wavelength} --methods {a.methods}",
                   "ms: each building's regularization on one core.", text)

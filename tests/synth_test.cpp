@@ -66,6 +66,35 @@ TEST(Synth, AWobbleInMetresIsTheSameAtEveryPixelSize) {
   EXPECT_NEAR(displacement[0], displacement[1], 0.3 * displacement[0]);
 }
 
+// A network's smoothing (blur_m): along a straight wall the boundary stays where it is (the
+// blurred step crosses its level there), a convex corner is cut and a concave one filled along
+// about a blur, and a bias moves every wall out by itself. An L of 20 m x 20 m less a 10 m x
+// 10 m quarter at 0.1 m pixels, blurred by 1 m.
+TEST(Synth, ANetworksBlurCutsCornersKeepsWallsAndABiasMovesThem) {
+  const double pixel = 0.1, blur = 1.0;
+  cv::Mat truth = cv::Mat::zeros(400, 400, CV_8U);
+  truth(cv::Rect(100, 100, 200, 200)).setTo(1);
+  truth(cv::Rect(200, 100, 100, 100)).setTo(0);  // (the upper right quarter: a concave corner at 200, 200)
+  const auto width_at_row = [](const cv::Mat& m, int row) { return cv::countNonZero(m.row(row)); };
+  const auto degraded = [&](double bias_m, double blur_m) {
+    return degrade_mask(truth, 0, 0, 1, 3.0, true, blur_m / pixel, bias_m / pixel);
+  };
+  const cv::Mat blurred = degraded(0, blur);
+  // The walls in place: the lower half's rows 20 m wide (the corners a few blurs away).
+  EXPECT_NEAR(width_at_row(blurred, 250), 200, 1);
+  // The convex corner at (100, 300) cut: on its diagonal the boundary is where Phi(d / blur)^2 =
+  // 1/2, d = 0.545 blur from each wall (5.45 px); the concave corner at (200, 200) filled alike.
+  EXPECT_EQ(blurred.at<uint8_t>(296, 103), 0);   // 3.5 px in from each wall: cut
+  EXPECT_EQ(blurred.at<uint8_t>(292, 107), 1);   // 7.5 px in: kept
+  EXPECT_EQ(truth.at<uint8_t>(197, 203), 0);
+  EXPECT_EQ(blurred.at<uint8_t>(197, 203), 1);   // 3.5 px out of the concave corner: filled
+  EXPECT_EQ(blurred.at<uint8_t>(193, 207), 0);   // 7.5 px out: not
+  // A bias of 0.5 m moves both walls out by 5 px, blurred or not; -0.5 m in.
+  EXPECT_NEAR(width_at_row(degraded(0.5, blur), 250), 210, 1);
+  EXPECT_NEAR(width_at_row(degraded(0.5, 0), 250), 210, 1);
+  EXPECT_NEAR(width_at_row(degraded(-0.5, 0), 250), 190, 1);
+}
+
 TEST(Synth, CityHasEveryKindValidFootprintsAndRoofsAboveGround) {
   SynthOptions o;
   o.width_m = o.height_m = 500;

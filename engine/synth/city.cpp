@@ -111,8 +111,9 @@ static cv::Mat segmentation_of(const cv::Mat& truth, const SynthOptions& o, Rng&
   const double noise_px = o.boundary_noise_m >= 0 ? wobble_rms_px(o.boundary_noise_m, px) : o.boundary_noise_px;
   const double radius_px = o.corner_radius_m >= 0 ? o.corner_radius_m / px : o.corner_radius_px;
   const double correlation_px = o.noise_wavelength_m > 0 ? wobble_correlation_px(o.noise_wavelength_m, px) : 3.0;
-  cv::Mat mask = degrade_mask(truth, noise_px, radius_px, o.seed * 7919 + 2, correlation_px,
-                              o.boundary_noise_m >= 0 || o.corner_radius_m >= 0);
+  const bool physical = o.boundary_noise_m >= 0 || o.corner_radius_m >= 0 || o.blur_m > 0 || o.bias_m != 0;
+  cv::Mat mask = degrade_mask(truth, noise_px, radius_px, o.seed * 7919 + 2, correlation_px, physical,
+                              std::max(0.0, o.blur_m) / px, o.bias_m / px);
   const int speckles = int(o.speckle_per_km2 * o.width_m * o.height_m / 1e6);
   const int speckle_px = o.speckle_size_m >= 0 ? std::max(1, int(std::lround(o.speckle_size_m / px))) : 0;
   for (int k = 0; k < speckles; ++k) {
@@ -249,7 +250,7 @@ double wobble_correlation_px(double wavelength_m, double pixel_size) {
 }
 
 cv::Mat degrade_mask(const cv::Mat& truth, double noise_px, double corner_radius_px, std::uint64_t seed,
-                     double correlation_px, bool physical) {
+                     double correlation_px, bool physical, double blur_px, double bias_px) {
   const int rows = truth.rows, cols = truth.cols;
   cv::Mat mask = truth.clone();
   const int radius = int(std::lround(corner_radius_px));
@@ -263,16 +264,13 @@ cv::Mat degrade_mask(const cv::Mat& truth, double noise_px, double corner_radius
     cv::morphologyEx(mask, mask, cv::MORPH_OPEN, kernel);
     cv::morphologyEx(mask, mask, cv::MORPH_CLOSE, kernel);
   }
+  const bool blur = physical && blur_px > 0, bias = physical && bias_px != 0;
+  if (noise_px <= 0 && !blur && !bias) return mask;
+  // The boundary's displacement along its normal at each pixel (pixels, outwards): the wobble and
+  // the bias.
+  cv::Mat shift = cv::Mat(rows, cols, CV_32F, cv::Scalar(physical ? bias_px : 0.0));
   if (noise_px > 0) {
     cv::RNG cv_rng(seed);
-    cv::Mat inside, outside, inverse = 1 - mask;
-    cv::distanceTransform(mask, inside, cv::DIST_L2, cv::DIST_MASK_PRECISE);
-    cv::distanceTransform(inverse, outside, cv::DIST_L2, cv::DIST_MASK_PRECISE);
-    cv::Mat signed_distance(rows, cols, CV_32F);
-    for (int r = 0; r < rows; ++r)
-      for (int c = 0; c < cols; ++c)
-        signed_distance.at<float>(r, c) = mask.at<uint8_t>(r, c) ? inside.at<float>(r, c) - 0.5f
-                                                                  : 0.5f - outside.at<float>(r, c);
     cv::Mat noise(rows, cols, CV_32F);
     cv_rng.fill(noise, cv::RNG::NORMAL, 0, 1);
     if (correlation_px >= 0.2) cv::GaussianBlur(noise, noise, {0, 0}, correlation_px);
@@ -280,9 +278,33 @@ cv::Mat degrade_mask(const cv::Mat& truth, double noise_px, double corner_radius
     cv::meanStdDev(noise, mean, stddev);
     noise = noise * (noise_px / std::max(stddev[0], 1e-9));
     if (physical) noise = noise_of_nearest_boundary(mask, noise);
-    mask = (signed_distance + noise) > 0;
-    mask /= 255;
+    shift += noise;
   }
+  if (blur) {
+    // A network's smoothing: the mask blurred by a Gaussian of blur_px, and kept where it is above
+    // the level a straight wall's blurred step takes at the displaced boundary, Phi(-shift / blur):
+    // along a straight wall the boundary moves by the shift exactly (up to about three blurs, where
+    // the blurred step ends), a corner is cut (convex) or filled (concave) along a few blurs.
+    cv::Mat blurred;
+    mask.convertTo(blurred, CV_32F);
+    cv::GaussianBlur(blurred, blurred, {0, 0}, blur_px);
+    cv::Mat out(rows, cols, CV_8U);
+    for (int r = 0; r < rows; ++r)
+      for (int c = 0; c < cols; ++c)
+        out.at<uint8_t>(r, c) =
+            blurred.at<float>(r, c) > 0.5 * std::erfc(shift.at<float>(r, c) / (blur_px * std::sqrt(2.0))) ? 1 : 0;
+    return out;
+  }
+  cv::Mat inside, outside, inverse = 1 - mask;
+  cv::distanceTransform(mask, inside, cv::DIST_L2, cv::DIST_MASK_PRECISE);
+  cv::distanceTransform(inverse, outside, cv::DIST_L2, cv::DIST_MASK_PRECISE);
+  cv::Mat signed_distance(rows, cols, CV_32F);
+  for (int r = 0; r < rows; ++r)
+    for (int c = 0; c < cols; ++c)
+      signed_distance.at<float>(r, c) = mask.at<uint8_t>(r, c) ? inside.at<float>(r, c) - 0.5f
+                                                                : 0.5f - outside.at<float>(r, c);
+  mask = (signed_distance + shift) > 0;
+  mask /= 255;
   return mask;
 }
 

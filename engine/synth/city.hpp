@@ -29,6 +29,8 @@ struct SynthOptions {
                                    // unset: a Gaussian correlation of 3 px (about 27 px)
   double corner_radius_m = -1;     // corner rounding radius (m)
   double speckle_size_m = -1;      // side of a speckle (m, at least a pixel); unset: 1 or 2 px
+  double blur_m = 0;               // a network's smoothing: the Gaussian blur of the true mask (m)
+  double bias_m = 0;               // a network's over- (> 0) or under-segmentation (< 0): the boundary moved out (m)
 
   template <class V>
   void visit(V& v) {
@@ -46,6 +48,8 @@ struct SynthOptions {
     v("noise_wavelength_m", noise_wavelength_m, "mean wavelength of the boundary wobble along the boundary in metres (-1: a correlation of 3 pixels)", Check::at_least(-1));
     v("corner_radius_m", corner_radius_m, "corner rounding radius in metres (replaces corner_radius_px when >= 0)", Check::at_least(-1));
     v("speckle_size_m", speckle_size_m, "side of a speckle in metres, at least one pixel (-1: 1 or 2 pixels)", Check::at_least(-1));
+    v("blur_m", blur_m, "a network's smoothing: the true mask blurred by a Gaussian of this many metres and cut where a straight wall's blurred edge is (corners cut and filled along a few blurs; the wobble then moves the boundary by up to about three blurs; 0: none)", Check::at_least(0));
+    v("bias_m", bias_m, "a network's over- (> 0) or under-segmentation (< 0): the boundary moved out by this many metres along its normal");
   }
 };
 
@@ -76,9 +80,11 @@ SynthCity segment_footprints(const std::vector<PolygonWithHoles>& footprints, co
 // are rounded by an opening and a closing with a disc of the radius rounded to whole pixels.
 // physical: the disc is exact for any real radius, and the wobble displaces the boundary along
 // its normal (the noise is taken at the nearest boundary pixel), so that an amplitude near the
-// wobble's wavelength still gives one boundary, not a fringe of islands. Seeded.
+// wobble's wavelength still gives one boundary, not a fringe of islands; and, after the disc,
+// blur_px > 0 blurs the mask by a Gaussian and cuts it where a straight wall's blurred edge is
+// (a network's smoothing), bias_px moves the boundary out along its normal. Seeded.
 cv::Mat degrade_mask(const cv::Mat& mask, double noise_px, double corner_radius_px, std::uint64_t seed,
-                     double correlation_px = 3.0, bool physical = false);
+                     double correlation_px = 3.0, bool physical = false, double blur_px = 0, double bias_px = 0);
 
 // The wobble in metres as degrade_mask takes it in pixels: the RMS displacement of a wave of that
 // amplitude, and the Gaussian correlation whose mean wavelength along the boundary is wavelength_m.
