@@ -1615,6 +1615,31 @@ TEST(Squaring, AStepIsTakenByHowFarItSpreadsAlongItsWalls) {
   EXPECT_FALSE(square_connectors(cut, lattice, 2.0, 0.05, 1.0, 2.0, 4.0, 1.0));
 }
 
+// Under a rounding of radius R, a U-turn between two walls on the lattice facing each other, with
+// no wall on the lattice left between them: the end of a wing, or the bottom of a yard, narrower
+// than the roundings that met across it. Its end is drawn square through the chain's farthest
+// vertex (a rounding keeps the end of a wing at least 2R wide there): a wing 4 m wide whose end is
+// a semicircle, and a yard 3 m wide whose bottom is one; nothing without a rounding.
+TEST(Squaring, ARoundedWingEndOrYardBottomIsSquaredThroughItsApex) {
+  const Vec2 lattice(1, 0);
+  const auto arc = [](Ring ring, const Vec2& centre, double radius, double from, double to, const std::vector<Vec2>& after) {
+    for (int k = 1; k <= 5; ++k) ring.push_back(centre + radius * Vec2(std::cos(from + (to - from) * k / 6), std::sin(from + (to - from) * k / 6)));
+    ring.insert(ring.end(), after.begin(), after.end());
+    return ring;
+  };
+  const PolygonWithHoles wing{arc({{0, 0}, {20, 0}, {20, 10}, {12, 10}, {12, 16}}, {10, 16}, 2.0, 0, M_PI, {{8, 16}, {8, 10}, {0, 10}}), {}};
+  EXPECT_FALSE(square_connectors(wing, lattice, 2.0, 0.05, 1.0, 0.0, 0.0, 1.0));  // (no rounding: the end as drawn)
+  const std::optional<PolygonWithHoles> wing_end = square_connectors(wing, lattice, 2.0, 0.05, 1.0, 0.0, 4.0, 1.0);
+  ASSERT_TRUE(wing_end);
+  EXPECT_EQ(wing_end->outer.size(), 8u);
+  EXPECT_NEAR(std::abs(signed_area(wing_end->outer)), 200 + 4 * 8, 1e-9);
+  const PolygonWithHoles yard{arc({{0, 0}, {20, 0}, {20, 14}, {11.5, 14}, {11.5, 7.5}}, {10, 7.5}, 1.5, 0, -M_PI, {{8.5, 7.5}, {8.5, 14}, {0, 14}}), {}};
+  const std::optional<PolygonWithHoles> yard_bottom = square_connectors(yard, lattice, 2.0, 0.05, 1.0, 0.0, 4.0, 1.0);
+  ASSERT_TRUE(yard_bottom);
+  EXPECT_EQ(yard_bottom->outer.size(), 8u);
+  EXPECT_NEAR(std::abs(signed_area(yard_bottom->outer)), 280 - 3 * 8, 1e-9);
+}
+
 // Under a measured rounding of radius R, rounded_share's corners are taken through walls up to 2.5 R
 // long (a rounding drawn along its arc or as a staircase along it, longer than corners.max_cut_m),
 // where the corner moves no more area than R^2 / 2: a 30 x 20 m rectangle whose corners are drawn as

@@ -360,6 +360,29 @@ bool square_ring(Ring& ring, const Vec2& lattice, double on_deg, double noise, d
         if (!corner || !corner->allFinite() || (*corner - p0).dot(a) <= 0 || (p3 - *corner).dot(c) <= 0) continue;
         if (chain->rounding && area_off_corner(ring, i, m, *corner) > 0.5 * std::pow(0.5 * max_chain, 2)) continue;
         replace_vertices(ring, i, m + 1, {*corner});
+      } else if (chain->rounding) {
+        // A U-turn between a and c under a rounding: the end of a wing, or the bottom of a yard,
+        // narrower than the roundings that met across it (no wall on the lattice left between
+        // them). Its end wall square to a's axis through the chain's farthest vertex along a
+        // (where a rounding keeps the end of a wing at least its diameter wide), its corners where
+        // a's and c's lines meet it; where that moves no more area than the triangles of two
+        // roundings of radius max_chain / 2 between their tangent points (more: an outline's
+        // vertex past the contour, no rounding's).
+        const Vec2 a_dir = a / a.norm();
+        double reach = 0;
+        Vec2 apex = p1;
+        for (std::size_t j = 1; j < m; ++j) {
+          const double d = a_dir.dot(ring[(i + j) % n] - p1);
+          if (d > reach) reach = d, apex = ring[(i + j) % n];
+        }
+        if (!(reach > 0)) continue;
+        const Vec2 across(-along_a.y(), along_a.x());
+        const std::optional<Vec2> from = meet(p0, a, apex, across), to = meet(apex, across, p3, c);
+        if (!from || !to || !from->allFinite() || !to->allFinite() || (*from - p0).dot(a) <= 0 || (p3 - *to).dot(c) <= 0) continue;
+        Ring with_end = ring;
+        replace_vertices(with_end, i, m + 1, {*from, *to});
+        if (std::abs(signed_area(with_end) - signed_area(ring)) > std::pow(0.5 * max_chain, 2) || !ring_problem(with_end).empty()) continue;
+        ring = std::move(with_end);
       } else {
         continue;  // (a and c facing each other: the end of a spike, no connector)
       }
