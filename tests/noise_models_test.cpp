@@ -21,6 +21,7 @@
 #include "models/steps.hpp"
 #include "normals/smoothing.hpp"
 #include "pipeline/building.hpp"
+#include "pipeline/model_choice.hpp"
 #include "run/batch.hpp"
 #include "support/shapes.hpp"
 
@@ -1846,6 +1847,46 @@ TEST(CleanMasks, ABuildingThatMeasuresNoRoundingTakesItsMasks) {
   EXPECT_GE(test::iou(l.footprint, truths[0]), test::iou(l_alone.footprint, truths[0]));
   // The houses are the same either way.
   for (std::size_t i = 1; i < buildings.size(); ++i) EXPECT_EQ(on.results[i].footprint.outer, without.results[i].footprint.outer) << i;
+}
+
+// Under a rounding, a small house whose every corner the rounding took reads as a blob: its
+// rectangle is compared with the contour rounded as the mask rounds it. A shed of 3 x 2.6 m whose
+// contour a rounding of 1.2 m drew (at 0.1 m), its outline the octagon of its straight walls (0.6
+// and 0.2 m long: no square corner for rounded_share, no wall to square a chain from): under the
+// mask's rounding it becomes its rectangle; without one (models.rounding_noise = 0) it stays.
+TEST(Squaring, ASmallHouseWhoseCornersARoundingTookIsItsRectangle) {
+  const double radius = 1.2, w = 3.0, h = 2.6;
+  Ring contour;
+  const Vec2 centres[4] = {{w - radius, radius}, {w - radius, h - radius}, {radius, h - radius}, {radius, radius}};
+  for (int c = 0; c < 4; ++c)
+    for (int k = 0; k <= 19; ++k) {
+      const double t = (0.5 * c - 0.5 + 0.5 * k / 19.0) * M_PI;
+      contour.push_back(centres[c] + radius * Vec2(std::cos(t), std::sin(t)));
+    }
+  const Ring octagon = {{radius, 0}, {w - radius, 0}, {w, radius}, {w, h - radius}, {w - radius, h}, {radius, h}, {0, h - radius}, {0, radius}};
+  CornerContext context;
+  context.noise = 0.05;
+  context.mask_noise = 0.05;
+  context.mask_rounding = radius;
+  context.lattice = Vec2(1, 0);
+  const auto squared = [&](const CoreOptions& o) {
+    BuildingResult result;
+    result.ok = true;
+    result.noise_m = 0.05;
+    result.footprint = PolygonWithHoles{octagon, {}};
+    chain::square_and_clean({contour}, 0.1, true, context, o, result);
+    return result.footprint;
+  };
+  const PolygonWithHoles rectangle = squared(CoreOptions{});
+  ASSERT_EQ(rectangle.outer.size(), 4u);
+  EXPECT_EQ(right_angle_corners(rectangle).first, 4u);
+  // (Its sides on the medians of the contour nearest to them, inside the rounding: within a tenth
+  // of the true area, more than the contour's.)
+  EXPECT_NEAR(std::abs(signed_area(rectangle.outer)), w * h, 0.1 * w * h);
+  EXPECT_GT(std::abs(signed_area(rectangle.outer)), std::abs(signed_area(contour)));
+  CoreOptions no_rounding;
+  no_rounding.models.rounding_noise = 0;
+  EXPECT_EQ(squared(no_rounding).outer.size(), 8u);
 }
 
 // A quadrilateral that is not a rectangle competes with the building's rectangle as any other

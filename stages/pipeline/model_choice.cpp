@@ -60,8 +60,29 @@ class StretchGuard {
 // unless the outline leaves one the rectangle explains:
 // the simplest outline that explains the contour within its noise. (lattice: the rectangle is held
 // to it, a building whose own lattice is undetermined; else the best fitting one.)
+// A rectangle as a segmentation that rounds corners by `radius` draws it: each corner a quarter
+// circle (eight chords) between the points `radius` along its walls (at most half of each).
+Ring rounded_rectangle(const Ring& rectangle, double radius) {
+  Ring out;
+  const std::size_t n = rectangle.size();
+  for (std::size_t i = 0; i < n; ++i) {
+    const Vec2 before = edge_vector(rectangle, (i + n - 1) % n), after = edge_vector(rectangle, i);
+    const double r = std::min({radius, 0.5 * before.norm(), 0.5 * after.norm()});
+    const Vec2 u = before.normalized(), w = after.normalized(), v = rectangle[i];
+    const Vec2 centre = v - r * u + r * w, start = -r * w, end = r * u;  // (square to each other)
+    for (int k = 0; k <= 8; ++k) {
+      const double phi = 0.5 * M_PI * k / 8;
+      out.push_back(centre + std::cos(phi) * start + std::sin(phi) * end);
+    }
+  }
+  return out;
+}
+
+// rounding: the segmentation's corner rounding (m), when known: the rectangle is compared with the
+// contour as the mask would draw it, its corners rounded so, and a building whose every corner the
+// rounding took (a small house read as an octagon) becomes its rectangle as a sharp one does.
 void choose_rectangle(const std::vector<Ring>& rings, double pixel_size, const CoreOptions& co, BuildingResult& result,
-                      const Vec2* lattice = nullptr) {
+                      const Vec2* lattice = nullptr, double rounding = 0) {
   const ModelOptions& o = co.models;
   // (A triangle and a quadrilateral are tested too, unless the quadrilateral is a rectangle
   // already: a skewed one, or a triangle, a small building's blob read as two or three
@@ -78,7 +99,8 @@ void choose_rectangle(const std::vector<Ring>& rings, double pixel_size, const C
   if (rectangle.empty()) return;
   PolygonWithHoles candidate{std::move(rectangle), {}};
   const auto outline_distances = boundary_distances(rings[0], result.footprint);
-  const auto rectangle_distances = boundary_distances(rings[0], candidate);
+  const auto rectangle_distances =
+      boundary_distances(rings[0], rounding > 0 ? PolygonWithHoles{rounded_rectangle(candidate.outer, rounding), {}} : candidate);
   const double outline_fit = weighted_quantile(outline_distances, o.rectangle_quantile);
   const double rectangle_fit = weighted_quantile(rectangle_distances, o.rectangle_quantile);
   const double noise = model_noise(result, pixel_size, o);
@@ -537,6 +559,9 @@ void square_and_clean(const std::vector<Ring>& rings, double pixel_size, bool on
     if (std::optional<PolygonWithHoles> squared = square_connectors(result.footprint, context.lattice, o.models.merge_parallel_deg,
                                                                    context.noise, correlation, 0.0, 2 * rounding_radius, min_wall))
       result.footprint = std::move(*squared);
+  // Under a rounding, the building's rectangle compared with the contour rounded as the mask
+  // rounds it: a small house whose every corner the rounding took, read as an octagon.
+  if (squarable && rounding_radius > 0) choose_rectangle(rings, pixel_size, o, result, &context.lattice, rounding_radius);
   // Last of all, the needles where two walls' lines met past the end of one (models.spike_deg).
   // (remove_spikes keeps the outline valid; the collinear vertices it may leave are dropped where
   // that keeps it valid too.)

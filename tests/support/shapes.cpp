@@ -59,10 +59,10 @@ RasterizedShape rasterize_shape(const PolygonWithHoles& truth, double pixel_size
 }
 
 RasterizedShape rasterize_shape_m(const PolygonWithHoles& truth, double pixel_size, double wobble_m, double wavelength_m,
-                                  double radius_m, std::uint64_t seed) {
+                                  double radius_m, std::uint64_t seed, double blur_m) {
   return rasterize(truth, pixel_size, [&](const cv::Mat& mask) {
     return degrade_mask(mask, wobble_rms_px(wobble_m, pixel_size), radius_m / pixel_size, seed,
-                        wobble_correlation_px(wavelength_m, pixel_size), true);
+                        wobble_correlation_px(wavelength_m, pixel_size), true, blur_m / pixel_size);
   });
 }
 

@@ -27,9 +27,10 @@ RasterizedShape rasterize_shape(const PolygonWithHoles& truth, double pixel_size
 
 // The same with the degradation given in metres, as a network's at any pixel size: a boundary
 // wobble of amplitude wobble_m and wavelength wavelength_m along the boundary, corners rounded
-// by radius_m (synth's boundary_noise_m, noise_wavelength_m, corner_radius_m).
+// by radius_m, the mask blurred by blur_m (synth's boundary_noise_m, noise_wavelength_m,
+// corner_radius_m, blur_m).
 RasterizedShape rasterize_shape_m(const PolygonWithHoles& truth, double pixel_size, double wobble_m, double wavelength_m,
-                                  double radius_m, std::uint64_t seed);
+                                  double radius_m, std::uint64_t seed, double blur_m = 0);
 
 double iou(const PolygonWithHoles& a, const PolygonWithHoles& b);
 
