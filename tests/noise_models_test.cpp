@@ -1629,7 +1629,7 @@ TEST(Squaring, ARoundedWingEndOrYardBottomIsSquaredThroughItsApex) {
     return ring;
   };
   const PolygonWithHoles wing{arc({{0, 0}, {20, 0}, {20, 10}, {12, 10}, {12, 16}}, {10, 16}, 2.0, 0, M_PI, {{8, 16}, {8, 10}, {0, 10}}), {}};
-  EXPECT_FALSE(square_connectors(wing, lattice, 2.0, 0.05, 1.0, 0.0, 0.0, 1.0));  // (no rounding: the end as drawn)
+  EXPECT_FALSE(square_connectors(wing, lattice, 2.0, 0.05, 1.0, 2.0, 0.0, 1.0));  // (no rounding: the end as drawn)
   const std::optional<PolygonWithHoles> wing_end = square_connectors(wing, lattice, 2.0, 0.05, 1.0, 0.0, 4.0, 1.0);
   ASSERT_TRUE(wing_end);
   EXPECT_EQ(wing_end->outer.size(), 8u);

@@ -68,8 +68,8 @@ TEST(Synth, AWobbleInMetresIsTheSameAtEveryPixelSize) {
 
 // A network's smoothing (blur_m): along a straight wall the boundary stays where it is (the
 // blurred step crosses its level there), a convex corner is cut and a concave one filled along
-// about a blur, and a bias moves every wall out by itself. An L of 20 m x 20 m less a 10 m x
-// 10 m quarter at 0.1 m pixels, blurred by 1 m.
+// about a blur, and a bias moves every wall out by itself (with a blur, by four blurs at most). An
+// L of 20 m x 20 m less a 10 m x 10 m quarter at 0.1 m pixels, blurred by 1 m.
 TEST(Synth, ANetworksBlurCutsCornersKeepsWallsAndABiasMovesThem) {
   const double pixel = 0.1, blur = 1.0;
   cv::Mat truth = cv::Mat::zeros(400, 400, CV_8U);
@@ -93,6 +93,14 @@ TEST(Synth, ANetworksBlurCutsCornersKeepsWallsAndABiasMovesThem) {
   EXPECT_NEAR(width_at_row(degraded(0.5, blur), 250), 210, 1);
   EXPECT_NEAR(width_at_row(degraded(0.5, 0), 250), 210, 1);
   EXPECT_NEAR(width_at_row(degraded(-0.5, 0), 250), 190, 1);
+  // A bias of many blurs is taken as four: the walls 4 m in, the row still one run (no pixel lost
+  // inside to the blur's rounding).
+  const cv::Mat eroded = degraded(-8.0, blur);
+  EXPECT_NEAR(width_at_row(eroded, 250), 120, 2);
+  std::vector<cv::Point> set;
+  cv::findNonZero(eroded.row(250), set);
+  ASSERT_FALSE(set.empty());
+  EXPECT_EQ(set.back().x - set.front().x + 1, width_at_row(eroded, 250));
 }
 
 TEST(Synth, CityHasEveryKindValidFootprintsAndRoofsAboveGround) {

@@ -48,8 +48,8 @@ struct SynthOptions {
     v("noise_wavelength_m", noise_wavelength_m, "mean wavelength of the boundary wobble along the boundary in metres (-1: a correlation of 3 pixels)", Check::at_least(-1));
     v("corner_radius_m", corner_radius_m, "corner rounding radius in metres (replaces corner_radius_px when >= 0)", Check::at_least(-1));
     v("speckle_size_m", speckle_size_m, "side of a speckle in metres, at least one pixel (-1: 1 or 2 pixels)", Check::at_least(-1));
-    v("blur_m", blur_m, "a network's smoothing: the true mask blurred by a Gaussian of this many metres and cut where a straight wall's blurred edge is (corners cut and filled along a few blurs; the wobble then moves the boundary by up to about three blurs; 0: none)", Check::at_least(0));
-    v("bias_m", bias_m, "a network's over- (> 0) or under-segmentation (< 0): the boundary moved out by this many metres along its normal");
+    v("blur_m", blur_m, "a network's smoothing: the true mask blurred by a Gaussian of this many metres and cut where a straight wall's blurred edge is (corners cut and filled along a few blurs; the wobble and bias_m then move the boundary by at most four blurs; 0: none)", Check::at_least(0));
+    v("bias_m", bias_m, "a network's over- (> 0) or under-segmentation (< 0): the boundary moved out by this many metres along its normal (with blur_m, at most four blurs)");
   }
 };
 

@@ -365,18 +365,24 @@ bool square_ring(Ring& ring, const Vec2& lattice, double on_deg, double noise, d
         // narrower than the roundings that met across it (no wall on the lattice left between
         // them). Its end wall square to a's axis through the chain's farthest vertex along a
         // (where a rounding keeps the end of a wing at least its diameter wide), its corners where
-        // a's and c's lines meet it; where that moves no more area than the triangles of two
+        // a's and c's lines meet it; where the chain stays between those lines (within a tenth of
+        // the rounding's radius) and the end moves no more area than the triangles of two
         // roundings of radius max_chain / 2 between their tangent points (more: an outline's
-        // vertex past the contour, no rounding's).
-        const Vec2 a_dir = a / a.norm();
+        // vertex past the contour, no rounding's). Not where a and c lie less than min_wall
+        // apart: a needle, whose end remove_spikes takes.
+        const Vec2 across(-along_a.y(), along_a.x());
+        const double width = across.dot(p2 - p1), slack = 0.05 * max_chain;
+        if (!(std::abs(width) >= min_wall)) continue;
         double reach = 0;
         Vec2 apex = p1;
-        for (std::size_t j = 1; j < m; ++j) {
-          const double d = a_dir.dot(ring[(i + j) % n] - p1);
-          if (d > reach) reach = d, apex = ring[(i + j) % n];
+        bool inside = true;
+        for (std::size_t j = 1; j <= m && inside; ++j) {
+          const Vec2 q = ring[(i + j) % n];
+          const double d = along_a.dot(q - p1), t = across.dot(q - p1);
+          inside = t >= std::min(0.0, width) - slack && t <= std::max(0.0, width) + slack;
+          if (d > reach) reach = d, apex = q;
         }
-        if (!(reach > 0)) continue;
-        const Vec2 across(-along_a.y(), along_a.x());
+        if (!inside || !(reach > 0)) continue;
         const std::optional<Vec2> from = meet(p0, a, apex, across), to = meet(apex, across, p3, c);
         if (!from || !to || !from->allFinite() || !to->allFinite() || (*from - p0).dot(a) <= 0 || (p3 - *to).dot(c) <= 0) continue;
         Ring with_end = ring;

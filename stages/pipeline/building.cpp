@@ -352,12 +352,13 @@ void take_mask_rounding(const std::vector<Ring>& rings, double pixel_size, const
   PolygonWithHoles drawn = std::move(result.footprint);
   const double own_m = result.rounding_m;
   const int corners = result.rounding_corners;
+  const std::string model = result.model;
   result.footprint = std::move(kept.outline);
   try {
     chain::square_and_clean(rings, pixel_size, true, kept.context, o, result);
   } catch (const std::exception&) {
     result.footprint = std::move(drawn);
-    result.rounding_m = own_m, result.rounding_corners = corners, result.rounding_pooled = false;
+    result.rounding_m = own_m, result.rounding_corners = corners, result.rounding_pooled = false, result.model = model;
   }
   const double seconds = std::chrono::duration<double>(Clock::now() - start).count();
   result.seconds += seconds;

@@ -54,33 +54,49 @@ class StretchGuard {
   std::vector<std::vector<std::pair<double, double>>> reference_;
 };
 
+// A ring as a segmentation that rounds corners by `radius` draws it (an opening and a closing by
+// a disc): each corner an arc of that radius (eight chords) tangent to its two walls, the radius
+// less where the tangent points would pass the middle of either wall.
+Ring rounded_ring(const Ring& ring, double radius) {
+  Ring out;
+  const std::size_t n = ring.size();
+  for (std::size_t i = 0; i < n; ++i) {
+    const Vec2 before = edge_vector(ring, (i + n - 1) % n), after = edge_vector(ring, i), v = ring[i];
+    const double turn = std::atan2(cross(before, after), before.dot(after));  // (signed: left > 0)
+    const double half_tan = std::tan(0.5 * std::abs(turn));
+    if (!(before.norm() > 0) || !(after.norm() > 0) || !(half_tan > 1e-9)) {
+      out.push_back(v);
+      continue;
+    }
+    const double tangent = std::min({radius * half_tan, 0.5 * before.norm(), 0.5 * after.norm()});
+    const double r = tangent / half_tan;
+    const Vec2 u = before.normalized(), left(-u.y(), u.x());
+    const Vec2 start = v - tangent * u, centre = start + (turn > 0 ? r : -r) * left;
+    const Vec2 arm = start - centre;
+    for (int k = 0; k <= 8; ++k) {
+      const double phi = turn * k / 8;
+      out.push_back(centre + Vec2(std::cos(phi) * arm.x() - std::sin(phi) * arm.y(), std::sin(phi) * arm.x() + std::cos(phi) * arm.y()));
+    }
+  }
+  return out;
+}
+
+PolygonWithHoles rounded_polygon(const PolygonWithHoles& polygon, double radius) {
+  PolygonWithHoles out{rounded_ring(polygon.outer, radius), {}};
+  for (const Ring& hole : polygon.holes) out.holes.push_back(rounded_ring(hole, radius));
+  return out;
+}
+
 // Replaces the chain's outline by the building's moment rectangle when that explains the contour
 // (a high percentile, models.rectangle_quantile, of the contour's distances to each) no worse than the outline plus the allowed noise,
 // and leaves out no stretch of it that the outline explains (a wing, a notch, an arc's bow)
 // unless the outline leaves one the rectangle explains:
 // the simplest outline that explains the contour within its noise. (lattice: the rectangle is held
 // to it, a building whose own lattice is undetermined; else the best fitting one.)
-// A rectangle as a segmentation that rounds corners by `radius` draws it: each corner a quarter
-// circle (eight chords) between the points `radius` along its walls (at most half of each).
-Ring rounded_rectangle(const Ring& rectangle, double radius) {
-  Ring out;
-  const std::size_t n = rectangle.size();
-  for (std::size_t i = 0; i < n; ++i) {
-    const Vec2 before = edge_vector(rectangle, (i + n - 1) % n), after = edge_vector(rectangle, i);
-    const double r = std::min({radius, 0.5 * before.norm(), 0.5 * after.norm()});
-    const Vec2 u = before.normalized(), w = after.normalized(), v = rectangle[i];
-    const Vec2 centre = v - r * u + r * w, start = -r * w, end = r * u;  // (square to each other)
-    for (int k = 0; k <= 8; ++k) {
-      const double phi = 0.5 * M_PI * k / 8;
-      out.push_back(centre + std::cos(phi) * start + std::sin(phi) * end);
-    }
-  }
-  return out;
-}
-
-// rounding: the segmentation's corner rounding (m), when known: the rectangle is compared with the
-// contour as the mask would draw it, its corners rounded so, and a building whose every corner the
-// rounding took (a small house read as an octagon) becomes its rectangle as a sharp one does.
+// rounding: the segmentation's corner rounding (m), when known: the rectangle and the outline are
+// compared with the contour as the mask would draw them, their corners rounded so, and a building
+// whose every corner the rounding took (a small house read as an octagon) becomes its rectangle
+// as a sharp one does.
 void choose_rectangle(const std::vector<Ring>& rings, double pixel_size, const CoreOptions& co, BuildingResult& result,
                       const Vec2* lattice = nullptr, double rounding = 0) {
   const ModelOptions& o = co.models;
@@ -98,9 +114,8 @@ void choose_rectangle(const std::vector<Ring>& rings, double pixel_size, const C
   Ring rectangle = lattice ? moment_rectangle(rings[0], *lattice) : best_rectangle(rings[0], result.directions, &mean_fit);
   if (rectangle.empty()) return;
   PolygonWithHoles candidate{std::move(rectangle), {}};
-  const auto outline_distances = boundary_distances(rings[0], result.footprint);
-  const auto rectangle_distances =
-      boundary_distances(rings[0], rounding > 0 ? PolygonWithHoles{rounded_rectangle(candidate.outer, rounding), {}} : candidate);
+  const auto outline_distances = boundary_distances(rings[0], rounding > 0 ? rounded_polygon(result.footprint, rounding) : result.footprint);
+  const auto rectangle_distances = boundary_distances(rings[0], rounding > 0 ? rounded_polygon(candidate, rounding) : candidate);
   const double outline_fit = weighted_quantile(outline_distances, o.rectangle_quantile);
   const double rectangle_fit = weighted_quantile(rectangle_distances, o.rectangle_quantile);
   const double noise = model_noise(result, pixel_size, o);
