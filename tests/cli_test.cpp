@@ -216,6 +216,10 @@ TEST_F(Cli, OptionsAnywhereShortFormsHelpAndSuggestions) {
       EXPECT_NE(r.output.find("exit codes: 0 done, 1 error in the input or the run, 2 usage error"), std::string::npos) << command;
     }
   }
+  // synth's help lists the options --set takes, with their defaults.
+  r = lodforge("synth --help");
+  for (const char* key : {"boundary_noise_m: -1", "corner_radius_m: -1", "blur_m: 0", "bias_m: 0", "speckle_size_m: -1"})
+    EXPECT_NE(r.output.find(key), std::string::npos) << key << "\n" << r.output;
   // Did you mean: a mistyped command or option.
   r = lodforge("rnu " + path("job.yaml"));
   EXPECT_EQ(r.code, 2);

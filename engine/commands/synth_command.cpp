@@ -2,6 +2,8 @@
 #include <cstdlib>
 #include <filesystem>
 #include <iostream>
+#include <sstream>
+#include <string>
 #include <ogr_spatialref.h>
 #include <opencv2/core.hpp>
 #include <spdlog/spdlog.h>
@@ -30,10 +32,19 @@ int run_synth(int argc, char** argv) {
       .value("pixel-size", "M", "ground sampling distance in metres (default 0.25)")
       .value("seed", "N", "random seed (default 1)")
       .value("from", "FOOTPRINTS", "simulate the segmentation of these true footprints (any OGR polygon source; --size-m is ignored)")
-      .value("set", "KEY=VALUE", "any other option, e.g. boundary_noise_px=1.2", true)
+      .value("set", "KEY=VALUE", "any other option (listed below), e.g. boundary_noise_m=0.5", true)
       .flag("help", "show this help");
   args.parse(argc, argv, 2);
-  if (args.has("help")) { std::cout << args.help(); return 0; }
+  if (args.has("help")) {
+    // (The options --set takes, from the one declaration the values are read and checked by.)
+    SynthOptions defaults;
+    OptionPrinter printer;
+    defaults.visit(printer);
+    std::cout << args.help() << "\nOptions for --set (key: default  # meaning):\n";
+    std::istringstream lines(printer.str());
+    for (std::string line; std::getline(lines, line);) std::cout << "  " << line << '\n';
+    return 0;
+  }
   set_gpkg_timestamp();  // (the same city, the same bytes)
   const fs::path out = args.require("out");
   std::vector<std::string> errors;
