@@ -315,6 +315,24 @@ bool square_ring(Ring& ring, const Vec2& lattice, double on_deg, double noise, d
       // The axes a and c lie along (each within on_deg of one).
       const Vec2 along_a = nearest_lattice_axis(a.normalized(), axis), along_c = nearest_lattice_axis(c.normalized(), axis);
       const double same = along_a.dot(along_c);
+      // Where the lines of a and c meet the line through `point` along `direction`: past a's start
+      // and before c's end, else none.
+      const auto ends_through = [&](const Vec2& point, const Vec2& direction) -> std::optional<std::vector<Vec2>> {
+        const std::optional<Vec2> from = meet(p0, a, point, direction), to = meet(point, direction, p3, c);
+        if (!from || !to || !from->allFinite() || !to->allFinite() || (*from - p0).dot(a) <= 0 || (p3 - *to).dot(c) <= 0)
+          return std::nullopt;
+        return std::vector<Vec2>{*from, *to};
+      };
+      // The chain (with a's end and c's start) replaced by `points` where the ring stays valid and
+      // its area changes by no more than max_area_change: true when it was. (One that would cross
+      // the ring elsewhere is left, not the ring's other squarings.)
+      const auto replaced_if_valid = [&](const std::vector<Vec2>& points, double max_area_change) {
+        Ring replaced = ring;
+        replace_vertices(replaced, i, m + 1, points);
+        if (std::abs(signed_area(replaced) - signed_area(ring)) > max_area_change || !ring_problem(replaced).empty()) return false;
+        ring = std::move(replaced);
+        return true;
+      };
       if (same > 0.5) {
         // A step along the lattice, square to a's axis, where it keeps the area between the
         // chain and the lines of a and c: at a single wall's middle (between walls on the
@@ -324,13 +342,8 @@ bool square_ring(Ring& ring, const Vec2& lattice, double on_deg, double noise, d
         if (chain->knob) {
           // A bump that reaches one way off a's line, back at it: drawn as a rectangle as deep as
           // it reaches (its deepest vertex), keeping its area and its centre along the line.
-          // (One that would cross the ring elsewhere is left, not the ring's other squarings.)
           const std::optional<std::vector<Vec2>> knob = knob_of(ring, i, m, along_a, across, min_wall);
-          if (!knob) continue;
-          Ring with_knob = ring;
-          replace_vertices(with_knob, i, m + 1, *knob);
-          if (!ring_problem(with_knob).empty()) continue;
-          ring = std::move(with_knob);
+          if (!knob || !replaced_if_valid(*knob, std::numeric_limits<double>::infinity())) continue;
           changed = any = true;
           continue;
         }
@@ -348,9 +361,9 @@ bool square_ring(Ring& ring, const Vec2& lattice, double on_deg, double noise, d
           if (!(u >= 0 && u <= end)) continue;  // (a notch or a knob between walls on one line: no step)
           riser = p1 + u * along_a;
         }
-        const std::optional<Vec2> from = meet(p0, a, riser, across), to = meet(riser, across, p3, c);
-        if (!from || !to || !from->allFinite() || !to->allFinite() || (*from - p0).dot(a) <= 0 || (p3 - *to).dot(c) <= 0) continue;
-        replace_vertices(ring, i, m + 1, {*from, *to});
+        const std::optional<std::vector<Vec2>> ends = ends_through(riser, across);
+        if (!ends) continue;
+        replace_vertices(ring, i, m + 1, *ends);
       } else if (std::abs(same) < 0.5) {
         // The corner where a and c meet (square to each other); for a chain taken as a rounding,
         // where it moves no more area than the triangle of a rounding of radius max_chain / 2
@@ -383,12 +396,8 @@ bool square_ring(Ring& ring, const Vec2& lattice, double on_deg, double noise, d
           if (d > reach) reach = d, apex = q;
         }
         if (!inside || !(reach > 0)) continue;
-        const std::optional<Vec2> from = meet(p0, a, apex, across), to = meet(apex, across, p3, c);
-        if (!from || !to || !from->allFinite() || !to->allFinite() || (*from - p0).dot(a) <= 0 || (p3 - *to).dot(c) <= 0) continue;
-        Ring with_end = ring;
-        replace_vertices(with_end, i, m + 1, {*from, *to});
-        if (std::abs(signed_area(with_end) - signed_area(ring)) > std::pow(0.5 * max_chain, 2) || !ring_problem(with_end).empty()) continue;
-        ring = std::move(with_end);
+        const std::optional<std::vector<Vec2>> ends = ends_through(apex, across);
+        if (!ends || !replaced_if_valid(*ends, std::pow(0.5 * max_chain, 2))) continue;
       } else {
         continue;  // (a and c facing each other: the end of a spike, no connector)
       }

@@ -5,6 +5,7 @@
 #include <optional>
 #include <string>
 #include <utility>
+#include <Eigen/Geometry>
 
 #include "geometry/polygon.hpp"
 #include "models/rectangle.hpp"
@@ -72,11 +73,7 @@ Ring rounded_ring(const Ring& ring, double radius) {
     const double r = tangent / half_tan;
     const Vec2 u = before.normalized(), left(-u.y(), u.x());
     const Vec2 start = v - tangent * u, centre = start + (turn > 0 ? r : -r) * left;
-    const Vec2 arm = start - centre;
-    for (int k = 0; k <= 8; ++k) {
-      const double phi = turn * k / 8;
-      out.push_back(centre + Vec2(std::cos(phi) * arm.x() - std::sin(phi) * arm.y(), std::sin(phi) * arm.x() + std::cos(phi) * arm.y()));
-    }
+    for (int k = 0; k <= 8; ++k) out.push_back(centre + Eigen::Rotation2Dd(turn * k / 8) * (start - centre));
   }
   return out;
 }
