@@ -1918,5 +1918,42 @@ TEST(NoiseModels, ASkewedQuadrilateralCompetesWithTheRectangle) {
   EXPECT_GT(iou, 0.85);
 }
 
+
+// An outline that draws an arc is squared too where the mask rounded its square corners: the
+// squarings are local (a chain between two walls on the lattice, at most twice the rounding
+// long), and a blur draws a large building's roundings as runs of small turns that read as an
+// arc. An L whose long outer wall bows out by 3 m over 30 m (an arc of radius 39 m), its mask
+// blurred by a metre at 0.1 m: its four square corners come out square (each a vertex within 0.3
+// m of the true corner turning within 5 degrees of a right angle), its bowed wall drawn with the
+// small turns of an arc. (Before session 41, an outline that drew an arc kept every rounding.)
+TEST(Squaring, AnOutlineThatDrawsAnArcHasItsRoundedCornersSquared) {
+  Ring outer = {{0, 0}, {40, 0}, {40, 12}, {14, 12}, {14, 30}};
+  const double radius = (15 * 15 + 3 * 3) / 6.0, half = std::asin(15 / radius);
+  const Vec2 centre(-3 + radius, 15);
+  for (int k = 0; k <= 24; ++k) {  // (0, 30) round to (0, 0) through (-3, 15)
+    const double t = M_PI - half + 2 * half * k / 24.0;
+    outer.push_back(centre + radius * Vec2(std::cos(t), std::sin(t)));
+  }
+  outer.pop_back();  // (the last is (0, 0))
+  const PolygonWithHoles truth = test::rotated(PolygonWithHoles{outer, {}}, 0.0);
+  const Vec2 offset = truth.outer[0] - outer[0];  // (where the shape was placed)
+  const test::RasterizedShape shape = test::rasterize_shape_m(truth, 0.1, 0.0, 8.0, 0.0, 1, 1.0);
+  ASSERT_EQ(shape.buildings.size(), 1u);
+  const BuildingResult r = regularize_building(shape.buildings[0].rings, 0.1, CoreOptions{});
+  ASSERT_TRUE(r.ok) << r.reason;
+  const Ring& ring = r.footprint.outer;
+  const std::size_t n = ring.size();
+  const auto turn_at = [&](std::size_t i) { return turn_deg(edge_vector(ring, (i + n - 1) % n), edge_vector(ring, i)); };
+  for (const Vec2& corner : {Vec2(40, 0), Vec2(40, 12), Vec2(14, 12), Vec2(14, 30)}) {
+    bool square = false;
+    for (std::size_t i = 0; i < n; ++i)
+      square = square || ((ring[i] - (offset + corner)).norm() < 0.3 && std::abs(turn_at(i) - 90) <= 5);
+    EXPECT_TRUE(square) << "corner (" << corner.x() << ", " << corner.y() << ")";
+  }
+  int small_turns = 0;  // (0.5 to 20 degrees: an arc's chords)
+  for (std::size_t i = 0; i < n; ++i) small_turns += turn_at(i) > 0.5 && turn_at(i) < 20;
+  EXPECT_GE(small_turns, 3);
+}
+
 }  // namespace
 }  // namespace lodforge

@@ -35,7 +35,7 @@ struct BuildingResult {
   double rounding_m = 0;        // the radius the segmentation rounded its corners by, where its outline's square corners
                                 // lie farther off the contour than its noise explains (models.rounding_noise; m), else 0
   int rounding_corners = -1;    // the square corners that rounding was measured on; -1: none measured (an outline off the
-                                // lattice or drawing an arc, or rounding_noise 0). Three or more: rounding_m is a measure
+                                // lattice, or rounding_noise 0). Three or more: rounding_m is a measure
   bool rounding_pooled = false;  // it measured no rounding of its own and took its mask's (BuildingStart::mask_rounding_m)
   // Where its mask's rounding was not known yet (BuildingStart::mask_rounding_m < 0) and it
   // measured none of its own on an outline that can take one: the outline chosen before its last

@@ -532,12 +532,14 @@ void square_and_clean(const std::vector<Ring>& rings, double pixel_size, bool on
   // How far the segmentation rounded the building's corners, where more than its noise explains
   // (models.rounding_noise): its square corners lie R (sqrt 2 - 1) off the contour. (Corners of
   // walls at least two pixels and the noise's correlation length long, whose directions the
-  // noise leaves defined.) Measured on the outline as chosen.
-  const bool squarable = on_lattice && !has_arc(result.footprint);
+  // noise leaves defined.) Measured on the outline as chosen, also where it draws an arc: the
+  // squarings below are local (a chain between two walls on the lattice, at most twice the
+  // rounding long, or one wall the noise does not tell from the lattice), and a network's blur
+  // draws a large building's roundings and steps as runs of small turns that read as an arc.
   const double correlation = noise_correlation_m(o.corners, pixel_size);
   const double min_wall = std::max(2 * pixel_size, correlation);
   double rounding_radius = 0;
-  if (squarable && o.models.rounding_noise > 0) {
+  if (on_lattice && o.models.rounding_noise > 0) {
     std::size_t corners = 0;
     rounding_radius = corner_rounding_gap(result.footprint, rings, min_wall, o.corners.max_cut_m, o.corners.parallel_angle_deg,
                                           o.models.rounding_noise * context.noise, &corners) /
@@ -547,33 +549,35 @@ void square_and_clean(const std::vector<Ring>& rings, double pixel_size, bool on
   result.rounding_m = rounding_radius;
   // None of its own (too few square corners, or sharp within its noise): its mask's, where the
   // mask's buildings measured one (models.pooled_rounding_share; a network rounds them alike).
-  if (squarable && rounding_radius == 0 && context.mask_rounding > 0 && o.models.rounding_noise > 0) {
+  if (on_lattice && rounding_radius == 0 && context.mask_rounding > 0 && o.models.rounding_noise > 0) {
     rounding_radius = context.mask_rounding;
     result.rounding_pooled = true;
   }
   // The short oblique walls between two walls on the lattice that the noise does not tell from it:
   // square steps and corners (models.square_noise).
-  if (squarable && o.models.square_noise > 0)
+  if (on_lattice && o.models.square_noise > 0)
     if (std::optional<PolygonWithHoles> squared = square_connectors(result.footprint, context.lattice, o.models.merge_parallel_deg,
                                                                    context.noise, correlation, o.models.square_noise, 0.0, min_wall))
       result.footprint = std::move(*squared);
   // The corners the segmentation rounded made sharp, where most of the building's are
-  // (models.rounded_share; under a measured rounding, roundings up to 2.5 radii long too); not on
-  // an outline that draws an arc (a building rounded by design).
-  if (!has_arc(result.footprint))
+  // (models.rounded_share; under a measured rounding, roundings up to 2.5 radii long too); on an
+  // outline that draws an arc (a building rounded by design) only under a known rounding, the
+  // building's or its mask's: its roundings of square corners are then the mask's (a blur draws
+  // them as staircases of steps a few pixels high), and its arcs' chords meet at no square corner.
+  if (rounding_radius > 0 || !has_arc(result.footprint))
     if (std::optional<PolygonWithHoles> sharp =
             sharpen_rounded_corners(result.footprint, o.corners.max_cut_m, o.corners.parallel_angle_deg, o.models.rounded_share,
                                     rounding_radius))
       result.footprint = std::move(*sharp);
   // Then, under a rounding, the chains of walls off the lattice up to twice its radius long,
   // whatever the noise: the rounded steps and the corners the rules before left.
-  if (squarable && rounding_radius > 0)
+  if (on_lattice && rounding_radius > 0)
     if (std::optional<PolygonWithHoles> squared = square_connectors(result.footprint, context.lattice, o.models.merge_parallel_deg,
                                                                    context.noise, correlation, 0.0, 2 * rounding_radius, min_wall))
       result.footprint = std::move(*squared);
   // Under a rounding, the building's rectangle compared with the contour rounded as the mask
   // rounds it: a small house whose every corner the rounding took, read as an octagon.
-  if (squarable && rounding_radius > 0) choose_rectangle(rings, pixel_size, o, result, &context.lattice, rounding_radius);
+  if (on_lattice && rounding_radius > 0) choose_rectangle(rings, pixel_size, o, result, &context.lattice, rounding_radius);
   // Last of all, the needles where two walls' lines met past the end of one (models.spike_deg).
   // (remove_spikes keeps the outline valid; the collinear vertices it may leave are dropped where
   // that keeps it valid too.)
