@@ -1918,7 +1918,6 @@ TEST(NoiseModels, ASkewedQuadrilateralCompetesWithTheRectangle) {
   EXPECT_GT(iou, 0.85);
 }
 
-
 // An outline that draws an arc is squared too where the mask rounded its square corners: the
 // squarings are local (a chain between two walls on the lattice, at most twice the rounding
 // long), and a blur draws a large building's roundings as runs of small turns that read as an

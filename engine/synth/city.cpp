@@ -292,11 +292,19 @@ cv::Mat degrade_mask(const cv::Mat& truth, double noise_px, double corner_radius
     mask.convertTo(blurred, CV_32F);
     cv::GaussianBlur(blurred, blurred, {0, 0}, blur_px);
     cv::Mat out(rows, cols, CV_8U);
-    const double most = 4 * blur_px;
+    const double most = 4 * blur_px, width = blur_px * std::sqrt(2.0);
+    // (Every level lies between these two, the shift clamped: a pixel blurred to at most the lowest
+    // is out, one above the highest in, without its level.)
+    const double lowest = 0.5 * std::erfc(most / width), highest = 0.5 * std::erfc(-most / width);
     for (int r = 0; r < rows; ++r)
       for (int c = 0; c < cols; ++c) {
+        const double value = blurred.at<float>(r, c);
+        if (value <= lowest || value > highest) {
+          out.at<uint8_t>(r, c) = value > highest ? 1 : 0;
+          continue;
+        }
         const double moved = std::clamp(double(shift.at<float>(r, c)), -most, most);
-        out.at<uint8_t>(r, c) = blurred.at<float>(r, c) > 0.5 * std::erfc(moved / (blur_px * std::sqrt(2.0))) ? 1 : 0;
+        out.at<uint8_t>(r, c) = value > 0.5 * std::erfc(moved / width) ? 1 : 0;
       }
     return out;
   }

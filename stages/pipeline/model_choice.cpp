@@ -569,15 +569,16 @@ void square_and_clean(const std::vector<Ring>& rings, double pixel_size, bool on
             sharpen_rounded_corners(result.footprint, o.corners.max_cut_m, o.corners.parallel_angle_deg, o.models.rounded_share,
                                     rounding_radius))
       result.footprint = std::move(*sharp);
-  // Then, under a rounding, the chains of walls off the lattice up to twice its radius long,
-  // whatever the noise: the rounded steps and the corners the rules before left.
-  if (on_lattice && rounding_radius > 0)
+  // Then, under a rounding (only an outline on the lattice has one), the chains of walls off the
+  // lattice up to twice its radius long, whatever the noise: the rounded steps and the corners the
+  // rules before left; and the building's rectangle compared with the contour rounded as the mask
+  // rounds it: a small house whose every corner the rounding took, read as an octagon.
+  if (rounding_radius > 0) {
     if (std::optional<PolygonWithHoles> squared = square_connectors(result.footprint, context.lattice, o.models.merge_parallel_deg,
                                                                    context.noise, correlation, 0.0, 2 * rounding_radius, min_wall))
       result.footprint = std::move(*squared);
-  // Under a rounding, the building's rectangle compared with the contour rounded as the mask
-  // rounds it: a small house whose every corner the rounding took, read as an octagon.
-  if (on_lattice && rounding_radius > 0) choose_rectangle(rings, pixel_size, o, result, &context.lattice, rounding_radius);
+    choose_rectangle(rings, pixel_size, o, result, &context.lattice, rounding_radius);
+  }
   // Last of all, the needles where two walls' lines met past the end of one (models.spike_deg).
   // (remove_spikes keeps the outline valid; the collinear vertices it may leave are dropped where
   // that keeps it valid too.)
