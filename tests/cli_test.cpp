@@ -407,7 +407,9 @@ TEST_F(Cli, SynthFromFootprintsRegularizeWithEachMethodAndEvaluate) {
       EXPECT_NEAR(sum, stats.at("seconds_mean").get<double>(), 1e-9 + 1e-6 * sum) << stats.dump();
       for (const char* stage : {"start", "labeling", "outline"}) EXPECT_GT(stages.at(stage).get<double>(), 0.0) << stage;
       for (const auto& [size, entry] : stats.at("by_size").items())
-        if (entry.at("buildings").get<int>() > 0) EXPECT_TRUE(entry.contains("chain_seconds_mean")) << size;
+        if (entry.at("buildings").get<int>() > 0) {
+          EXPECT_TRUE(entry.contains("chain_seconds_mean")) << size;
+        }
     } else {
       EXPECT_FALSE(stats.contains("chain_seconds_mean")) << name;
     }
