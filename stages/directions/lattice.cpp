@@ -13,13 +13,19 @@ namespace lodforge {
 namespace {
 
 // The point at arc length s along a closed ring (positions: the arc length at each vertex, and the
-// perimeter last).
-Vec2 point_at(const Ring& ring, const std::vector<double>& positions, double s) {
+// perimeter last). *edge: where the search for s's edge starts (the edge of the previous query:
+// a walk along the ring from there, queries that move forward by little at a time cost no search),
+// and where s's edge is on return; it is the edge a binary search gives (the last vertex at or
+// before s, the ring's last at most).
+Vec2 point_at(const Ring& ring, const std::vector<double>& positions, double s, std::size_t* edge) {
   const double total = positions.back();
   s = std::fmod(s, total);
   if (s < 0) s += total;
-  const std::size_t k = std::min<std::size_t>(std::upper_bound(positions.begin(), positions.end(), s) - positions.begin() - 1,
-                                              ring.size() - 1);
+  const std::size_t last = ring.size() - 1;
+  std::size_t k = std::min(*edge, last);
+  if (positions[k] > s) k = 0;  // (s wrapped past the ring's start)
+  while (k < last && positions[k + 1] <= s) ++k;
+  *edge = k;
   const double length = positions[k + 1] - positions[k];
   const double t = length > 0 ? (s - positions[k]) / length : 0.0;
   return ring[k] + t * edge_vector(ring, k);
@@ -58,10 +64,11 @@ ChordLattice chord_lattice(const std::vector<Ring>& rings, const LatticeOptions&
     for (std::size_t i = 0; i < n; ++i) positions[i + 1] = positions[i] + edge_vector(ring, i).norm();
     const double span = std::min(o.chord_m, o.chord_share * positions[n]);
     if (span <= 0) continue;
+    std::size_t ahead = 0, behind = 0;  // (the chords' ends move forward along the ring with i)
     for (std::size_t i = 0; i < n; ++i) {
       const double length = positions[i + 1] - positions[i];
       const double middle = positions[i] + length / 2;
-      const Vec2 chord = point_at(ring, positions, middle + span / 2) - point_at(ring, positions, middle - span / 2);
+      const Vec2 chord = point_at(ring, positions, middle + span / 2, &ahead) - point_at(ring, positions, middle - span / 2, &behind);
       if (length <= 0 || chord.squaredNorm() <= 0) continue;
       samples.push_back({wrap(4 * std::atan2(chord.y(), chord.x())), length});
     }
