@@ -52,6 +52,7 @@ def main():
     if not points:
         raise SystemExit(f"wobble_correlation.py: no polygon in '{args.raw}'")
     points = np.vstack(points)
+    points = points[np.argsort(points[:, 0], kind="stable")]  # (by x: each wall looks at its strip only)
     lags = int(round(8.0 / args.bin))
     products, counts, variances = np.zeros(lags), np.zeros(lags), []
     for ring in rings(args.outlines):
@@ -61,7 +62,9 @@ def main():
                 continue
             along = (b - a) / length
             across = np.array([-along[1], along[0]])
-            t, y = (points - a) @ along, (points - a) @ across
+            lo, hi = np.searchsorted(points[:, 0], [min(a[0], b[0]) - 2, max(a[0], b[0]) + 2])
+            strip = points[lo:hi]
+            t, y = (strip - a) @ along, (strip - a) @ across
             near = (t > 1.5) & (t < length - 1.5) & (np.abs(y) < 2)
             if near.sum() < 50:
                 continue
