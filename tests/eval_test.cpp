@@ -201,6 +201,17 @@ nlohmann::json regularize_and_eval(const std::filesystem::path& dir, const std::
   return nlohmann::json::parse(test::slurp(json));
 }
 
+// The synthetic city (500 m, seed 11) simulated as bench/sweep.sh makes a row: `pixel` metres a
+// pixel under `wobble` metres of wobble at a `wavelength` m wavelength, corners rounded by twice
+// the wobble, speckles; into dir/mask. Its true footprints.
+std::string synthetic_row(const std::filesystem::path& dir, const std::string& pixel, double wobble, double wavelength) {
+  const auto r = test::lodforge("synth --size-m 500x500 --pixel-size " + pixel + " --seed 11 --set boundary_noise_m=" + std::to_string(wobble) +
+                                " --set noise_wavelength_m=" + std::to_string(wavelength) + " --set corner_radius_m=" + std::to_string(2 * wobble) +
+                                " --set speckle_per_km2=400 --set speckle_size_m=0.5 --out " + (dir / "mask").string());
+  EXPECT_EQ(r.code, 0) << r.output;
+  return (dir / "mask" / "footprints.gpkg").string();
+}
+
 // A triangle competes with the rectangle too: Delft's old town simulated at 0.25 m under half a
 // metre of wobble at a 2 m wavelength (as bench/sweep.sh makes it) has a shed of 8 m² that the
 // chain draws as a triangle (seen with the rectangle test off), and the rectangle test passed
@@ -253,18 +264,55 @@ TEST(EvalCommand, DelftBlocksAt2mAreNotCutAcross) {
   EXPECT_LT(unguarded, raw - 0.01);
 }
 
+// Delft's real mask (AHN3 class 6 at 0.5 m) against the BGT inside its AOI: rows of houses
+// whose fronts step, and a sawtooth of angled bays, measure their structure as their own noise.
+// Judged by that, up to twice the mask's (noise.pooled_ceiling 2, the default before session 43,
+// with models.square_noise 2), they were drawn as one wall: IoU 0.8479, below the 0.8490 of the
+// default before issue 14. Judged by the mask's noise (pooled_ceiling 1) the steps and bays are
+// drawn.
+TEST(EvalCommand, TheMasksNoiseDrawsDelftsStepsAndBays) {
+  const auto dir = test::fresh_test_directory("lodforge_structure_noise");
+  const std::string derived = test::test_data() + "/delft-ahn3-bgt/derived";
+  ASSERT_TRUE(std::filesystem::exists(derived + "/top_class_50cm.tif")) << "test data missing at " << test::test_data();
+  const auto iou = [&](const std::string& name, const std::string& options) {
+    const std::string out = (dir / (name + ".gpkg")).string(), json = (dir / (name + ".json")).string();
+    const auto r = test::lodforge("regularize --mask " + derived + "/top_class_50cm.tif --out " + out + " " + options);
+    EXPECT_EQ(r.code, 0) << r.output;
+    EXPECT_EQ(test::lodforge("eval --pred " + out + " --gt " + derived + "/bgt_pand_buildings.geojson --aoi " + derived +
+                             "/gt_coverage_aoi.geojson --json " + json)
+                  .code,
+              0);
+    return nlohmann::json::parse(test::slurp(json)).at("overall_iou").get<double>();
+  };
+  const double own = iou("own", "--set stages.noise.pooled_ceiling=2 --set stages.models.square_noise=2"), mask = iou("mask", "");
+  std::cout << "IoU " << own << " -> " << mask << '\n';
+  EXPECT_GE(mask, own + 0.001);
+  EXPECT_GE(mask, 0.8490);
+}
+
+// The synthetic city at 0.25 m under half a metre of wobble at a 4 m wavelength (bench/sweep.sh's
+// row): where a building's wobble is larger than its mask's median, its walls' directions are as
+// much less sure. Its regularity (snaps, squarings, the lattice outline's and the rectangle's
+// tolerance) judged by its own noise up to twice the mask's (noise.regularity_ceiling 2) keeps
+// more right angles than judged by the mask's noise, for about the same IoU.
+TEST(EvalCommand, TheBuildingsOwnNoiseKeepsItsRightAngles) {
+  const auto dir = test::fresh_test_directory("lodforge_regularity_noise");
+  const std::string truth = synthetic_row(dir, "0.25", 0.5, 4);
+  const nlohmann::json own = regularize_and_eval(dir, truth, "own", ""),
+                       mask = regularize_and_eval(dir, truth, "mask", "--set stages.noise.regularity_ceiling=1");
+  const double share = own.at("right_angle_share").get<double>(), share_mask = mask.at("right_angle_share").get<double>();
+  std::cout << "right angles " << share_mask << " -> " << share << ", IoU " << mask.at("overall_iou") << " -> " << own.at("overall_iou") << '\n';
+  EXPECT_GE(share, share_mask + 0.02);
+  EXPECT_NEAR(own.at("overall_iou").get<double>(), mask.at("overall_iou").get<double>(), 0.003);
+}
+
 // The synthetic city at 2 m a pixel under a metre of wobble (bench/sweep.sh's row): a corner
 // whose two walls meet too far from their runs' junction is drawn with a connector between
 // their ends, a few pixels long and oblique, as is a pixel's step of a wall. Squared
 // (models.square_noise), more of the outlines' corners are right angles, with the same IoU.
 TEST(EvalCommand, ShortConnectorsAt2mAreSquared) {
   const auto dir = test::fresh_test_directory("lodforge_square2m");
-  ASSERT_EQ(test::lodforge("synth --size-m 500x500 --pixel-size 2 --seed 11 --set boundary_noise_m=1 --set noise_wavelength_m=8" +
-                           std::string(" --set corner_radius_m=2 --set speckle_per_km2=400 --set speckle_size_m=0.5 --out ") +
-                           (dir / "mask").string())
-                .code,
-            0);
-  const std::string truth = (dir / "mask" / "footprints.gpkg").string();
+  const std::string truth = synthetic_row(dir, "2", 1, 8);
   const nlohmann::json squared = regularize_and_eval(dir, truth, "squared", ""),
                        kept = regularize_and_eval(dir, truth, "kept", "--set stages.models.square_noise=0");
   const double share = squared.at("right_angle_share").get<double>(), share_kept = kept.at("right_angle_share").get<double>();

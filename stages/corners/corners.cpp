@@ -473,6 +473,7 @@ void absorb_short_runs(const Ring& ring, std::vector<int>& labels, double min_le
 Ring extract_corners(const Ring& ring, const std::vector<int>& labels, const std::vector<Vec2>& directions,
                      double pixel_size, const CornerOptions& o, std::string* problem, const CornerContext& context) {
   const double noise = context.noise;
+  const double regularity = std::max(noise, context.regularity_noise);  // (snaps and curves: noise.regularity_ceiling)
   std::vector<int> own = labels;
   absorb_short_runs(ring, own, o.min_run_px * pixel_size);
   std::vector<std::pair<int, int>> runs;
@@ -481,7 +482,7 @@ Ring extract_corners(const Ring& ring, const std::vector<int>& labels, const std
   std::vector<Line> lines;
   for (auto [first, count] : runs) lines.push_back(fit_line(ring, first, count, directions[own[first]]));
   if (context.lattice.squaredNorm() > 0) {
-    snap_to_lattice(ring, runs, lines, context.lattice, o, pixel_size, noise);
+    snap_to_lattice(ring, runs, lines, context.lattice, o, pixel_size, regularity);
     merge_zigzags(ring, runs, lines, context.lattice, o.zigzag_max_deg, std::max(pixel_size, o.zigzag_rms_noise * noise),
                   std::max(2 * pixel_size, o.zigzag_max_noise * noise), o.parallel_angle_deg);
     merge_parallel(ring, runs, lines, std::max(o.merge_offset_m, o.merge_noise * noise), pixel_size);
@@ -504,7 +505,7 @@ Ring extract_corners(const Ring& ring, const std::vector<int>& labels, const std
     for (std::size_t r = 0; r < runs.size(); ++r) {
       const auto [first, count] = runs[r];
       Bay bay;
-      const bool curve = is_curved(ring, first, count, lines[r], o, pixel_size, noise, &bay);
+      const bool curve = is_curved(ring, first, count, lines[r], o, pixel_size, regularity, &bay);
       any_curved |= curve;
       if (!curve || bay.count < 0) {
         add(first, count, lines[r], curve);

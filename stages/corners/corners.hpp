@@ -99,6 +99,7 @@ void absorb_short_runs(const Ring& ring, std::vector<int>& labels, double min_le
 // What the corner extraction knows of the whole building.
 struct CornerContext {
   double noise = 0;                // its boundary noise (see boundary_noise)
+  double regularity_noise = 0;     // the noise its regularity is judged by: snaps and curves here (noise.regularity_ceiling; 0 or less: noise)
   double mask_noise = 0;           // the noise pooled over its mask's buildings (0: unknown)
   double mask_rounding = 0;        // the corner rounding pooled over its mask's buildings (0: none; negative: not known yet)
   Vec2 lattice = Vec2::Zero();     // its main wall direction (unit normal); zero: no lattice snap

@@ -134,15 +134,25 @@ Vec2 building_lattice(const EdgeLabels& labels, const LabelingInput& input, bool
 // farther than that off the lines of its lattice is not noisier than its mask's other buildings, it
 // has arcs or walls off the lattice (a round building's measures metres), which the noise must not
 // hide. (About the chords' lattice, the start measured it for its sample, on the same normals.)
+// *regularity: the same measure held to noise.regularity_ceiling instead, at least the noise: what
+// the building's regularity (snaps, squarings, curves, the lattice outline's and the rectangle's
+// tolerance) is judged by.
 double building_noise(const std::vector<Ring>& rings, const std::vector<std::vector<Vec2>>& normals, const Vec2& lattice,
                       bool follow_chords, const BuildingStart& start, double pixel_size, double noise_floor_m, const CoreOptions& o,
-                      double* arc_noise) {
+                      double* arc_noise, double* regularity) {
   *arc_noise = start.chord_arc_noise_m;
-  double noise = follow_chords && start.chord_noise_m >= 0 ? start.chord_noise_m
-                                                            : lattice_noise(rings, normals, lattice, pixel_size, o.noise, arc_noise);
-  noise = std::max(noise, noise_floor_m);
-  if (noise_floor_m > 0 && o.noise.pooled_floor > 0 && o.noise.pooled_ceiling > 0)
-    noise = std::min(noise, std::max(1.0, o.noise.pooled_ceiling / o.noise.pooled_floor) * noise_floor_m);
+  const double own = std::max(noise_floor_m, follow_chords && start.chord_noise_m >= 0
+                                                 ? start.chord_noise_m
+                                                 : lattice_noise(rings, normals, lattice, pixel_size, o.noise, arc_noise));
+  const bool pooled = noise_floor_m > 0 && o.noise.pooled_floor > 0;
+  // (The floor is pooled_floor times the pooled noise: a ceiling of c times the pooled noise is c / pooled_floor floors.)
+  // (And a ceiling at least the floor and noise.ceiling_staircase_px's staircase added in quadrature.)
+  const double staircase = std::hypot(noise_floor_m, o.noise.ceiling_staircase_px * pixel_size);
+  const auto held = [&](double ceiling) {
+    return pooled && ceiling > 0 ? std::min(own, std::max(std::max(1.0, ceiling / o.noise.pooled_floor) * noise_floor_m, staircase)) : own;
+  };
+  const double noise = held(o.noise.pooled_ceiling);
+  *regularity = std::max(noise, held(o.noise.regularity_ceiling));
   *arc_noise = std::max(*arc_noise, noise_floor_m);
   return noise;
 }
@@ -226,8 +236,9 @@ void run_chain(const std::vector<Ring>& rings, double pixel_size, const CoreOpti
                              angle_between_lattices_deg(first_main, chord.direction) > o.lattice.max_gap_deg &&
                              chord.share_at(first_main, o.lattice.window_deg) < o.lattice.main_share_ratio * chord.share;
   const Vec2 lattice = follow_chords ? chord.direction : first_main;
-  double arc_noise = 0;
-  const double noise = building_noise(rings, input.normals, lattice, follow_chords, start, pixel_size, noise_floor_m, o, &arc_noise);
+  double arc_noise = 0, regularity_noise = 0;
+  const double noise =
+      building_noise(rings, input.normals, lattice, follow_chords, start, pixel_size, noise_floor_m, o, &arc_noise, &regularity_noise);
   // The lattice fitted to the contour's runs along it, from the chords' direction where they give
   // one (under a wobble the labeled main direction follows a flank, degrees off the walls); and
   // the spread of those runs about it, which a wobble's flanks do not cut short (the model choice).
@@ -238,6 +249,7 @@ void run_chain(const std::vector<Ring>& rings, double pixel_size, const CoreOpti
   bool small_for_noise = false;
   const bool on_lattice = holds_to_lattice(rings, input, lattice, pixel_size, noise_floor_m, o.refinement, &small_for_noise);
   result.noise_m = noise;
+  result.regularity_noise_m = regularity_noise;
   result.arc_noise_m = arc_noise;
   // Label again: without the directions off the lattice that have no wall of their own, long
   // against the noise about that lattice (a wobble's; their support unknown), then with the
@@ -268,6 +280,7 @@ void run_chain(const std::vector<Ring>& rings, double pixel_size, const CoreOpti
     context.lattice = outline_lattice(building_lattice(labels, input, follow_chords, chord, o.lattice), fitted, small_for_noise, chord,
                                       neighbour_lattice, o.lattice, result);
   context.noise = noise;
+  context.regularity_noise = regularity_noise;
   context.mask_noise = noise_floor_m;
   context.mask_rounding = mask_rounding;
   const chain::LabeledBuilding labeled{rings, fit_rings, origin, pixel_size, labels, input, context, on_lattice, follow_chords, fitted.spread};

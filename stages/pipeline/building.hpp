@@ -24,6 +24,7 @@ struct BuildingResult {
   int deformation_iterations = 0;
   int mesh_vertices = 0;         // of the deformation mesh, if one was built
   double noise_m = -1;          // the boundary noise measured on the contour (m), when labeled; at least the floor it was given
+  double regularity_noise_m = -1;  // ... and held to noise.regularity_ceiling instead: what its regularity is judged by (m); the same
   double arc_noise_m = -1;      // ... and measured about parabolas along the same runs, which an arc does not inflate (m); the same
   std::string model;            // the outline chosen: "regular" (walls held to the lattice; also after its oblique
                                 // walls are redrawn per stretch), "lines" (pixel thresholds), "lattice", "rectangle",

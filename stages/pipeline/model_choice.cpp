@@ -19,9 +19,11 @@ namespace {
 
 // The boundary noise the model choice allows for (m): as measured, and at least a staircase's;
 // at most models.arc_noise_ratio times the noise about parabolas along the same runs (a round
-// building's contour lies metres off lattice lines, and that is no noise).
-double model_noise(const BuildingResult& result, double pixel_size, const ModelOptions& o) {
-  double noise = result.noise_m;
+// building's contour lies metres off lattice lines, and that is no noise). regularity: the noise
+// its regularity is judged by instead (noise.regularity_ceiling: the lattice outline's and the
+// rectangle's tolerances).
+double model_noise(const BuildingResult& result, double pixel_size, const ModelOptions& o, bool regularity = false) {
+  double noise = regularity ? std::max(result.noise_m, result.regularity_noise_m) : result.noise_m;
   if (o.arc_noise_ratio > 0 && result.arc_noise_m >= 0) noise = std::min(noise, o.arc_noise_ratio * result.arc_noise_m);
   return std::max(noise, o.min_noise_px * pixel_size);
 }
@@ -32,7 +34,7 @@ double model_noise(const BuildingResult& result, double pixel_size, const ModelO
 double fit_tolerance(const std::vector<Ring>& rings, double pixel_size, const BuildingResult& result, const CoreOptions& o) {
   const double perimeter_m = total_perimeter(rings);
   const double correlation = noise_correlation_m(o.corners, pixel_size);
-  return o.models.lattice_tolerance * model_noise(result, pixel_size, o.models) * std::sqrt(correlation / std::max(perimeter_m, correlation));
+  return o.models.lattice_tolerance * model_noise(result, pixel_size, o.models, true) * std::sqrt(correlation / std::max(perimeter_m, correlation));
 }
 
 // Whether an outline leaves a stretch of the contour that a reference outline explains:
@@ -115,7 +117,7 @@ void choose_rectangle(const std::vector<Ring>& rings, double pixel_size, const C
   const auto rectangle_distances = boundary_distances(rings[0], rounding > 0 ? rounded_polygon(candidate, rounding) : candidate);
   const double outline_fit = weighted_quantile(outline_distances, o.rectangle_quantile);
   const double rectangle_fit = weighted_quantile(rectangle_distances, o.rectangle_quantile);
-  const double noise = model_noise(result, pixel_size, o);
+  const double noise = model_noise(result, pixel_size, o, true);
   if (rectangle_fit > outline_fit + o.rectangle_tolerance * noise) return;
   // (Unless the outline itself leaves a stretch the rectangle explains: then it is no better an
   // explanation, only a more intricate one, as where a chain's outline went astray.)
@@ -379,7 +381,7 @@ void ModelChoice::take_lattice_outline_if_as_good() {
   // (A building whose lattice came from its chords: its wobble, which the chosen outline may
   // follow, is what the lattice outline leaves within the noise; a wing it leaves out would
   // cost more than lattice_fit_gap_noise over the chosen outline.)
-  const double model_noise_m = model_noise(result, pixel_size, o.models);
+  const double model_noise_m = model_noise(result, pixel_size, o.models, true);
   const bool lattice_within_noise = follow_chords && vertex_count(lattice_outline) < vertex_count(result.footprint) &&
                                     lattice_fit <= o.models.lattice_fit_noise * model_noise_m &&
                                     lattice_fit <= chosen_fit + o.models.lattice_fit_gap_noise * model_noise_m;
@@ -464,6 +466,7 @@ bool ModelChoice::offer_coarse_lattices(Criterion& criterion) {
     scale *= o.models.coarse_scale;
     CornerContext coarse = context;
     coarse.noise = scale * context.noise;
+    coarse.regularity_noise = scale * context.regularity_noise;
     coarse.mask_noise = scale * context.mask_noise;
     PolygonWithHoles candidate;
     if (!lattice_outline_of(fit_rings, axis_labels, input.directions, o.corners, origin, pixel_size, coarse, candidate).second.empty() ||
@@ -556,8 +559,9 @@ void square_and_clean(const std::vector<Ring>& rings, double pixel_size, bool on
   // The short oblique walls between two walls on the lattice that the noise does not tell from it:
   // square steps and corners (models.square_noise).
   if (on_lattice && o.models.square_noise > 0)
-    if (std::optional<PolygonWithHoles> squared = square_connectors(result.footprint, context.lattice, o.models.merge_parallel_deg,
-                                                                   context.noise, correlation, o.models.square_noise, 0.0, min_wall))
+    if (std::optional<PolygonWithHoles> squared =
+            square_connectors(result.footprint, context.lattice, o.models.merge_parallel_deg, std::max(context.noise, context.regularity_noise),
+                              correlation, o.models.square_noise, 0.0, min_wall))
       result.footprint = std::move(*squared);
   // The corners the segmentation rounded made sharp, where most of the building's are
   // (models.rounded_share; under a measured rounding, roundings up to 2.5 radii long too); on an
