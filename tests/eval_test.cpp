@@ -190,15 +190,28 @@ TEST(EvalCommand, ReportsOnFilesAndRefusesMissingOnes) {
   EXPECT_NE(missing.output.find("nope.gpkg': file not found"), std::string::npos) << missing.output;
 }
 
-// `lodforge regularize` on dir/mask/seg_class.tif with the options, written to dir/NAME.gpkg,
-// and `lodforge eval` of it against the truth: its metrics.
+// `lodforge regularize` on the mask (dir/mask/seg_class.tif unless given) with the options,
+// written to dir/NAME.gpkg, and `lodforge eval` of it against the truth (with eval_options, e.g.
+// an --aoi): its metrics.
 nlohmann::json regularize_and_eval(const std::filesystem::path& dir, const std::string& truth, const std::string& name,
-                                   const std::string& options) {
+                                   const std::string& options, const std::string& mask = "", const std::string& eval_options = "") {
   const std::string out = (dir / (name + ".gpkg")).string(), json = (dir / (name + ".json")).string();
-  const auto r = test::lodforge("regularize --mask " + (dir / "mask" / "seg_class.tif").string() + " --out " + out + " " + options);
+  const std::string mask_path = mask.empty() ? (dir / "mask" / "seg_class.tif").string() : mask;
+  const auto r = test::lodforge("regularize --mask " + mask_path + " --out " + out + " " + options);
   EXPECT_EQ(r.code, 0) << r.output;
-  EXPECT_EQ(test::lodforge("eval --pred " + out + " --gt " + truth + " --json " + json).code, 0);
+  EXPECT_EQ(test::lodforge("eval --pred " + out + " --gt " + truth + " --json " + json + " " + eval_options).code, 0);
   return nlohmann::json::parse(test::slurp(json));
+}
+
+// Two runs of regularize_and_eval on dir/mask, `more` (name, options) expected to give at least
+// `gain` more of its corners right angles than `fewer`, their overall IoU within iou_tolerance.
+void expect_more_right_angles(const std::filesystem::path& dir, const std::string& truth, const std::pair<std::string, std::string>& more,
+                              const std::pair<std::string, std::string>& fewer, double gain, double iou_tolerance) {
+  const nlohmann::json a = regularize_and_eval(dir, truth, more.first, more.second), b = regularize_and_eval(dir, truth, fewer.first, fewer.second);
+  const double share_a = a.at("right_angle_share").get<double>(), share_b = b.at("right_angle_share").get<double>();
+  std::cout << "right angles " << share_b << " -> " << share_a << ", IoU " << b.at("overall_iou") << " -> " << a.at("overall_iou") << '\n';
+  EXPECT_GE(share_a, share_b + gain);
+  EXPECT_NEAR(a.at("overall_iou").get<double>(), b.at("overall_iou").get<double>(), iou_tolerance);
 }
 
 // The synthetic city (500 m, seed 11) simulated as bench/sweep.sh makes a row: `pixel` metres a
@@ -275,14 +288,10 @@ TEST(EvalCommand, TheMasksNoiseDrawsDelftsStepsAndBays) {
   const std::string derived = test::test_data() + "/delft-ahn3-bgt/derived";
   ASSERT_TRUE(std::filesystem::exists(derived + "/top_class_50cm.tif")) << "test data missing at " << test::test_data();
   const auto iou = [&](const std::string& name, const std::string& options) {
-    const std::string out = (dir / (name + ".gpkg")).string(), json = (dir / (name + ".json")).string();
-    const auto r = test::lodforge("regularize --mask " + derived + "/top_class_50cm.tif --out " + out + " " + options);
-    EXPECT_EQ(r.code, 0) << r.output;
-    EXPECT_EQ(test::lodforge("eval --pred " + out + " --gt " + derived + "/bgt_pand_buildings.geojson --aoi " + derived +
-                             "/gt_coverage_aoi.geojson --json " + json)
-                  .code,
-              0);
-    return nlohmann::json::parse(test::slurp(json)).at("overall_iou").get<double>();
+    return regularize_and_eval(dir, derived + "/bgt_pand_buildings.geojson", name, options, derived + "/top_class_50cm.tif",
+                               "--aoi " + derived + "/gt_coverage_aoi.geojson")
+        .at("overall_iou")
+        .get<double>();
   };
   const double own = iou("own", "--set stages.noise.pooled_ceiling=2 --set stages.models.square_noise=2"), mask = iou("mask", "");
   std::cout << "IoU " << own << " -> " << mask << '\n';
@@ -298,12 +307,7 @@ TEST(EvalCommand, TheMasksNoiseDrawsDelftsStepsAndBays) {
 TEST(EvalCommand, TheBuildingsOwnNoiseKeepsItsRightAngles) {
   const auto dir = test::fresh_test_directory("lodforge_regularity_noise");
   const std::string truth = synthetic_row(dir, "0.25", 0.5, 4);
-  const nlohmann::json own = regularize_and_eval(dir, truth, "own", ""),
-                       mask = regularize_and_eval(dir, truth, "mask", "--set stages.noise.regularity_ceiling=1");
-  const double share = own.at("right_angle_share").get<double>(), share_mask = mask.at("right_angle_share").get<double>();
-  std::cout << "right angles " << share_mask << " -> " << share << ", IoU " << mask.at("overall_iou") << " -> " << own.at("overall_iou") << '\n';
-  EXPECT_GE(share, share_mask + 0.02);
-  EXPECT_NEAR(own.at("overall_iou").get<double>(), mask.at("overall_iou").get<double>(), 0.003);
+  expect_more_right_angles(dir, truth, {"own", ""}, {"mask", "--set stages.noise.regularity_ceiling=1"}, 0.02, 0.003);
 }
 
 // The synthetic city at 2 m a pixel under a metre of wobble (bench/sweep.sh's row): a corner
@@ -313,12 +317,7 @@ TEST(EvalCommand, TheBuildingsOwnNoiseKeepsItsRightAngles) {
 TEST(EvalCommand, ShortConnectorsAt2mAreSquared) {
   const auto dir = test::fresh_test_directory("lodforge_square2m");
   const std::string truth = synthetic_row(dir, "2", 1, 8);
-  const nlohmann::json squared = regularize_and_eval(dir, truth, "squared", ""),
-                       kept = regularize_and_eval(dir, truth, "kept", "--set stages.models.square_noise=0");
-  const double share = squared.at("right_angle_share").get<double>(), share_kept = kept.at("right_angle_share").get<double>();
-  std::cout << "right angles " << share_kept << " -> " << share << ", IoU " << kept.at("overall_iou") << " -> " << squared.at("overall_iou") << '\n';
-  EXPECT_GE(share, share_kept + 0.015);
-  EXPECT_NEAR(squared.at("overall_iou").get<double>(), kept.at("overall_iou").get<double>(), 0.001);
+  expect_more_right_angles(dir, truth, {"squared", ""}, {"kept", "--set stages.models.square_noise=0"}, 0.015, 0.001);
 }
 
 }  // namespace

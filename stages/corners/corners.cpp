@@ -473,7 +473,7 @@ void absorb_short_runs(const Ring& ring, std::vector<int>& labels, double min_le
 Ring extract_corners(const Ring& ring, const std::vector<int>& labels, const std::vector<Vec2>& directions,
                      double pixel_size, const CornerOptions& o, std::string* problem, const CornerContext& context) {
   const double noise = context.noise;
-  const double regularity = std::max(noise, context.regularity_noise);  // (snaps and curves: noise.regularity_ceiling)
+  const double regularity = context.regularity();  // (snaps and curves: noise.regularity_ceiling)
   std::vector<int> own = labels;
   absorb_short_runs(ring, own, o.min_run_px * pixel_size);
   std::vector<std::pair<int, int>> runs;

@@ -99,10 +99,12 @@ void absorb_short_runs(const Ring& ring, std::vector<int>& labels, double min_le
 // What the corner extraction knows of the whole building.
 struct CornerContext {
   double noise = 0;                // its boundary noise (see boundary_noise)
-  double regularity_noise = 0;     // the noise its regularity is judged by: snaps and curves here (noise.regularity_ceiling; 0 or less: noise)
+  double regularity_noise = 0;     // the noise its regularity is judged by (noise.regularity_ceiling; 0 or less: noise): regularity()
   double mask_noise = 0;           // the noise pooled over its mask's buildings (0: unknown)
   double mask_rounding = 0;        // the corner rounding pooled over its mask's buildings (0: none; negative: not known yet)
   Vec2 lattice = Vec2::Zero();     // its main wall direction (unit normal); zero: no lattice snap
+  // The noise its snaps, curves and squarings are judged by: the regularity noise, at least the noise.
+  double regularity() const { return std::max(noise, regularity_noise); }
 };
 
 // The corner ring of one contour ring (in metres; pixel_size converts the _px options). A curved

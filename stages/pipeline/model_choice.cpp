@@ -560,8 +560,8 @@ void square_and_clean(const std::vector<Ring>& rings, double pixel_size, bool on
   // square steps and corners (models.square_noise).
   if (on_lattice && o.models.square_noise > 0)
     if (std::optional<PolygonWithHoles> squared =
-            square_connectors(result.footprint, context.lattice, o.models.merge_parallel_deg, std::max(context.noise, context.regularity_noise),
-                              correlation, o.models.square_noise, 0.0, min_wall))
+            square_connectors(result.footprint, context.lattice, o.models.merge_parallel_deg, context.regularity(), correlation,
+                              o.models.square_noise, 0.0, min_wall))
       result.footprint = std::move(*squared);
   // The corners the segmentation rounded made sharp, where most of the building's are
   // (models.rounded_share; under a measured rounding, roundings up to 2.5 radii long too); on an
