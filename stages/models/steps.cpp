@@ -433,6 +433,110 @@ std::optional<PolygonWithHoles> square_connectors(const PolygonWithHoles& polygo
   return out;
 }
 
+namespace {
+
+// Whether wall i of the ring (vertex i to i + 1) is a rounded step's tread, as level_rounded_treads
+// takes one; *along: the lattice axis it turns onto.
+bool rounded_tread(const Ring& ring, std::size_t i, const Vec2& axis, double on_sin, double radius, double max_shift, Vec2* along) {
+  const std::size_t n = ring.size();
+  const Vec2 a = ring[i] - ring[(i + n - 1) % n], w = ring[(i + 1) % n] - ring[i], c = ring[(i + 2) % n] - ring[(i + 1) % n];
+  const double length = w.norm();
+  if (!(length >= 2 * radius) || !(a.norm() > 0) || !(c.norm() > 0)) return false;
+  *along = nearest_lattice_axis(w / length, axis);
+  const double off = std::abs(cross(w / length, *along));
+  const double turn_in = cross(a.normalized(), w / length), turn_out = cross(w / length, c.normalized());
+  // (A wall square to both its neighbours is one of a frame of walls of their own, off the lattice.)
+  const double square_cos = on_sin;
+  const bool framed = std::abs(a.normalized().dot(w / length)) <= square_cos && std::abs(c.normalized().dot(w / length)) <= square_cos;
+  return off > on_sin && 0.5 * length * off <= max_shift && std::abs(turn_in) > on_sin && std::abs(turn_out) > on_sin &&
+         (turn_in > 0) != (turn_out > 0) && !framed;
+}
+
+// The ring with walls i turned onto along[i] about their middles (where along[i] is not zero) and
+// the walls between two such turned onto parallel axes drawn square to them through their middles
+// (a step's riser), its vertices where consecutive walls' lines meet; none where two lines do not
+// meet, a vertex moves farther than max_move, a wall turns back, or the ring is not valid.
+std::optional<Ring> with_walls_turned(const Ring& ring, const std::vector<Vec2>& along, double max_move) {
+  const std::size_t n = ring.size();
+  std::vector<Vec2> point(n), direction(n);
+  std::vector<char> changed(n, 0);
+  for (std::size_t i = 0; i < n; ++i) {
+    const Vec2 w = ring[(i + 1) % n] - ring[i];
+    point[i] = 0.5 * (ring[i] + ring[(i + 1) % n]);
+    direction[i] = w;
+    const Vec2& before = along[(i + n - 1) % n];
+    const Vec2& after = along[(i + 1) % n];
+    changed[i] = along[i].squaredNorm() > 0 ||
+                 (before.squaredNorm() > 0 && after.squaredNorm() > 0 && std::abs(before.dot(after)) > 0.5);
+    if (along[i].squaredNorm() > 0) direction[i] = along[i];
+    else if (changed[i]) direction[i] = Vec2(-before.y(), before.x());
+  }
+  // (The corners between two walls left as they were stay where they are.)
+  Ring turned = ring;
+  for (std::size_t i = 0; i < n; ++i) {
+    const std::size_t b = (i + n - 1) % n;
+    if (!changed[b] && !changed[i]) continue;
+    const std::optional<Vec2> corner = meet(point[b], direction[b], point[i], direction[i]);
+    if (!corner || !corner->allFinite() || (*corner - ring[i]).norm() > max_move) return std::nullopt;
+    turned[i] = *corner;
+  }
+  for (std::size_t i = 0; i < n; ++i)
+    if ((turned[(i + 1) % n] - turned[i]).dot(ring[(i + 1) % n] - ring[i]) <= 0) return std::nullopt;
+  if (!ring_problem(turned).empty()) return std::nullopt;
+  return turned;
+}
+
+}  // namespace
+
+std::optional<PolygonWithHoles> level_rounded_treads(const PolygonWithHoles& polygon, const Vec2& lattice, double on_deg,
+                                                     double radius, double shift_ratio) {
+  if (lattice.squaredNorm() <= 0 || !(radius > 0) || !(shift_ratio > 0)) return std::nullopt;
+  const Vec2 axis = lattice.normalized();
+  const double on_sin = std::sin(on_deg * M_PI / 180.0);
+  const double max_shift = shift_ratio * radius;
+  // (A riser drawn square moves its corners along a tread by up to its own length: R or so.)
+  const double max_move = 2 * max_shift + 2 * radius;
+  // (Only against a lattice the outline's longest wall lies on: a lattice fitted off the walls, a
+  // staircase's diagonal pulling it, would turn true treads off.)
+  const Ring& outer = polygon.outer;
+  std::size_t longest = 0;
+  for (std::size_t i = 0; i < outer.size(); ++i)
+    if ((outer[(i + 1) % outer.size()] - outer[i]).squaredNorm() > (outer[(longest + 1) % outer.size()] - outer[longest]).squaredNorm()) longest = i;
+  if (outer.size() < 3) return std::nullopt;
+  const Vec2 wall = (outer[(longest + 1) % outer.size()] - outer[longest]).normalized();
+  if (!(std::abs(cross(wall, nearest_lattice_axis(wall, axis))) <= on_sin)) return std::nullopt;
+  std::optional<PolygonWithHoles> out;  // (copied when a ring changes)
+  for (std::size_t r = 0; r <= polygon.holes.size(); ++r) {
+    Ring ring = r == 0 ? polygon.outer : polygon.holes[r - 1];
+    const std::size_t n = ring.size();
+    if (n < 5) continue;
+    std::vector<Vec2> along(n, Vec2::Zero());
+    std::vector<std::size_t> treads;
+    for (std::size_t i = 0; i < n; ++i)
+      if (rounded_tread(ring, i, axis, on_sin, radius, max_shift, &along[i])) treads.push_back(i);
+      else along[i].setZero();
+    if (treads.empty()) continue;
+    // All at once (a staircase's risers squared between its treads), or else tread by tread,
+    // each kept where the ring stays valid with it.
+    if (std::optional<Ring> turned = with_walls_turned(ring, along, max_move)) {
+      ring = std::move(*turned);
+    } else {
+      bool any = false;
+      for (std::size_t i : treads) {
+        std::vector<Vec2> one(n, Vec2::Zero());
+        if (!rounded_tread(ring, i, axis, on_sin, radius, max_shift, &one[i])) continue;
+        if (std::optional<Ring> turned = with_walls_turned(ring, one, max_move)) ring = std::move(*turned), any = true;
+      }
+      if (!any) continue;
+    }
+    PolygonWithHoles candidate = out ? *out : polygon;
+    ring_at(candidate, r) = std::move(ring);
+    if (!polygon_problem(candidate).empty()) continue;
+    out = std::move(candidate);
+  }
+  return out;
+}
+
 std::optional<PolygonWithHoles> sharpen_rounded_corners(const PolygonWithHoles& polygon, double max_cut, double square_deg,
                                                         double min_share, double radius) {
   if (!(max_cut > 0) || !(min_share > 0)) return std::nullopt;

@@ -47,6 +47,19 @@ std::optional<PolygonWithHoles> staircases_as_lines(const PolygonWithHoles& poly
 std::optional<PolygonWithHoles> square_connectors(const PolygonWithHoles& polygon, const Vec2& lattice, double on_deg,
                                                   double noise, double correlation, double k, double max_chain, double min_wall);
 
+// The treads of the steps a segmentation rounded by `radius` R, turned onto the lattice: a wall at
+// least 2 R long whose corners turn opposite ways (a step's, or a staircase's tread: the rounding
+// cuts its convex corner and fills its concave one, up to R (sqrt 2 - 1) each, and its fitted line
+// tilts by up to that at each end), more than on_deg off the lattice, turned about its middle onto
+// the nearest axis where that moves its ends by at most shift_ratio R (sqrt 2 - 1: the rounding's offset); the corners where the
+// walls' lines then meet (each within twice that of the old one, every wall keeping its sense).
+// A wall whose corners turn alike (a side of a rectangle) is rounded alike at both ends and keeps
+// its direction. Its oblique neighbours, between walls on the lattice now, are then
+// square_connectors' (a chain shorter than 2 R). Ring by ring, each kept where the polygon stays
+// valid with it; none when no wall is turned.
+std::optional<PolygonWithHoles> level_rounded_treads(const PolygonWithHoles& polygon, const Vec2& lattice, double on_deg,
+                                                     double radius, double shift_ratio);
+
 // How far the outline's square corners lie from the contour, at the median, where that is
 // farther than least_gap (else 0): its corners where two walls at least min_wall long meet within
 // square_deg of a right angle, directly or through walls shorter than max_cut together that lie

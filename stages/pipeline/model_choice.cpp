@@ -578,6 +578,11 @@ void square_and_clean(const std::vector<Ring>& rings, double pixel_size, bool on
   // rules before left; and the building's rectangle compared with the contour rounded as the mask
   // rounds it: a small house whose every corner the rounding took, read as an octagon.
   if (rounding_radius > 0) {
+    // (First the treads of its steps, turned onto the lattice: their risers are such chains then.)
+    if (o.models.tread_rounding > 0)
+      if (std::optional<PolygonWithHoles> leveled = level_rounded_treads(result.footprint, context.lattice, o.models.merge_parallel_deg,
+                                                                          rounding_radius, o.models.tread_rounding))
+        result.footprint = std::move(*leveled);
     if (std::optional<PolygonWithHoles> squared = square_connectors(result.footprint, context.lattice, o.models.merge_parallel_deg,
                                                                    context.noise, correlation, 0.0, 2 * rounding_radius, min_wall))
       result.footprint = std::move(*squared);
