@@ -445,9 +445,9 @@ bool rounded_tread(const Ring& ring, std::size_t i, const Vec2& axis, double on_
   *along = nearest_lattice_axis(w / length, axis);
   const double off = std::abs(cross(w / length, *along));
   const double turn_in = cross(a.normalized(), w / length), turn_out = cross(w / length, c.normalized());
-  // (A wall square to both its neighbours is one of a frame of walls of their own, off the lattice.)
-  const double square_cos = on_sin;
-  const bool framed = std::abs(a.normalized().dot(w / length)) <= square_cos && std::abs(c.normalized().dot(w / length)) <= square_cos;
+  // (A wall square to both its neighbours, within on_deg, is one of a frame of walls of their own
+  // off the lattice.)
+  const bool framed = std::abs(a.normalized().dot(w / length)) <= on_sin && std::abs(c.normalized().dot(w / length)) <= on_sin;
   return off > on_sin && 0.5 * length * off <= max_shift && std::abs(turn_in) > on_sin && std::abs(turn_out) > on_sin &&
          (turn_in > 0) != (turn_out > 0) && !framed;
 }
@@ -499,11 +499,12 @@ std::optional<PolygonWithHoles> level_rounded_treads(const PolygonWithHoles& pol
   // (Only against a lattice the outline's longest wall lies on: a lattice fitted off the walls, a
   // staircase's diagonal pulling it, would turn true treads off.)
   const Ring& outer = polygon.outer;
-  std::size_t longest = 0;
-  for (std::size_t i = 0; i < outer.size(); ++i)
-    if ((outer[(i + 1) % outer.size()] - outer[i]).squaredNorm() > (outer[(longest + 1) % outer.size()] - outer[longest]).squaredNorm()) longest = i;
   if (outer.size() < 3) return std::nullopt;
-  const Vec2 wall = (outer[(longest + 1) % outer.size()] - outer[longest]).normalized();
+  const auto wall_of = [&](std::size_t i) { return outer[(i + 1) % outer.size()] - outer[i]; };
+  std::size_t longest = 0;
+  for (std::size_t i = 1; i < outer.size(); ++i)
+    if (wall_of(i).squaredNorm() > wall_of(longest).squaredNorm()) longest = i;
+  const Vec2 wall = wall_of(longest).normalized();
   if (!(std::abs(cross(wall, nearest_lattice_axis(wall, axis))) <= on_sin)) return std::nullopt;
   std::optional<PolygonWithHoles> out;  // (copied when a ring changes)
   for (std::size_t r = 0; r <= polygon.holes.size(); ++r) {

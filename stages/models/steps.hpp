@@ -50,13 +50,17 @@ std::optional<PolygonWithHoles> square_connectors(const PolygonWithHoles& polygo
 // The treads of the steps a segmentation rounded by `radius` R, turned onto the lattice: a wall at
 // least 2 R long whose corners turn opposite ways (a step's, or a staircase's tread: the rounding
 // cuts its convex corner and fills its concave one, up to R (sqrt 2 - 1) each, and its fitted line
-// tilts by up to that at each end), more than on_deg off the lattice, turned about its middle onto
-// the nearest axis where that moves its ends by at most shift_ratio R (sqrt 2 - 1: the rounding's offset); the corners where the
-// walls' lines then meet (each within twice that of the old one, every wall keeping its sense).
-// A wall whose corners turn alike (a side of a rectangle) is rounded alike at both ends and keeps
-// its direction. Its oblique neighbours, between walls on the lattice now, are then
-// square_connectors' (a chain shorter than 2 R). Ring by ring, each kept where the polygon stays
-// valid with it; none when no wall is turned.
+// tilts by up to that at each end), more than on_deg off the lattice and not square (within
+// on_deg) to both its neighbours, turned about its middle onto the nearest axis where that moves
+// its ends by at most shift_ratio R (sqrt 2 - 1: the rounding's offset). A wall between two
+// treads turned onto parallel axes is drawn square to them through its middle (a staircase's
+// riser). The corners where the walls' lines then meet, each within 2 (shift_ratio + 1) R of the
+// old one, every wall keeping its sense; all the ring's treads at once, else one by one, each
+// kept where the ring stays valid. A wall whose corners turn alike (a side of a rectangle) is
+// rounded alike at both ends and keeps its direction. The oblique risers left between a tread and
+// a wall on the lattice are then square_connectors' (a chain shorter than 2 R). Only where the
+// outer ring's longest wall lies on the lattice (within on_deg); ring by ring, each kept where
+// the polygon stays valid with it; none when no wall is turned.
 std::optional<PolygonWithHoles> level_rounded_treads(const PolygonWithHoles& polygon, const Vec2& lattice, double on_deg,
                                                      double radius, double shift_ratio);
 
