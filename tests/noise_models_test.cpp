@@ -11,6 +11,8 @@
 #include <numeric>
 #include <optional>
 #include <random>
+#include <sstream>
+#include <string>
 
 #include "directions/lattice.hpp"
 #include "eval/metrics.hpp"
@@ -1710,6 +1712,12 @@ TEST(Corners, TheGapOfRoundedCornersMeasuresTheRadius) {
 struct UnderRounding {
   int corners = 0, right = 0, corners_off = 0, right_off = 0, cases = 0;
   double iou = 0, iou_off = 0;
+  std::string summary() const {
+    std::ostringstream out;
+    out << "right angles " << right << " of " << corners << ", without " << right_off << " of " << corners_off << "; IoU " << iou / cases
+        << ", without " << iou_off / cases;
+    return out.str();
+  }
 };
 ::testing::AssertionResult compare_under_rounding(const std::vector<PolygonWithHoles>& shapes, double pixel, const CoreOptions& off,
                                                   UnderRounding& sums) {
@@ -1753,8 +1761,7 @@ TEST(CleanMasks, StepsRoundedByTwoMetresComeBackSquare) {
   for (double pixel : {0.1, 0.25}) {
     UnderRounding s;
     ASSERT_TRUE(compare_under_rounding(shapes, pixel, off, s)) << pixel;
-    std::cout << pixel << " m: right angles " << s.right << " of " << s.corners << ", without " << s.right_off << " of " << s.corners_off
-              << "; IoU " << s.iou / s.cases << ", without " << s.iou_off / s.cases << '\n';
+    std::cout << pixel << " m: " << s.summary() << '\n';
     // Never fewer right angles nor a lower IoU; at 0.25 m, where the roundings are drawn as a
     // wall or two, more right angles by a tenth and a better IoU.
     EXPECT_GE(double(s.right) / s.corners, double(s.right_off) / s.corners_off - 1e-9) << pixel;
@@ -1810,8 +1817,7 @@ TEST(CleanMasks, StepsRoundedByTwoMetresKeepTheirWallsOnTheLattice) {
       {{{0, 0}, {24, 0}, {24, 8}, {16, 8}, {16, 13}, {8, 13}, {8, 18}, {0, 18}}, {}}};
   UnderRounding s;
   for (double pixel : {0.1, 0.25}) ASSERT_TRUE(compare_under_rounding(shapes, pixel, off, s)) << pixel;
-  std::cout << "right angles " << s.right << " of " << s.corners << ", without " << s.right_off << " of " << s.corners_off << "; IoU "
-            << s.iou / s.cases << ", without " << s.iou_off / s.cases << '\n';
+  std::cout << s.summary() << '\n';
   EXPECT_GT(double(s.right) / s.corners, 0.9);
   EXPECT_GT(double(s.right) / s.corners, double(s.right_off) / s.corners_off + 0.1);
   EXPECT_GT(s.iou / s.cases, s.iou_off / s.cases + 0.002);

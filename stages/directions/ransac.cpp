@@ -84,30 +84,27 @@ std::vector<DominantDirection> detect_directions(const std::vector<Vec2>& normal
   const double cos_threshold = std::cos(o.inlier_angle_deg * M_PI / 180.0);
   const double total = std::accumulate(weights.begin(), weights.end(), 0.0);
   std::vector<char> remaining(normals.size(), 1);
-  std::vector<std::size_t> pool(normals.size());
   // The edges not yet taken, in their order (each candidate is evaluated over them alone: the same
   // sums, in the same order, as over every edge skipping the taken ones).
   std::vector<Vec2> pool_normals;
   std::vector<double> pool_weights;
   std::mt19937_64 rng(o.seed);
   while (static_cast<int>(directions.size()) < o.max_directions) {
-    pool.clear();
     pool_normals.clear();
     pool_weights.clear();
     double remaining_weight = 0;
     for (std::size_t k = 0; k < normals.size(); ++k) {
       if (remaining[k]) {
-        pool.push_back(k);
         pool_normals.push_back(normals[k]);
         pool_weights.push_back(weights[k]);
         remaining_weight += weights[k];
       }
     }
-    if (pool.empty()) break;
+    if (pool_normals.empty()) break;
     Candidate best;
     for (int drawn = 1; drawn <= o.max_candidates; ++drawn) {
-      const std::size_t k = pool[std::uniform_int_distribution<std::size_t>(0, pool.size() - 1)(rng)];
-      const Candidate c = evaluate(normals[k], pool_normals, pool_weights, cos_threshold);
+      const Vec2& drawn_normal = pool_normals[std::uniform_int_distribution<std::size_t>(0, pool_normals.size() - 1)(rng)];
+      const Candidate c = evaluate(drawn_normal, pool_normals, pool_weights, cos_threshold);
       if (c.support > best.support) best = c;
       // Eq. 3 with the probability of never having drawn from the best set, as in Schnabel et
       // al. (the paper prints the ratio without the complement, which never falls).

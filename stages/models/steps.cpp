@@ -435,21 +435,22 @@ std::optional<PolygonWithHoles> square_connectors(const PolygonWithHoles& polygo
 
 namespace {
 
-// Whether wall i of the ring (vertex i to i + 1) is a rounded step's tread, as level_rounded_treads
-// takes one; *along: the lattice axis it turns onto.
-bool rounded_tread(const Ring& ring, std::size_t i, const Vec2& axis, double on_sin, double radius, double max_shift, Vec2* along) {
+// The lattice axis wall i of the ring (vertex i to i + 1) turns onto when it is a rounded step's
+// tread, as level_rounded_treads takes one; none when it is not.
+std::optional<Vec2> tread_axis(const Ring& ring, std::size_t i, const Vec2& axis, double on_sin, double radius, double max_shift) {
   const std::size_t n = ring.size();
   const Vec2 a = ring[i] - ring[(i + n - 1) % n], w = ring[(i + 1) % n] - ring[i], c = ring[(i + 2) % n] - ring[(i + 1) % n];
   const double length = w.norm();
-  if (!(length >= 2 * radius) || !(a.norm() > 0) || !(c.norm() > 0)) return false;
-  *along = nearest_lattice_axis(w / length, axis);
-  const double off = std::abs(cross(w / length, *along));
+  if (!(length >= 2 * radius) || !(a.norm() > 0) || !(c.norm() > 0)) return std::nullopt;
+  const Vec2 along = nearest_lattice_axis(w / length, axis);
+  const double off = std::abs(cross(w / length, along));
   const double turn_in = cross(a.normalized(), w / length), turn_out = cross(w / length, c.normalized());
   // (A wall square to both its neighbours, within on_deg, is one of a frame of walls of their own
   // off the lattice.)
   const bool framed = std::abs(a.normalized().dot(w / length)) <= on_sin && std::abs(c.normalized().dot(w / length)) <= on_sin;
-  return off > on_sin && 0.5 * length * off <= max_shift && std::abs(turn_in) > on_sin && std::abs(turn_out) > on_sin &&
-         (turn_in > 0) != (turn_out > 0) && !framed;
+  const bool tread = off > on_sin && 0.5 * length * off <= max_shift && std::abs(turn_in) > on_sin && std::abs(turn_out) > on_sin &&
+                     (turn_in > 0) != (turn_out > 0) && !framed;
+  return tread ? std::optional<Vec2>(along) : std::nullopt;
 }
 
 // The ring with walls i turned onto along[i] about their middles (where along[i] is not zero) and
@@ -504,18 +505,16 @@ std::optional<PolygonWithHoles> level_rounded_treads(const PolygonWithHoles& pol
   std::size_t longest = 0;
   for (std::size_t i = 1; i < outer.size(); ++i)
     if (wall_of(i).squaredNorm() > wall_of(longest).squaredNorm()) longest = i;
-  const Vec2 wall = wall_of(longest).normalized();
-  if (!(std::abs(cross(wall, nearest_lattice_axis(wall, axis))) <= on_sin)) return std::nullopt;
+  if (!(angle_between_lattices_deg(wall_of(longest).normalized(), axis) <= on_deg)) return std::nullopt;
   std::optional<PolygonWithHoles> out;  // (copied when a ring changes)
   for (std::size_t r = 0; r <= polygon.holes.size(); ++r) {
     Ring ring = r == 0 ? polygon.outer : polygon.holes[r - 1];
     const std::size_t n = ring.size();
     if (n < 5) continue;
-    std::vector<Vec2> along(n, Vec2::Zero());
+    std::vector<Vec2> along(n, Vec2::Zero());  // (zero: not a tread)
     std::vector<std::size_t> treads;
     for (std::size_t i = 0; i < n; ++i)
-      if (rounded_tread(ring, i, axis, on_sin, radius, max_shift, &along[i])) treads.push_back(i);
-      else along[i].setZero();
+      if (const std::optional<Vec2> onto = tread_axis(ring, i, axis, on_sin, radius, max_shift)) along[i] = *onto, treads.push_back(i);
     if (treads.empty()) continue;
     // All at once (a staircase's risers squared between its treads), or else tread by tread,
     // each kept where the ring stays valid with it.
@@ -524,8 +523,10 @@ std::optional<PolygonWithHoles> level_rounded_treads(const PolygonWithHoles& pol
     } else {
       bool any = false;
       for (std::size_t i : treads) {
+        const std::optional<Vec2> onto = tread_axis(ring, i, axis, on_sin, radius, max_shift);  // (on the ring as turned so far)
+        if (!onto) continue;
         std::vector<Vec2> one(n, Vec2::Zero());
-        if (!rounded_tread(ring, i, axis, on_sin, radius, max_shift, &one[i])) continue;
+        one[i] = *onto;
         if (std::optional<Ring> turned = with_walls_turned(ring, one, max_move)) ring = std::move(*turned), any = true;
       }
       if (!any) continue;
