@@ -1,8 +1,12 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cmath>
+#include <limits>
+#include <random>
 
 #include "geometry/polygon.hpp"
+#include "geometry/segment_grid.hpp"
 
 namespace lodforge {
 namespace {
@@ -137,6 +141,40 @@ TEST(Geometry, DouglasPeuckerOpenKeepsTheEndsAndTheBump) {
   const std::vector<char> keep = douglas_peucker_open(line, 0.5);
   EXPECT_EQ(keep, (std::vector<char>{1, 0, 1, 1, 1, 0, 1}));
   EXPECT_EQ(douglas_peucker_open(line, 5.0), (std::vector<char>{1, 0, 0, 0, 0, 0, 1}));
+}
+
+
+// The grid's nearest segment is the one a scan over every segment finds, bit for bit: points
+// inside, on and outside a ring of a thousand short segments (a contour of pixel edges), and with
+// too few segments to bucket.
+TEST(Geometry, SegmentGridFindsTheNearestSegmentAsAFullScanDoes) {
+  std::mt19937 random(7);
+  std::uniform_real_distribution<double> jitter(-0.4, 0.4), anywhere(-80.0, 80.0);
+  std::vector<SegmentGrid::Segment> segments;
+  Ring ring;
+  for (int i = 0; i < 1000; ++i) {
+    const double t = 2 * M_PI * i / 1000;
+    ring.push_back({50 * std::cos(t) + jitter(random), 30 * std::sin(t) + jitter(random)});
+  }
+  for (std::size_t k = 0; k < ring.size(); ++k) {
+    const Vec2 &a = ring[k], &b = ring[(k + 1) % ring.size()];
+    segments.push_back({a, b, a.cwiseMin(b), a.cwiseMax(b)});
+  }
+  const auto scan = [](const std::vector<SegmentGrid::Segment>& all, const Vec2& p) {
+    double best = std::numeric_limits<double>::infinity();
+    for (const auto& s : all) best = std::min(best, squared_distance_to_segment(p, s.a, s.b));
+    return best;
+  };
+  const SegmentGrid grid(segments);
+  const SegmentGrid few({segments.begin(), segments.begin() + 10});
+  std::vector<Vec2> points = {ring[17], 0.5 * (ring[3] + ring[4]), {0, 0}, {200, -150}, {-1e4, 3}};
+  for (int i = 0; i < 300; ++i) points.push_back({anywhere(random), anywhere(random)});
+  for (const Vec2& p : points) {
+    EXPECT_EQ(grid.nearest_squared(p), scan(segments, p)) << p.transpose();
+    EXPECT_EQ(few.nearest_squared(p), scan({segments.begin(), segments.begin() + 10}, p)) << p.transpose();
+  }
+  EXPECT_EQ(grid.nearest_squared(ring[17]), 0.0);
+  EXPECT_TRUE(std::isinf(SegmentGrid({}).nearest_squared({1, 2})));
 }
 
 }  // namespace

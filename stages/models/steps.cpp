@@ -5,6 +5,7 @@
 #include <limits>
 
 #include "geometry/polygon.hpp"
+#include "geometry/segment_grid.hpp"
 #include "models/rectangle.hpp"
 
 namespace lodforge {
@@ -591,46 +592,23 @@ double corner_rounding_gap(const PolygonWithHoles& outline, const std::vector<Ri
   }
   if (count) *count = corners.size();
   if (corners.size() < 3) return 0.0;
-  // The squared distance from p to the contour, the scan stopped at the first segment within
-  // `stop` (each ring scanned from where the scan before stopped: the corners come in the order
-  // of the outline's rings, which follow the contour's), segments whose boxes lie farther than
-  // the nearest so far passed over.
-  std::vector<std::size_t> start(contour.size(), 0);
-  const auto nearest = [&](const Vec2& p, double stop) {
-    double best = std::numeric_limits<double>::infinity(), reach = best;
-    for (std::size_t r = 0; r < contour.size(); ++r) {
-      const Ring& ring = contour[r];
-      const std::size_t n = ring.size();
-      for (std::size_t j = 0; j < n; ++j) {
-        const std::size_t k = (start[r] + j) % n;
-        const Vec2& a = ring[k];
-        const Vec2& b = ring[(k + 1) % n];
-        if (std::min(a.x(), b.x()) > p.x() + reach || std::max(a.x(), b.x()) < p.x() - reach ||
-            std::min(a.y(), b.y()) > p.y() + reach || std::max(a.y(), b.y()) < p.y() - reach)
-          continue;
-        const double squared = squared_distance_to_segment(p, a, b);
-        if (squared >= best) continue;
-        best = squared, reach = std::sqrt(squared);
-        if (best <= stop * stop) {
-          start[r] = k;
-          return best;
-        }
-      }
+  // Each corner's squared distance to the contour (SegmentGrid).
+  std::vector<SegmentGrid::Segment> segments;
+  for (const Ring& ring : contour)
+    for (std::size_t k = 0; k < ring.size(); ++k) {
+      const Vec2& a = ring[k];
+      const Vec2& b = ring[(k + 1) % ring.size()];
+      segments.push_back({a, b, a.cwiseMin(b), a.cwiseMax(b)});
     }
-    return best;
-  };
-  // The median (the upper one of an even count) lies beyond least_gap when that many corners do:
-  // counted first, the count stopped once it is decided.
-  const double least = least_gap * least_gap;
-  const std::size_t needed = corners.size() - corners.size() / 2;
-  std::size_t far = 0, near = 0;
-  for (std::size_t c = 0; c < corners.size() && far < needed; ++c) {
-    (nearest(corners[c], least_gap) <= least ? near : far) += 1;
-    if (near > corners.size() - needed) return 0.0;
-  }
+  const SegmentGrid grid(std::move(segments));
   std::vector<double> gaps;
   gaps.reserve(corners.size());
-  for (const Vec2& corner : corners) gaps.push_back(std::sqrt(nearest(corner, 0.0)));
+  for (const Vec2& corner : corners) gaps.push_back(grid.nearest_squared(corner));
+  // The median (the upper one of an even count) lies beyond least_gap when that many corners do.
+  const double least = least_gap * least_gap;
+  const std::size_t needed = corners.size() - corners.size() / 2;
+  if (std::size_t(std::count_if(gaps.begin(), gaps.end(), [&](double g) { return g <= least; })) > corners.size() - needed) return 0.0;
+  for (double& gap : gaps) gap = std::sqrt(gap);
   const auto middle = gaps.begin() + long(gaps.size() / 2);
   std::nth_element(gaps.begin(), middle, gaps.end());
   return std::isfinite(*middle) ? *middle : 0.0;  // (a contour without a segment)
