@@ -1719,15 +1719,20 @@ struct UnderRounding {
     return out.str();
   }
 };
+// (radius_m, blur_m: the mask's rounding, as rasterize_shape_m draws it. mask_rounding: both runs
+// told the mask's rounding, as a batch pools it: the radius the building measures itself.)
 ::testing::AssertionResult compare_under_rounding(const std::vector<PolygonWithHoles>& shapes, double pixel, const CoreOptions& off,
-                                                  UnderRounding& sums) {
+                                                  UnderRounding& sums, double radius_m = 2.0, double blur_m = 0.0,
+                                                  bool mask_rounding = false) {
   for (const PolygonWithHoles& shape : shapes)
     for (double angle = 0; angle < 90; angle += 7.5) {
       const PolygonWithHoles truth = test::rotated(shape, angle);
-      const test::RasterizedShape mask = test::rasterize_shape_m(truth, pixel, 0.0, 8.0, 2.0, 1);
+      const test::RasterizedShape mask = test::rasterize_shape_m(truth, pixel, 0.0, 8.0, radius_m, 1, blur_m);
       if (mask.buildings.size() != 1) return ::testing::AssertionFailure() << mask.buildings.size() << " buildings at " << angle;
-      const BuildingResult on = regularize_building(mask.buildings[0].rings, pixel, CoreOptions{});
-      const BuildingResult without = regularize_building(mask.buildings[0].rings, pixel, off);
+      BuildingStart start;
+      if (mask_rounding) start.mask_rounding_m = regularize_building(mask.buildings[0].rings, pixel, CoreOptions{}).rounding_m;
+      const BuildingResult on = regularize_building(mask.buildings[0].rings, pixel, CoreOptions{}, 0.0, start);
+      const BuildingResult without = regularize_building(mask.buildings[0].rings, pixel, off, 0.0, start);
       if (!on.ok || !without.ok) return ::testing::AssertionFailure() << angle << ": " << on.reason << without.reason;
       const auto count = [](const PolygonWithHoles& p, int& all, int& square) {
         const auto [right_corners, turning] = right_angle_corners(p);
@@ -1821,6 +1826,31 @@ TEST(CleanMasks, StepsRoundedByTwoMetresKeepTheirWallsOnTheLattice) {
   EXPECT_GT(double(s.right) / s.corners, 0.9);
   EXPECT_GT(double(s.right) / s.corners, double(s.right_off) / s.corners_off + 0.1);
   EXPECT_GT(s.iou / s.cases, s.iou_off / s.cases + 0.002);
+}
+
+// Rows of four 6 m houses whose fronts step back and forth by 0.5-1.5 m, their mask's corners
+// rounded by 2 m (no wobble: the noise measures a few centimetres), at 0.1 and 0.25 m, turned by
+// 0-82.5 degrees, the mask's rounding known (the radius the building measures, as a batch pools
+// it). Where the outline draws the rounded steps as an oblique wall or a cut, the lattice outlines,
+// compared with the contour as the mask rounds them by one sample per quarter circle of rounding
+// (models.rounded_criterion), draw them as steps: at 0.1 m on 4 of the 24, IoU 0.9753 against
+// 0.9728 and right angles 161 of 214 against 151 of 204; at 0.25 m the same outlines.
+TEST(CleanMasks, RoundedStepsOfARowComeBackAsSteps) {
+  CoreOptions off;
+  off.models.rounded_criterion = 0;
+  const std::vector<PolygonWithHoles> shapes = {
+      {{{0, 0}, {24, 0}, {24, 11.5}, {18, 11.5}, {18, 10.5}, {12, 10.5}, {12, 11}, {6, 11}, {6, 10}, {0, 10}}, {}},
+      {{{0, 0}, {24, 0}, {24, 9}, {18, 9}, {18, 10}, {12, 10}, {12, 11.5}, {6, 11.5}, {6, 10.5}, {0, 10.5}}, {}}};
+  UnderRounding s;
+  for (double pixel : {0.1, 0.25}) ASSERT_TRUE(compare_under_rounding(shapes, pixel, off, s, 2.0, 0.0, true)) << pixel;
+  std::cout << s.summary() << '\n';
+  EXPECT_GT(s.iou / s.cases, s.iou_off / s.cases + 0.001);
+  EXPECT_GE(double(s.right) / s.corners, double(s.right_off) / s.corners_off);
+  // Without the mask's rounding (a building alone), nothing changes.
+  UnderRounding alone;
+  ASSERT_TRUE(compare_under_rounding(shapes, 0.1, off, alone, 2.0, 0.0, false));
+  EXPECT_EQ(alone.iou, alone.iou_off);
+  EXPECT_EQ(alone.corners, alone.corners_off);
 }
 
 // A clean mask whose corners the segmentation rounded by 2 m (no wobble: the noise measures a few
@@ -1918,8 +1948,14 @@ TEST(CleanMasks, ABuildingThatMeasuresNoRoundingTakesItsMasks) {
   EXPECT_EQ(right, 6u);
   EXPECT_GT(l_alone.footprint.outer.size(), 6u);
   EXPECT_GE(test::iou(l.footprint, truths[0]), test::iou(l_alone.footprint, truths[0]));
-  // The houses are the same either way.
-  for (std::size_t i = 1; i < buildings.size(); ++i) EXPECT_EQ(on.results[i].footprint.outer, without.results[i].footprint.outer) << i;
+  // The houses are rectangles either way; under the mask's rounding one (turned by 40 degrees) is
+  // drawn from its lattice outlines instead (models.rounded_criterion), closer to its walls (IoU
+  // 0.9974 against 0.9955).
+  for (std::size_t i = 1; i < buildings.size(); ++i) {
+    EXPECT_EQ(on.results[i].footprint.outer.size(), 4u) << i;
+    EXPECT_EQ(right_angle_corners(on.results[i].footprint).first, 4u) << i;
+    EXPECT_GE(test::iou(on.results[i].footprint, truths[i]), test::iou(without.results[i].footprint, truths[i]) - 1e-9) << i;
+  }
 }
 
 // Under a rounding, a small house whose every corner the rounding took reads as a blob: its

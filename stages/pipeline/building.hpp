@@ -3,6 +3,7 @@
 #pragma once
 #include <optional>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "geometry/types.hpp"
@@ -46,6 +47,14 @@ struct BuildingResult {
     CornerContext context;
   };
   std::optional<Unsquared> unsquared;
+  // Where its mask's rounding was not known yet and it measured one of its own: the outlines on
+  // its lattice that compete with the chosen one under the mask's rounding
+  // (chain::simplify_under_rounding, in take_mask_rounding), and its context; else none.
+  struct RoundingCandidates {
+    std::vector<std::pair<PolygonWithHoles, std::string>> outlines;
+    CornerContext context;
+  };
+  std::optional<RoundingCandidates> rounding_candidates;
   std::string route;            // the chain's corner route taken: "original" or "deformed"; empty otherwise
   std::string note;             // when ok: why the route taken is not the one asked for (a budget), else empty
   double seconds = 0;

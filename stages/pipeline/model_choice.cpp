@@ -291,8 +291,12 @@ struct ModelChoice : LabeledBuilding {
   PolygonWithHoles lattice_outline;
   bool lattice_ok = false;  // lattice_outline was drawn
   EdgeLabels axis_labels;   // the contour labeled among the lattice's four directions (input.directions now)
+  std::vector<PolygonWithHoles> coarse_outlines;  // coarse_lattice_outlines, once drawn
+  bool coarse_drawn = false;
 
   void first_outline();
+  std::vector<std::pair<PolygonWithHoles, std::string>> rounding_candidates();
+  const std::vector<PolygonWithHoles>& coarse_lattice_outlines();
   void draw_lattice_outline();
   void take_lattice_outline_if_as_good();
   void redraw_stretches();
@@ -461,6 +465,22 @@ void ModelChoice::simplify_by_criterion() {
 // with fewer vertices than the chosen outline offered to the criterion. Whether one was taken.
 bool ModelChoice::offer_coarse_lattices(Criterion& criterion) {
   bool taken = false;
+  for (const PolygonWithHoles& drawn : coarse_lattice_outlines()) {
+    if (vertex_count(drawn) >= vertex_count(result.footprint)) continue;
+    const double c = criterion.of(drawn);
+    if (criterion.offer(c)) {
+      criterion.take(drawn, c, "coarse_lattice");
+      taken = true;
+    }
+  }
+  return taken;
+}
+
+// The lattice outline drawn as if the noise were coarse_scale and its square times as large (those
+// drawn), drawn once.
+const std::vector<PolygonWithHoles>& ModelChoice::coarse_lattice_outlines() {
+  if (coarse_drawn) return coarse_outlines;
+  coarse_drawn = true;
   double scale = 1;
   for (int k = 0; k < 2 && o.models.coarse_scale > 1; ++k) {
     scale *= o.models.coarse_scale;
@@ -469,16 +489,10 @@ bool ModelChoice::offer_coarse_lattices(Criterion& criterion) {
     coarse.regularity_noise = scale * context.regularity_noise;
     coarse.mask_noise = scale * context.mask_noise;
     PolygonWithHoles candidate;
-    if (!lattice_outline_of(fit_rings, axis_labels, input.directions, o.corners, origin, pixel_size, coarse, candidate).second.empty() ||
-        vertex_count(candidate) >= vertex_count(result.footprint))
-      continue;
-    const double c = criterion.of(candidate);
-    if (criterion.offer(c)) {
-      criterion.take(std::move(candidate), c, "coarse_lattice");
-      taken = true;
-    }
+    if (lattice_outline_of(fit_rings, axis_labels, input.directions, o.corners, origin, pixel_size, coarse, candidate).second.empty())
+      coarse_outlines.push_back(std::move(candidate));
   }
-  return taken;
+  return coarse_outlines;
 }
 
 // A staircase drawn as the oblique wall it follows (a corner cut at an angle to the lattice,
@@ -511,7 +525,83 @@ void ModelChoice::walk_merged_steps(StepPath& path, bool outline_replaced, Crite
   }
 }
 
+// The outlines that compete with the chosen one under its mask's rounding (simplify_under_rounding):
+// the lattice outline, where it is not the chosen one, and those drawn as if the noise were
+// coarse_scale and its square times as large.
+std::vector<std::pair<PolygonWithHoles, std::string>> ModelChoice::rounding_candidates() {
+  std::vector<std::pair<PolygonWithHoles, std::string>> candidates;
+  if (!lattice_ok) return candidates;
+  if (!lattice_outline.outer.empty()) candidates.emplace_back(lattice_outline, "lattice");
+  for (const PolygonWithHoles& drawn : coarse_lattice_outlines()) candidates.emplace_back(drawn, "coarse_lattice");
+  return candidates;
+}
+
 }  // namespace
+
+void simplify_under_rounding(const std::vector<Ring>& rings, double pixel_size, const CornerContext& context, const CoreOptions& o,
+                             double rounding, std::vector<std::pair<PolygonWithHoles, std::string>> candidates, BuildingResult& result) {
+  if (!(rounding > 0) || !(o.models.rounded_criterion > 0) || candidates.empty()) return;
+  CornerContext rounded_context = context;
+  rounded_context.mask_rounding = rounding;
+  const double correlation =
+      std::max({pixel_size, o.models.coarse_correlation_noise * context.noise, o.models.rounded_criterion * rounding});
+  const double samples = std::max(2.0, total_perimeter(rings) / correlation);
+  // Each contour ring's distances to an outline rounded so (boundary_distances), the criterion
+  // from them (their mean as contour_fit takes it).
+  using Distances = std::vector<std::vector<std::pair<double, double>>>;
+  const auto distances = [&](const PolygonWithHoles& p) {
+    const PolygonWithHoles rounded = rounded_polygon(p, rounding);
+    Distances d;
+    for (const Ring& ring : rings) d.push_back(boundary_distances(ring, rounded));
+    return d;
+  };
+  const auto criterion = [&](const Distances& d, std::size_t vertices) {
+    double sum = 0, total = 0;
+    for (std::size_t r = 0; r < rings.size(); ++r) {
+      double ring_sum = 0, weight = 0;
+      for (const auto& [distance, length] : d[r]) ring_sum += length * distance, weight += length;
+      const double length = perimeter(rings[r]);
+      sum += length * (weight > 0 ? ring_sum / weight : 0.0);
+      total += length;
+    }
+    const double fit = std::max(0.1 * pixel_size, total > 0 ? sum / total : 0.0);
+    return samples * std::log(fit * fit) + 2.0 * std::log(samples) * double(vertices);
+  };
+  const Distances chosen = distances(result.footprint);
+  double best = criterion(chosen, vertex_count(result.footprint));
+  std::optional<BuildingResult> taken;
+  Distances taken_distances;
+  // (One drawn the same as one before it passed over: the coarser lattice outlines often are.)
+  const auto same = [](const PolygonWithHoles& a, const PolygonWithHoles& b) { return a.outer == b.outer && a.holes == b.holes; };
+  for (std::size_t k = candidates.size(); k-- > 1;)
+    if (std::any_of(candidates.begin(), candidates.begin() + long(k), [&](const auto& c) { return same(c.first, candidates[k].first); }))
+      candidates.erase(candidates.begin() + long(k));
+  for (auto& [outline, model] : candidates) {
+    // (Each squared and cleaned as the chosen one was, under the same rounding.)
+    BuildingResult cleaned = result;
+    cleaned.footprint = std::move(outline);
+    cleaned.model = model;
+    square_and_clean(rings, pixel_size, true, rounded_context, o, cleaned);
+    if (cleaned.footprint.outer.empty()) continue;
+    Distances d = distances(cleaned.footprint);
+    const double c = criterion(d, vertex_count(cleaned.footprint));
+    if (c < best && polygon_problem(cleaned.footprint).empty()) {
+      best = c;
+      taken = std::move(cleaned);
+      taken_distances = std::move(d);
+    }
+  }
+  if (!taken) return;
+  // None that leaves a stretch of contour the chosen outline explains (models.rounded_stretch_noise).
+  if (o.models.rounded_stretch_noise > 0) {
+    const double noise = model_noise(result, pixel_size, o.models);
+    for (std::size_t r = 0; r < rings.size(); ++r)
+      if (leaves_a_stretch(taken_distances[r], chosen[r], noise, correlation, o.models.rounded_stretch_noise)) return;
+  }
+  result.footprint = std::move(taken->footprint);
+  result.model = std::move(taken->model);
+  result.rounding_m = taken->rounding_m, result.rounding_corners = taken->rounding_corners, result.rounding_pooled = taken->rounding_pooled;
+}
 
 void choose_outline(const LabeledBuilding& b, const CoreOptions& o, const std::function<bool()>& over_budget,
                     BuildingResult& result) {
@@ -528,6 +618,16 @@ void choose_outline(const LabeledBuilding& b, const CoreOptions& o, const std::f
   square_and_clean(b.rings, b.pixel_size, b.on_lattice, b.context, o, result);
   if (chosen && result.rounding_corners >= 0 && result.rounding_m == 0)
     result.unsquared = BuildingResult::Unsquared{std::move(*chosen), b.context};
+  // Where it measures a rounding of its own, the lattice outlines against the chosen one under
+  // its mask's rounding: now where that is known, else kept for take_mask_rounding.
+  if (b.on_lattice && o.models.rounded_criterion > 0 && result.rounding_m > 0 && !result.rounding_pooled && b.context.mask_rounding != 0 &&
+      !over_budget()) {
+    std::vector<std::pair<PolygonWithHoles, std::string>> candidates = choice.rounding_candidates();
+    if (b.context.mask_rounding > 0)
+      simplify_under_rounding(b.rings, b.pixel_size, b.context, o, b.context.mask_rounding, std::move(candidates), result);
+    else if (!candidates.empty())
+      result.rounding_candidates = BuildingResult::RoundingCandidates{std::move(candidates), b.context};
+  }
 }
 
 void square_and_clean(const std::vector<Ring>& rings, double pixel_size, bool on_lattice, const CornerContext& context,

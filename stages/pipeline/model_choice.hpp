@@ -7,6 +7,8 @@
 // taken away. Not a public interface: pipeline/building.cpp's chain calls it.
 #pragma once
 #include <functional>
+#include <string>
+#include <utility>
 #include <vector>
 
 #include "corners/corners.hpp"
@@ -44,5 +46,17 @@ void choose_outline(const LabeledBuilding& building, const CoreOptions& o, const
 // walls held to context.lattice.
 void square_and_clean(const std::vector<Ring>& rings, double pixel_size, bool on_lattice, const CornerContext& context,
                       const CoreOptions& o, BuildingResult& result);
+
+// Under its mask's corner rounding (m), where the building measured one of its own: the
+// candidates (outlines on its lattice, with their models' names), each squared and cleaned as
+// above, against the chosen outline by an information criterion (n ln(d^2) + 2 k ln(n), k its
+// vertices), every outline compared with the contour as the mask draws it, its corners rounded
+// so (d: the contour's mean distance to it), one independent sample of contour per
+// models.rounded_criterion roundings (a rounding's departure from a polygon spans its arc, where
+// the noise the mask's blur leaves is a few centimetres). The least taken where it leaves no
+// stretch of contour the chosen one explains (models.rounded_stretch_noise); its rounding_* as its
+// own squaring measured them.
+void simplify_under_rounding(const std::vector<Ring>& rings, double pixel_size, const CornerContext& context, const CoreOptions& o,
+                             double rounding, std::vector<std::pair<PolygonWithHoles, std::string>> candidates, BuildingResult& result);
 
 }  // namespace lodforge::chain
