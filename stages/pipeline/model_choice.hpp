@@ -4,7 +4,8 @@
 // wall on the lattice), the moment rectangle, the regular outline's oblique stretches redrawn on
 // the lattice, simpler outlines by an information criterion (the coarse lattice outline, the
 // staircases drawn as lines, the steps merged); last the short connectors squared and the needles
-// taken away. Not a public interface: pipeline/building.cpp's chain calls it.
+// taken away, and, under its mask's rounding, the lattice outlines against the outline once more.
+// Not a public interface: pipeline/building.cpp's chain calls it.
 #pragma once
 #include <functional>
 #include <string>
@@ -53,9 +54,10 @@ void square_and_clean(const std::vector<Ring>& rings, double pixel_size, bool on
 // vertices), every outline compared with the contour as the mask draws it, its corners rounded
 // so (d: the contour's mean distance to it), one independent sample of contour per
 // models.rounded_criterion roundings (a rounding's departure from a polygon spans its arc, where
-// the noise the mask's blur leaves is a few centimetres). The least taken where it leaves no
-// stretch of contour the chosen one explains (models.rounded_stretch_noise); its rounding_* as its
-// own squaring measured them.
+// the noise the mask's blur leaves is a few centimetres). The candidate of least criterion, where
+// less than the chosen outline's, is taken unless it leaves a stretch of contour the chosen one
+// explains (models.rounded_stretch_noise); its model, and its rounding_* as its own squaring
+// measured them, with it.
 void simplify_under_rounding(const std::vector<Ring>& rings, double pixel_size, const CornerContext& context, const CoreOptions& o,
                              double rounding, std::vector<std::pair<PolygonWithHoles, std::string>> candidates, BuildingResult& result);
 
