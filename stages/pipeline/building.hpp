@@ -47,7 +47,8 @@ struct BuildingResult {
     CornerContext context;
   };
   std::optional<Unsquared> unsquared;
-  // Where its mask's rounding was not known yet and it measured one of its own: the outlines on
+  // Where its mask's rounding was not known yet and it measured one of its own (so never with
+  // unsquared, which is kept where it measured none): the outlines on
   // its lattice that compete with the chosen one under the mask's rounding
   // (chain::simplify_under_rounding, in take_mask_rounding), and its context; else none.
   struct RoundingCandidates {

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <exception>
 #include <optional>
 #include <string>
 #include <utility>
@@ -345,6 +346,7 @@ void ModelChoice::first_outline() {
                                         lattice_fit <= contour_fit(rings, fallback_footprint(rings, o.fallback.tolerance_m)) + allowed);
     if (!rescues) throw StageError(regular_problem.first, regular_problem.second);
     result.footprint = std::move(lattice_outline);
+    lattice_outline = {};  // (taken: no candidate of its own after this, rounding_candidates)
     result.model = "lattice";
   } else {
     bool regular_wins = regular_within_noise || !plain_problem.second.empty();
@@ -391,6 +393,7 @@ void ModelChoice::take_lattice_outline_if_as_good() {
                                     lattice_fit <= chosen_fit + o.models.lattice_fit_gap_noise * model_noise_m;
   if (lattice_within_noise || lattice_fit <= chosen_fit + fit_tolerance(rings, pixel_size, result, o)) {
     result.footprint = std::move(lattice_outline);
+    lattice_outline = {};  // (taken: no candidate of its own after this, rounding_candidates)
     result.model = "lattice";
   }
 }
@@ -526,7 +529,7 @@ void ModelChoice::walk_merged_steps(StepPath& path, bool outline_replaced, Crite
 }
 
 // The outlines that compete with the chosen one under its mask's rounding (simplify_under_rounding):
-// the lattice outline, where it is not the chosen one, and those drawn as if the noise were
+// the lattice outline, unless it was taken (cleared then), and those drawn as if the noise were
 // coarse_scale and its square times as large.
 std::vector<std::pair<PolygonWithHoles, std::string>> ModelChoice::rounding_candidates() {
   std::vector<std::pair<PolygonWithHoles, std::string>> candidates;
@@ -623,10 +626,17 @@ void choose_outline(const LabeledBuilding& b, const CoreOptions& o, const std::f
   if (b.on_lattice && o.models.rounded_criterion > 0 && result.rounding_m > 0 && !result.rounding_pooled && b.context.mask_rounding != 0 &&
       !over_budget()) {
     std::vector<std::pair<PolygonWithHoles, std::string>> candidates = choice.rounding_candidates();
-    if (b.context.mask_rounding > 0)
-      simplify_under_rounding(b.rings, b.pixel_size, b.context, o, b.context.mask_rounding, std::move(candidates), result);
-    else if (!candidates.empty())
+    if (b.context.mask_rounding > 0) {
+      // (A failure there leaves the outline as chosen, as take_mask_rounding's does.)
+      const BuildingResult chosen_result = result;
+      try {
+        simplify_under_rounding(b.rings, b.pixel_size, b.context, o, b.context.mask_rounding, std::move(candidates), result);
+      } catch (const std::exception&) {
+        result = chosen_result;
+      }
+    } else if (!candidates.empty()) {
       result.rounding_candidates = BuildingResult::RoundingCandidates{std::move(candidates), b.context};
+    }
   }
 }
 
