@@ -156,10 +156,7 @@ TEST(Geometry, SegmentGridFindsTheNearestSegmentAsAFullScanDoes) {
     const double t = 2 * M_PI * i / 1000;
     ring.push_back({50 * std::cos(t) + jitter(random), 30 * std::sin(t) + jitter(random)});
   }
-  for (std::size_t k = 0; k < ring.size(); ++k) {
-    const Vec2 &a = ring[k], &b = ring[(k + 1) % ring.size()];
-    segments.push_back({a, b, a.cwiseMin(b), a.cwiseMax(b)});
-  }
+  SegmentGrid::add_ring(ring, segments);
   const auto scan = [](const std::vector<SegmentGrid::Segment>& all, const Vec2& p) {
     double best = std::numeric_limits<double>::infinity();
     for (const auto& s : all) best = std::min(best, squared_distance_to_segment(p, s.a, s.b));

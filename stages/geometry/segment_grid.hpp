@@ -19,6 +19,15 @@ class SegmentGrid {
     Vec2 a, b, low, high;  // ends and bounding box
   };
 
+  // The ring's edges (vertex k to k + 1, cyclically) appended to segments.
+  static void add_ring(const Ring& ring, std::vector<Segment>& segments) {
+    for (std::size_t k = 0; k < ring.size(); ++k) {
+      const Vec2& a = ring[k];
+      const Vec2& b = ring[(k + 1) % ring.size()];
+      segments.push_back({a, b, a.cwiseMin(b), a.cwiseMax(b)});
+    }
+  }
+
   // Over more than min_bucketed segments with finite ends, a grid over their bounding box of
   // about four cells a segment (at most 512 a side); fewer are looked at one by one.
   explicit SegmentGrid(std::vector<Segment> segments, std::size_t min_bucketed = 24) : segments_(std::move(segments)) {
@@ -91,8 +100,7 @@ class SegmentGrid {
   }
 
  private:
-  static long cell_of(double v, double origin, double cell, long count) { return std::clamp(long(std::floor((v - origin) / cell)), 0L, count - 1); }
-  long cell_of(double v, double origin, long count) const { return cell_of(v, origin, cell_, count); }
+  long cell_of(double v, double origin, long count) const { return std::clamp(long(std::floor((v - origin) / cell_)), 0L, count - 1); }
 
   std::vector<Segment> segments_;
   bool bucketed_ = false;

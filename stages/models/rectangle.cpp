@@ -87,12 +87,7 @@ Ring moment_rectangle(const Ring& ring, const Vec2& normal) {
 std::vector<std::pair<double, double>> boundary_distances(const Ring& ring, const PolygonWithHoles& polygon,
                                                           std::vector<std::size_t>* nearest_segments) {
   std::vector<SegmentGrid::Segment> edges;
-  for (const Ring* r : rings_of(polygon))
-    for (std::size_t k = 0; k < r->size(); ++k) {
-      const Vec2& a = (*r)[k];
-      const Vec2& b = (*r)[(k + 1) % r->size()];
-      edges.push_back({a, b, a.cwiseMin(b), a.cwiseMax(b)});
-    }
+  for (const Ring* r : rings_of(polygon)) SegmentGrid::add_ring(*r, edges);
   std::vector<std::pair<double, double>> distances;
   if (nearest_segments) nearest_segments->clear();
   if (edges.empty()) return distances;

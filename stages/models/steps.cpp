@@ -594,12 +594,7 @@ double corner_rounding_gap(const PolygonWithHoles& outline, const std::vector<Ri
   if (corners.size() < 3) return 0.0;
   // Each corner's squared distance to the contour (SegmentGrid).
   std::vector<SegmentGrid::Segment> segments;
-  for (const Ring& ring : contour)
-    for (std::size_t k = 0; k < ring.size(); ++k) {
-      const Vec2& a = ring[k];
-      const Vec2& b = ring[(k + 1) % ring.size()];
-      segments.push_back({a, b, a.cwiseMin(b), a.cwiseMax(b)});
-    }
+  for (const Ring& ring : contour) SegmentGrid::add_ring(ring, segments);
   const SegmentGrid grid(std::move(segments));
   std::vector<double> gaps;
   gaps.reserve(corners.size());

@@ -227,6 +227,13 @@ bool has_arc(const PolygonWithHoles& polygon) {
   return false;
 }
 
+// n ln(d^2) + k ln(n), n samples of contour: d the mean distance (at least a tenth of a pixel) for
+// the standard deviation, two parameters a vertex.
+double information_criterion(double fit, std::size_t vertices, double samples, double pixel_size) {
+  fit = std::max(0.1 * pixel_size, fit);
+  return samples * std::log(fit * fit) + 2.0 * std::log(samples) * double(vertices);
+}
+
 // The Bayesian information criterion simpler outlines compete by, against the chosen one, and
 // the outlines it takes in turn, each the least so far.
 class Criterion {
@@ -234,12 +241,7 @@ class Criterion {
   // samples: the contour's length over the length of one independent sample of it.
   Criterion(const std::vector<Ring>& rings, double pixel_size, double samples, bool guarded, BuildingResult& result)
       : rings_(rings), pixel_size_(pixel_size), samples_(samples), guarded_(guarded), result_(result) {}
-  // n ln(d^2) + k ln(n): d the mean distance (at least a tenth of a pixel) for the standard
-  // deviation, two parameters a vertex.
-  double of(double fit, std::size_t vertices) const {
-    fit = std::max(0.1 * pixel_size_, fit);
-    return samples_ * std::log(fit * fit) + 2.0 * std::log(samples_) * double(vertices);
-  }
+  double of(double fit, std::size_t vertices) const { return information_criterion(fit, vertices, samples_, pixel_size_); }
   double of(const PolygonWithHoles& p) const { return of(contour_fit(rings_, p), vertex_count(p)); }
   void start(double chosen) { best_ = chosen; }
   // Whether criterion c is below the least so far; then the outline is taken, with its model's name.
@@ -549,8 +551,8 @@ void simplify_under_rounding(const std::vector<Ring>& rings, double pixel_size, 
   const double correlation =
       std::max({pixel_size, o.models.coarse_correlation_noise * context.noise, o.models.rounded_criterion * rounding});
   const double samples = std::max(2.0, total_perimeter(rings) / correlation);
-  // Each contour ring's distances to an outline rounded so (boundary_distances), the criterion
-  // from them (their mean as contour_fit takes it).
+  // Each contour ring's distances to an outline rounded so (boundary_distances; the guard below
+  // reads them too), the criterion from their mean (contour_fit).
   using Distances = std::vector<std::vector<std::pair<double, double>>>;
   const auto distances = [&](const PolygonWithHoles& p) {
     const PolygonWithHoles rounded = rounded_polygon(p, rounding);
@@ -559,16 +561,7 @@ void simplify_under_rounding(const std::vector<Ring>& rings, double pixel_size, 
     return d;
   };
   const auto criterion = [&](const Distances& d, std::size_t vertices) {
-    double sum = 0, total = 0;
-    for (std::size_t r = 0; r < rings.size(); ++r) {
-      double ring_sum = 0, weight = 0;
-      for (const auto& [distance, length] : d[r]) ring_sum += length * distance, weight += length;
-      const double length = perimeter(rings[r]);
-      sum += length * (weight > 0 ? ring_sum / weight : 0.0);
-      total += length;
-    }
-    const double fit = std::max(0.1 * pixel_size, total > 0 ? sum / total : 0.0);
-    return samples * std::log(fit * fit) + 2.0 * std::log(samples) * double(vertices);
+    return information_criterion(contour_fit(rings, d), vertices, samples, pixel_size);
   };
   const Distances chosen = distances(result.footprint);
   double best = criterion(chosen, vertex_count(result.footprint));

@@ -44,6 +44,8 @@ StageProblem lattice_outline_of(const std::vector<Ring>& fit_rings, const EdgeLa
 // How well a polygon explains the contour: the length-weighted mean distance of every ring's
 // edges to the polygon's boundary.
 double contour_fit(const std::vector<Ring>& rings, const PolygonWithHoles& polygon);
+// The same from each ring's (distance, length) list of boundary_distances against the outline.
+double contour_fit(const std::vector<Ring>& rings, const std::vector<std::vector<std::pair<double, double>>>& distances);
 
 // The length of all of a building's rings (m).
 double total_perimeter(const std::vector<Ring>& rings);
