@@ -163,5 +163,29 @@ TEST(Refine, NearPerpendicularDirectionsAreSnappedOthersStayFree) {
   EXPECT_NEAR(cut, a + 45, 0.5);  // the cut is not snapped
 }
 
+// The lattice's missing axis: added (both ways) where every direction lies along the other one,
+// not where each axis has a direction near it, nor when switched off.
+TEST(Refine, TheLatticesMissingAxisIsAddedBothWays) {
+  const Vec2 main = unit(20);
+  RefineOptions o;
+  std::vector<Vec2> directions{unit(20), unit(-160), unit(25)};
+  ASSERT_TRUE(add_missing_axis(directions, main, o));
+  ASSERT_EQ(directions.size(), 5u);
+  EXPECT_NEAR(directions[3].dot(unit(110)), 1.0, 1e-12);
+  EXPECT_NEAR(directions[4].dot(unit(-70)), 1.0, 1e-12);
+  std::vector<Vec2> square{unit(20), unit(112)};  // the quarter turn within 10 degrees: no axis missing
+  EXPECT_FALSE(add_missing_axis(square, main, o));
+  EXPECT_EQ(square.size(), 2u);
+  std::vector<Vec2> across{unit(-70)};  // the main axis missing
+  ASSERT_TRUE(add_missing_axis(across, main, o));
+  ASSERT_EQ(across.size(), 3u);
+  EXPECT_NEAR(across[1].dot(unit(20)), 1.0, 1e-12);
+  EXPECT_NEAR(across[2].dot(unit(-160)), 1.0, 1e-12);
+  o.missing_axis_deg = 0;
+  std::vector<Vec2> off{unit(20), unit(-160)};
+  EXPECT_FALSE(add_missing_axis(off, main, o));
+  EXPECT_EQ(off.size(), 2u);
+}
+
 }  // namespace
 }  // namespace lodforge

@@ -471,7 +471,8 @@ void absorb_short_runs(const Ring& ring, std::vector<int>& labels, double min_le
 }
 
 Ring extract_corners(const Ring& ring, const std::vector<int>& labels, const std::vector<Vec2>& directions,
-                     double pixel_size, const CornerOptions& o, std::string* problem, const CornerContext& context) {
+                     double pixel_size, const CornerOptions& o, std::string* problem, const CornerContext& context,
+                     bool* curved_out) {
   const double noise = context.noise;
   const double regularity = context.regularity();  // (snaps and curves: noise.regularity_ceiling)
   std::vector<int> own = labels;
@@ -522,6 +523,7 @@ Ring extract_corners(const Ring& ring, const std::vector<int>& labels, const std
     lines = std::move(split_lines);
   }
   const int n = int(runs.size());
+  if (curved_out) *curved_out = any_curved;
   const double parallel_sin = std::sin(o.parallel_angle_deg * M_PI / 180.0);
   // Two runs make a polygon when one is a curve, or when they are a thin building's two long
   // walls, whose ends (each run's end, on a short wall no direction was found for) become steps

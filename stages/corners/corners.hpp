@@ -111,9 +111,10 @@ struct CornerContext {
 // run (see curve_px) keeps its contour, simplified, between the lines of its neighbours; straight
 // walls near the building's lattice are turned onto it and parallel neighbours within the noise
 // merged (snap_*, merge_*). labels: per edge; directions: unit outward normals.
-// Returns an empty ring and sets *problem when no polygon can be formed.
+// Returns an empty ring and sets *problem when no polygon can be formed. *curved (when given):
+// whether a run was kept as a curve.
 Ring extract_corners(const Ring& ring, const std::vector<int>& labels, const std::vector<Vec2>& directions,
                      double pixel_size, const CornerOptions& options, std::string* problem,
-                     const CornerContext& context = {});
+                     const CornerContext& context = {}, bool* curved = nullptr);
 
 }  // namespace lodforge

@@ -165,6 +165,19 @@ bool drop_insignificant_directions(const std::vector<Ring>& rings, const EdgeLab
   return true;
 }
 
+bool add_missing_axis(std::vector<Vec2>& directions, const Vec2& main, const RefineOptions& o) {
+  if (o.missing_axis_deg <= 0 || main.squaredNorm() <= 0) return false;
+  const double near = std::cos(o.missing_axis_deg * M_PI / 180.0);
+  bool added = false;
+  for (const Vec2& a : {main, Vec2(-main.y(), main.x())}) {
+    if (std::any_of(directions.begin(), directions.end(), [&](const Vec2& d) { return std::abs(d.dot(a)) >= near; })) continue;
+    directions.push_back(a);
+    directions.push_back(-a);
+    added = true;
+  }
+  return added;
+}
+
 int release_runs(const std::vector<Ring>& rings, EdgeLabels& labels, std::vector<Vec2>& directions, double pixel_size,
                  double building_noise, const RefineOptions& o) {
   if (o.release_px <= 0) return 0;

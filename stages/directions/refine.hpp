@@ -26,6 +26,7 @@ struct RefineOptions {
   double min_round_px = 40;        // ... unless its outline is shorter than this many pixels
   double min_round_m = 20;         // ... or than this (m)
   double min_round_noise = 60;     // ... or than this many times the mask's boundary noise
+  double missing_axis_deg = 10;    // a building on a lattice with no direction this near one of its axes and a curve gets it (0 = off)
 
   template <class V>
   void visit(V& v) {
@@ -41,6 +42,7 @@ struct RefineOptions {
     v("min_round_px", min_round_px, "... unless its outer ring is shorter than this many pixels (too few to tell a round shape from a rectangle)", Check::at_least(0));
     v("min_round_m", min_round_m, "... or than this (m; the traced outline, whose pixel steps make it up to 1.4 times the true one): a shed of 3 x 4 m whose corners a network rounds by a metre shows no more of a wall than of an arc, and is taken as on a lattice (a rectangle when that explains it, models.rectangle_tolerance)", Check::at_least(0));
     v("min_round_noise", min_round_noise, "... or than this many times the boundary noise pooled over the mask's buildings: under a noise that large a small house's walls are no straighter than an arc (0 = off)", Check::at_least(0));
+    v("missing_axis_deg", missing_axis_deg, "a building held to its lattice none of whose directions lies within this of one of the lattice's two axes (either way), whose regular outline keeps a curve, gets that axis's two directions, is labeled again and its outline drawn from those labels: a long thin building whose ends a wobble's flanks spread, so that no direction was found for them, has only its long walls' two, its ends join their runs, and those bow round the ends as curves drawn along the wobble (corners.curve_*; degrees, 0 = off)", Check::between(0, 45));
     v("release_px", release_px, "a long run whose own least-squares direction differs from its label's so much that its ends move by more than this (pixels, and twice its noise) gets its own direction (0 = off)", Check::at_least(0));
   }
 };
@@ -51,6 +53,11 @@ using EdgeLabels = std::vector<std::vector<int>>;
 // pixel_size converts trim_px to map units.
 void refine_directions(const std::vector<Ring>& rings, EdgeLabels& labels, std::vector<Vec2>& directions,
                        double pixel_size, const RefineOptions& options);
+
+// Where none of the directions lies within missing_axis_deg of one of the lattice's two axes
+// (main, a unit normal, or its quarter turn, either way), that axis's two directions are appended (the MRF's
+// label costs leave them unused where no wall faces them). Returns whether any was.
+bool add_missing_axis(std::vector<Vec2>& directions, const Vec2& main, const RefineOptions& o);
 
 // Drops the directions that are off the building's lattice (main, the direction with the most
 // labeled length, and its quarter turns, within lattice_deg) and have no run long enough: a real

@@ -8,6 +8,7 @@
 #include <utility>
 #include <Eigen/Geometry>
 
+#include "directions/refine.hpp"
 #include "geometry/polygon.hpp"
 #include "models/rectangle.hpp"
 #include "models/statistics.hpp"
@@ -288,6 +289,10 @@ struct ModelChoice : LabeledBuilding {
   ModelChoice(const LabeledBuilding& b, const CoreOptions& options, const std::function<bool()>& budget, BuildingResult& r)
       : LabeledBuilding(b), o(options), over_budget(budget), result(r) {}
 
+  // The labels the chain's outlines are drawn from: the chain's, or those of relabel_with_missing_axis.
+  const EdgeLabels* chain_labels = &labels;
+  EdgeLabels relabeled;
+
   // Left by the first outline for the steps after it.
   double min_run_px = 0;  // of the regular outline's runs
   double chosen_fit = -1;  // the chosen outline's contour_fit, -1 while unknown
@@ -298,6 +303,7 @@ struct ModelChoice : LabeledBuilding {
   bool coarse_drawn = false;
 
   void first_outline();
+  void relabel_with_missing_axis(StageProblem& regular_problem, PolygonWithHoles& regular);
   std::vector<std::pair<PolygonWithHoles, std::string>> rounding_candidates();
   const std::vector<PolygonWithHoles>& coarse_lattice_outlines();
   void draw_lattice_outline();
@@ -321,8 +327,10 @@ void ModelChoice::first_outline() {
   const double allowed = o.models.outline_tolerance * model_noise(result, pixel_size, o.models);
   PolygonWithHoles regular, plain;
   min_run_px = regular_min_run_px(o.corners, context.noise, pixel_size);
-  const StageProblem regular_problem =
-      outline(fit_rings, labels, input.directions, o.corners, origin, pixel_size, context, min_run_px, regular);
+  bool curved = false;
+  StageProblem regular_problem =
+      outline(fit_rings, *chain_labels, input.directions, o.corners, origin, pixel_size, context, min_run_px, regular, &curved);
+  if (curved) relabel_with_missing_axis(regular_problem, regular);
   // "Within the noise": the noise, or the spread of the runs along the fitted lattice where more
   // (the noise's runs, cut where a wobble's flank turns past 45 degrees, are shorter than the walls
   // at fine pixels, and their lines follow part of the wobble), bounded as the noise is by the
@@ -337,7 +345,7 @@ void ModelChoice::first_outline() {
   const StageProblem plain_problem =
       regular_within_noise
           ? StageProblem{}
-          : outline(fit_rings, labels, input.directions, o.corners, origin, pixel_size, CornerContext{}, o.corners.min_run_px, plain);
+          : outline(fit_rings, *chain_labels, input.directions, o.corners, origin, pixel_size, CornerContext{}, o.corners.min_run_px, plain);
   draw_lattice_outline();
   // (Each contour fit computed once, when it is needed: they are a good part of the time.)
   if (!regular_problem.second.empty() && !plain_problem.second.empty()) {
@@ -363,6 +371,35 @@ void ModelChoice::first_outline() {
     result.model = regular_wins ? "regular" : "lines";
     take_lattice_outline_if_as_good();
   }
+}
+
+// A building on a lattice whose directions lie along one of its axes alone (refinement.missing_axis_deg),
+// whose regular outline keeps a curve drawn without an arc (has_arc: no three vertices in a row
+// turning by under 20 degrees, as a round wall's chords do): its ends' runs joined to its long
+// walls' (a long thin building whose ends a wobble's flanks hid from the directions), bowing round
+// the ends and drawn along the wobble, turning by tens of degrees one way and the other. The other
+// axis's two directions are added, the contour labeled again, and the regular outline drawn from
+// those labels replaces the curved one where it is valid and has fewer vertices; the outline's
+// other steps, and result.directions and labels, then take those labels. (Where it has more, the
+// curve was a wall off the lattice, now drawn in steps: it stays.)
+void ModelChoice::relabel_with_missing_axis(StageProblem& regular_problem, PolygonWithHoles& regular) {
+  std::vector<Vec2> directions = input.directions;
+  if (!on_lattice || !regular_problem.second.empty() || has_arc(regular) || !add_missing_axis(directions, context.lattice, o.refinement))
+    return;
+  LabelingInput with_axis = input;
+  with_axis.directions = std::move(directions);
+  with_axis.support.assign(with_axis.directions.size(), 1.0);
+  EdgeLabels labels_with_axis = label_edges(with_axis, o.labeling);
+  PolygonWithHoles drawn;
+  if (!outline(fit_rings, labels_with_axis, with_axis.directions, o.corners, origin, pixel_size, context, min_run_px, drawn).second.empty() ||
+      vertex_count(drawn) >= vertex_count(regular))
+    return;
+  regular = std::move(drawn);
+  input = std::move(with_axis);
+  relabeled = std::move(labels_with_axis);
+  chain_labels = &relabeled;
+  result.directions = input.directions;
+  result.labels = relabeled;
 }
 
 // The lattice outline: every wall on the building's lattice (its main direction and quarter
@@ -417,7 +454,7 @@ void ModelChoice::redraw_stretches() {
   if (stretches.empty()) return;
   // The chain's labels with the stretches' edges labeled as the lattice labeling has them
   // (the chain's directions, then the lattice's four).
-  EdgeLabels mixed = labels;
+  EdgeLabels mixed = *chain_labels;
   for (const Stretch& s : stretches)
     for (int j = 0; j < s.count; ++j) {
       const std::size_t i = (s.first + j) % rings[s.ring].size();

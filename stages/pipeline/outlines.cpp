@@ -12,11 +12,14 @@ namespace {
 // rings: in a local frame (metres, less origin). Lengths of the options are in metres or pixels.
 PolygonWithHoles corner_polygon(const std::vector<Ring>& rings, const EdgeLabels& labels,
                                 const std::vector<Vec2>& directions, const CornerOptions& options, const Vec2& origin,
-                                double pixel_size, const CornerContext& context) {
+                                double pixel_size, const CornerContext& context, bool* curved) {
   PolygonWithHoles footprint;
+  *curved = false;
   for (std::size_t r = 0; r < rings.size(); ++r) {
     std::string problem;
-    Ring ring = extract_corners(rings[r], labels[r], directions, pixel_size, options, &problem, context);
+    bool ring_curved = false;
+    Ring ring = extract_corners(rings[r], labels[r], directions, pixel_size, options, &problem, context, &ring_curved);
+    *curved |= ring_curved;
     if (ring.empty()) throw StageError("corners", (r == 0 ? "outer ring: " : "hole " + std::to_string(r - 1) + ": ") + problem);
     // Where two corner lines overshoot past each other, the ring crosses itself in a thin loop.
     if (options.untangle_noise > 0 && !ring_problem(ring).empty())
@@ -32,7 +35,8 @@ PolygonWithHoles corner_polygon(const std::vector<Ring>& rings, const EdgeLabels
 
 StageProblem outline(const std::vector<Ring>& rings, const EdgeLabels& labels, const std::vector<Vec2>& directions,
                      const CornerOptions& o, const Vec2& origin, double pixel_size, const CornerContext& context,
-                     double min_run_px, PolygonWithHoles& footprint) {
+                     double min_run_px, PolygonWithHoles& footprint, bool* curved) {
+  bool drawn_curved = false;
   CornerOptions corner_options = o;
   std::string problem;
   try {
@@ -40,9 +44,12 @@ StageProblem outline(const std::vector<Ring>& rings, const EdgeLabels& labels, c
       corner_options.split_px = split_px;
       corner_options.min_run_px = min_run_px;
       for (int attempt = 0; attempt <= o.repair_attempts; ++attempt) {
-        footprint = corner_polygon(rings, labels, directions, corner_options, origin, pixel_size, context);
+        footprint = corner_polygon(rings, labels, directions, corner_options, origin, pixel_size, context, &drawn_curved);
         problem = polygon_problem(footprint);
-        if (problem.empty()) return {};
+        if (problem.empty()) {
+          if (curved) *curved = drawn_curved;
+          return {};
+        }
         corner_options.min_run_px = std::max(2.0, 2 * corner_options.min_run_px);
       }
     }
