@@ -163,8 +163,8 @@ TEST(Refine, NearPerpendicularDirectionsAreSnappedOthersStayFree) {
   EXPECT_NEAR(cut, a + 45, 0.5);  // the cut is not snapped
 }
 
-// The lattice's missing axis: added (both ways) where every direction lies along the other one,
-// not where each axis has a direction near it, nor when switched off.
+// The lattice's missing axis: added (both ways) where the directions lie along the other one,
+// not where each axis has a direction near it, nor where neither has, nor when switched off.
 TEST(Refine, TheLatticesMissingAxisIsAddedBothWays) {
   const Vec2 main = unit(20);
   RefineOptions o;
@@ -181,6 +181,9 @@ TEST(Refine, TheLatticesMissingAxisIsAddedBothWays) {
   ASSERT_EQ(across.size(), 3u);
   EXPECT_NEAR(across[1].dot(unit(20)), 1.0, 1e-12);
   EXPECT_NEAR(across[2].dot(unit(-160)), 1.0, 1e-12);
+  std::vector<Vec2> oblique{unit(65), unit(-25)};  // 45 degrees off both axes
+  EXPECT_FALSE(add_missing_axis(oblique, main, o));
+  EXPECT_EQ(oblique.size(), 2u);
   o.missing_axis_deg = 0;
   std::vector<Vec2> off{unit(20), unit(-160)};
   EXPECT_FALSE(add_missing_axis(off, main, o));

@@ -168,14 +168,15 @@ bool drop_insignificant_directions(const std::vector<Ring>& rings, const EdgeLab
 bool add_missing_axis(std::vector<Vec2>& directions, const Vec2& main, const RefineOptions& o) {
   if (o.missing_axis_deg <= 0 || main.squaredNorm() <= 0) return false;
   const double near = std::cos(o.missing_axis_deg * M_PI / 180.0);
-  bool added = false;
-  for (const Vec2& a : {main, Vec2(-main.y(), main.x())}) {
-    if (std::any_of(directions.begin(), directions.end(), [&](const Vec2& d) { return std::abs(d.dot(a)) >= near; })) continue;
-    directions.push_back(a);
-    directions.push_back(-a);
-    added = true;
-  }
-  return added;
+  const Vec2 axes[2] = {main, Vec2(-main.y(), main.x())};
+  bool present[2];
+  for (int k = 0; k < 2; ++k)
+    present[k] = std::any_of(directions.begin(), directions.end(), [&](const Vec2& d) { return std::abs(d.dot(axes[k])) >= near; });
+  if (present[0] == present[1]) return false;  // (both there, or neither: no lattice axis to go by)
+  const Vec2& missing = axes[present[0] ? 1 : 0];
+  directions.push_back(missing);
+  directions.push_back(-missing);
+  return true;
 }
 
 int release_runs(const std::vector<Ring>& rings, EdgeLabels& labels, std::vector<Vec2>& directions, double pixel_size,

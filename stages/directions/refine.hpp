@@ -55,8 +55,9 @@ void refine_directions(const std::vector<Ring>& rings, EdgeLabels& labels, std::
                        double pixel_size, const RefineOptions& options);
 
 // Where none of the directions lies within missing_axis_deg of one of the lattice's two axes
-// (main, a unit normal, or its quarter turn, either way), that axis's two directions are appended (the MRF's
-// label costs leave them unused where no wall faces them). Returns whether any was.
+// (main, a unit normal, or its quarter turn, either way) and some lie near the other, the missing
+// axis's two directions are appended (the MRF's label costs leave them unused where no wall faces
+// them); none where neither axis has a direction. Returns whether any was.
 bool add_missing_axis(std::vector<Vec2>& directions, const Vec2& main, const RefineOptions& o);
 
 // Drops the directions that are off the building's lattice (main, the direction with the most

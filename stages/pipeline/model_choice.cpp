@@ -288,6 +288,8 @@ struct ModelChoice : LabeledBuilding {
 
   ModelChoice(const LabeledBuilding& b, const CoreOptions& options, const std::function<bool()>& budget, BuildingResult& r)
       : LabeledBuilding(b), o(options), over_budget(budget), result(r) {}
+  ModelChoice(const ModelChoice&) = delete;  // (chain_labels may point into it)
+  ModelChoice& operator=(const ModelChoice&) = delete;
 
   // The labels the chain's outlines are drawn from: the chain's, or those of relabel_with_missing_axis.
   const EdgeLabels* chain_labels = &labels;
@@ -303,7 +305,7 @@ struct ModelChoice : LabeledBuilding {
   bool coarse_drawn = false;
 
   void first_outline();
-  void relabel_with_missing_axis(StageProblem& regular_problem, PolygonWithHoles& regular);
+  void relabel_with_missing_axis(const StageProblem& regular_problem, PolygonWithHoles& regular);
   std::vector<std::pair<PolygonWithHoles, std::string>> rounding_candidates();
   const std::vector<PolygonWithHoles>& coarse_lattice_outlines();
   void draw_lattice_outline();
@@ -328,7 +330,7 @@ void ModelChoice::first_outline() {
   PolygonWithHoles regular, plain;
   min_run_px = regular_min_run_px(o.corners, context.noise, pixel_size);
   bool curved = false;
-  StageProblem regular_problem =
+  const StageProblem regular_problem =
       outline(fit_rings, *chain_labels, input.directions, o.corners, origin, pixel_size, context, min_run_px, regular, &curved);
   if (curved) relabel_with_missing_axis(regular_problem, regular);
   // "Within the noise": the noise, or the spread of the runs along the fitted lattice where more
@@ -381,10 +383,16 @@ void ModelChoice::first_outline() {
 // axis's two directions are added, the contour labeled again, and the regular outline drawn from
 // those labels replaces the curved one where it is valid and has fewer vertices; the outline's
 // other steps, and result.directions and labels, then take those labels. (Where it has more, the
-// curve was a wall off the lattice, now drawn in steps: it stays.)
-void ModelChoice::relabel_with_missing_axis(StageProblem& regular_problem, PolygonWithHoles& regular) {
+// curve was a wall off the lattice, now drawn in steps: it stays.) The whole contour is labeled
+// again, from the same support for every direction (the chain's labels came from the labeled
+// support and had runs released to their own directions): the outline is judged by its vertices
+// alone, not by its fit, which a curve drawn along a wobble always wins; a round end of a few
+// metres' radius whose chords turn by more than 20 degrees (no has_arc) would be squared too.
+// (Past the time budget, not tried.)
+void ModelChoice::relabel_with_missing_axis(const StageProblem& regular_problem, PolygonWithHoles& regular) {
   std::vector<Vec2> directions = input.directions;
-  if (!on_lattice || !regular_problem.second.empty() || has_arc(regular) || !add_missing_axis(directions, context.lattice, o.refinement))
+  if (!on_lattice || !regular_problem.second.empty() || has_arc(regular) || over_budget() ||
+      !add_missing_axis(directions, context.lattice, o.refinement))
     return;
   LabelingInput with_axis = input;
   with_axis.directions = std::move(directions);

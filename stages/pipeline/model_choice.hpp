@@ -26,7 +26,8 @@ struct LabeledBuilding {
   const std::vector<Ring>& fit_rings;  // the rings the outlines are fitted to: less origin (deformed on that route)
   Vec2 origin;
   double pixel_size;
-  const EdgeLabels& labels;  // per ring, per edge, into the chain's directions (input.directions, result.directions)
+  const EdgeLabels& labels;  // per ring, per edge, into the chain's directions (input.directions, result.directions; the
+                             // model choice may label again, relabel_with_missing_axis, and draw from those labels)
   LabelingInput& input;      // the normals, lengths and directions labeled; the lattice outline's labeling takes it over
   CornerContext context;     // the building's lattice (zero: none) and noise, its mask's noise
   bool on_lattice;           // its walls are held to a lattice (not a round or oblique shape)
