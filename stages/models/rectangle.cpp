@@ -128,13 +128,17 @@ std::vector<std::pair<double, double>> boundary_distances(const Ring& ring, cons
   return distances;
 }
 
-double mean_distance_to_boundary(const Ring& ring, const PolygonWithHoles& polygon) {
+double mean_distance(const std::vector<std::pair<double, double>>& distances) {
   double sum = 0, weight = 0;
-  for (const auto& [d, w] : boundary_distances(ring, polygon)) {
+  for (const auto& [d, w] : distances) {
     sum += w * d;
     weight += w;
   }
   return weight > 0 ? sum / weight : 0.0;
+}
+
+double mean_distance_to_boundary(const Ring& ring, const PolygonWithHoles& polygon) {
+  return mean_distance(boundary_distances(ring, polygon));
 }
 
 bool leaves_a_stretch(const std::vector<std::pair<double, double>>& simple, const std::vector<std::pair<double, double>>& fine,

@@ -94,6 +94,8 @@ std::vector<std::pair<double, double>> boundary_distances(const Ring& ring, cons
 
 // The length-weighted mean distance from the ring's edge midpoints to the polygon's boundary.
 double mean_distance_to_boundary(const Ring& ring, const PolygonWithHoles& polygon);
+// The same from boundary_distances' (distance, length) list (0 for an empty one).
+double mean_distance(const std::vector<std::pair<double, double>>& distances);
 
 // Whether along some stretch of the ring (cyclic; lengths from `correlation`, doubling, up to
 // half the ring) the ring's mean distance to a simpler outline (`simple`) exceeds its mean

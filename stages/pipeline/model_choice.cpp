@@ -288,12 +288,10 @@ struct ModelChoice : LabeledBuilding {
 
   ModelChoice(const LabeledBuilding& b, const CoreOptions& options, const std::function<bool()>& budget, BuildingResult& r)
       : LabeledBuilding(b), o(options), over_budget(budget), result(r) {}
-  ModelChoice(const ModelChoice&) = delete;  // (chain_labels may point into it)
-  ModelChoice& operator=(const ModelChoice&) = delete;
 
   // The labels the chain's outlines are drawn from: the chain's, or those of relabel_with_missing_axis.
-  const EdgeLabels* chain_labels = &labels;
-  EdgeLabels relabeled;
+  EdgeLabels relabeled;  // (empty: none)
+  const EdgeLabels& chain_labels() const { return relabeled.empty() ? labels : relabeled; }
 
   // Left by the first outline for the steps after it.
   double min_run_px = 0;  // of the regular outline's runs
@@ -331,7 +329,7 @@ void ModelChoice::first_outline() {
   min_run_px = regular_min_run_px(o.corners, context.noise, pixel_size);
   bool curved = false;
   const StageProblem regular_problem =
-      outline(fit_rings, *chain_labels, input.directions, o.corners, origin, pixel_size, context, min_run_px, regular, &curved);
+      outline(fit_rings, chain_labels(), input.directions, o.corners, origin, pixel_size, context, min_run_px, regular, &curved);
   if (curved) relabel_with_missing_axis(regular_problem, regular);
   // "Within the noise": the noise, or the spread of the runs along the fitted lattice where more
   // (the noise's runs, cut where a wobble's flank turns past 45 degrees, are shorter than the walls
@@ -347,7 +345,7 @@ void ModelChoice::first_outline() {
   const StageProblem plain_problem =
       regular_within_noise
           ? StageProblem{}
-          : outline(fit_rings, *chain_labels, input.directions, o.corners, origin, pixel_size, CornerContext{}, o.corners.min_run_px, plain);
+          : outline(fit_rings, chain_labels(), input.directions, o.corners, origin, pixel_size, CornerContext{}, o.corners.min_run_px, plain);
   draw_lattice_outline();
   // (Each contour fit computed once, when it is needed: they are a good part of the time.)
   if (!regular_problem.second.empty() && !plain_problem.second.empty()) {
@@ -405,7 +403,6 @@ void ModelChoice::relabel_with_missing_axis(const StageProblem& regular_problem,
   regular = std::move(drawn);
   input = std::move(with_axis);
   relabeled = std::move(labels_with_axis);
-  chain_labels = &relabeled;
   result.directions = input.directions;
   result.labels = relabeled;
 }
@@ -462,7 +459,7 @@ void ModelChoice::redraw_stretches() {
   if (stretches.empty()) return;
   // The chain's labels with the stretches' edges labeled as the lattice labeling has them
   // (the chain's directions, then the lattice's four).
-  EdgeLabels mixed = *chain_labels;
+  EdgeLabels mixed = chain_labels();
   for (const Stretch& s : stretches)
     for (int j = 0; j < s.count; ++j) {
       const std::size_t i = (s.first + j) % rings[s.ring].size();

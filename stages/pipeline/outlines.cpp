@@ -77,10 +77,8 @@ double contour_fit(const std::vector<Ring>& rings, const PolygonWithHoles& polyg
 double contour_fit(const std::vector<Ring>& rings, const std::vector<std::vector<std::pair<double, double>>>& distances) {
   double sum = 0, total = 0;
   for (std::size_t r = 0; r < rings.size(); ++r) {
-    double ring_sum = 0, weight = 0;  // (the length-weighted mean, as mean_distance_to_boundary takes it)
-    for (const auto& [d, w] : distances[r]) ring_sum += w * d, weight += w;
     const double length = perimeter(rings[r]);
-    sum += length * (weight > 0 ? ring_sum / weight : 0.0);
+    sum += length * mean_distance(distances[r]);
     total += length;
   }
   return total > 0 ? sum / total : 0.0;
