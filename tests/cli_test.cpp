@@ -497,6 +497,53 @@ TEST_F(Cli, AThinRowUnderAWobbleHasSquareEnds) {
       << without.right << " of " << without.corners << " corners square): the test no longer shows the case";
 }
 
+// A tile cut from a larger mask: the buildings its edge cuts are drawn up to the edge and no
+// farther, their walls along their own directions (traced swept out across the edge,
+// stages.contour.edge_sweep_m, and clipped back).
+TEST_F(Cli, TheBuildingsATilesEdgeCutsEndOnIt) {
+  CommandRun r = lodforge("synth -q --size-m 200x200 --pixel-size 0.1 --seed 3 --set boundary_noise_m=0.5 --set noise_wavelength_m=8"
+                          " --set corner_radius_m=1 --out " + path("sim"));
+  ASSERT_EQ(r.code, 0) << r.output;
+  GDALAllRegister();
+  // The tile: the mask's 120 m from the west (its east edge cuts buildings).
+  {
+    GDALDataset* src = static_cast<GDALDataset*>(GDALOpen(path("sim/seg_class.tif").c_str(), GA_ReadOnly));
+    ASSERT_NE(src, nullptr);
+    GDALDriver* gtiff = GetGDALDriverManager()->GetDriverByName("GTiff");
+    GDALDataset* tile = gtiff->Create(path("tile.tif").c_str(), 1200, src->GetRasterYSize(), 1, GDT_Byte, nullptr);
+    double gt[6];
+    src->GetGeoTransform(gt);
+    tile->SetGeoTransform(gt);
+    tile->SetProjection(src->GetProjectionRef());
+    std::vector<uint8_t> rows(std::size_t(1200) * std::size_t(src->GetRasterYSize()));
+    ASSERT_EQ(src->GetRasterBand(1)->RasterIO(GF_Read, 0, 0, 1200, src->GetRasterYSize(), rows.data(), 1200, src->GetRasterYSize(), GDT_Byte, 0, 0),
+              CE_None);
+    ASSERT_EQ(tile->GetRasterBand(1)->RasterIO(GF_Write, 0, 0, 1200, src->GetRasterYSize(), rows.data(), 1200, src->GetRasterYSize(), GDT_Byte, 0, 0),
+              CE_None);
+    GDALClose(tile);
+    GDALClose(src);
+  }
+  const double east = 85000 + 120;  // (synth's city starts at 85000)
+  // Per run: the footprints reaching past the tile's east edge, and those ending on it.
+  const auto count = [&](const std::string& name, const std::string& options) {
+    r = lodforge("regularize -q --mask " + path("tile.tif") + " " + options + " --out " + path(name));
+    EXPECT_EQ(r.code, 0) << r.output;
+    std::size_t beyond = 0, on = 0;
+    for (const PolygonWithHoles& p : read_polygons(path(name), name)) {
+      double max_x = -1e300;
+      for (const Vec2& v : p.outer) max_x = std::max(max_x, v.x());
+      beyond += max_x > east + 1e-6;
+      on += std::abs(max_x - east) <= 1e-6;
+    }
+    return std::pair{beyond, on};
+  };
+  const auto [beyond, on] = count("default.gpkg", "");
+  EXPECT_EQ(beyond, 0u);
+  EXPECT_GE(on, 3u);
+  const auto [beyond_before, on_before] = count("cut.gpkg", "--set stages.contour.edge_sweep_m=0");
+  EXPECT_GE(beyond_before, 2u) << "traced as cut, no outline reaches past the edge any more: the test no longer shows the case";
+}
+
 TEST_F(Cli, OptionsPrintsDefaults) {
   const CommandRun r = lodforge("options");
   EXPECT_EQ(r.code, 0);

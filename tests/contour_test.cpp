@@ -294,5 +294,63 @@ TEST(Contour, TracedRingsHoldTheirComponentsPixelsAndOnlyDiagonalFills) {
   }
 }
 
+// A rectangle at 30 degrees on a canvas of 0.5 m pixels, the raster its columns from 40 on: the
+// raster's left edge cuts it (canvas: the whole rectangle).
+struct CutRectangle {
+  cv::Mat canvas = cv::Mat::zeros(240, 240, CV_8U);
+  cv::Mat raster;
+  explicit CutRectangle(cv::Point2f centre, cv::Size2f size) {
+    cv::Point2f corners[4];
+    cv::RotatedRect(centre, size, 30).points(corners);
+    std::vector<cv::Point> polygon;
+    for (const cv::Point2f& c : corners) polygon.emplace_back(int(std::lround(c.x)), int(std::lround(c.y)));
+    cv::fillConvexPoly(canvas, polygon, cv::Scalar(1));
+    raster = canvas.colRange(40, 240).clone();
+  }
+};
+
+TEST(Contour, ABuildingTheRastersEdgeCutsIsTracedGoingOnAlongItsWalls) {
+  const CutRectangle r(cv::Point2f(70, 120), cv::Size2f(170, 50));
+  ContourOptions o = no_minimum();
+  const GeoTransform t = transform(100, 200, 0.5);
+  // Not told where the raster's edge is: traced as it is, cut.
+  const auto plain = extract_contours(r.raster, t, o);
+  ASSERT_EQ(plain.buildings.size(), 1u);
+  EXPECT_TRUE(plain.buildings[0].cut.empty());
+  double plain_min = 1e9;
+  for (const Vec2& p : plain.buildings[0].rings[0]) plain_min = std::min(plain_min, p.x());
+  EXPECT_DOUBLE_EQ(plain_min, 100.0);
+  // Told: swept out 4 m (8 pixels) across the edge, and the raster's extent kept to clip to.
+  const auto swept = extract_contours(r.raster, t, o, {}, cv::Rect(0, 0, r.raster.cols, r.raster.rows));
+  ASSERT_EQ(swept.buildings.size(), 1u);
+  const BuildingContour& b = swept.buildings[0];
+  ASSERT_EQ(b.cut.size(), 4u);
+  EXPECT_DOUBLE_EQ(std::abs(signed_area(b.cut)), 100.0 * 120.0);
+  EXPECT_EQ(b.bbox, plain.buildings[0].bbox);
+  EXPECT_EQ(b.pixel_count, plain.buildings[0].pixel_count);
+  // Beyond the edge, the swept ring covers what the rectangle itself covers there: its walls go on.
+  cv::Mat drawn = cv::Mat::zeros(r.canvas.size(), CV_8U);
+  std::vector<cv::Point> pixels;
+  for (const Vec2& p : b.rings[0]) pixels.emplace_back(int(std::lround((p.x() - 100) / 0.5)) + 40, int(std::lround((200 - p.y()) / 0.5)));
+  cv::fillPoly(drawn, std::vector<std::vector<cv::Point>>{pixels}, cv::Scalar(1));
+  const cv::Rect band(32, 0, 8, 240);
+  const double both = cv::countNonZero(drawn(band) & r.canvas(band)), either = cv::countNonZero(drawn(band) | r.canvas(band));
+  ASSERT_GT(either, 200);
+  EXPECT_GT(both / either, 0.9) << "the sweep beyond the edge is not the rectangle going on";
+  EXPECT_LT(cv::countNonZero(drawn.colRange(0, 31)), 40) << "swept farther than 4 m";
+}
+
+TEST(Contour, ABuildingThatEndsAtTheRastersEdgeIsNotSwept) {
+  // Its corner, pointing at the edge, crosses it by a metre: it is less than half as wide at the
+  // edge as 4 m inside, so it ends there. Clipped to the raster (cut kept), not swept.
+  const CutRectangle r(cv::Point2f(40 - 2 + 0.5f * (50 * 0.866f + 30 * 0.5f), 120), cv::Size2f(50, 30));
+  const auto swept = extract_contours(r.raster, transform(100, 200, 0.5), no_minimum(), {}, cv::Rect(0, 0, r.raster.cols, r.raster.rows));
+  ASSERT_EQ(swept.buildings.size(), 1u);
+  EXPECT_EQ(swept.buildings[0].cut.size(), 4u);
+  double min_x = 1e9;
+  for (const Vec2& p : swept.buildings[0].rings[0]) min_x = std::min(min_x, p.x());
+  EXPECT_DOUBLE_EQ(min_x, 100.0);
+}
+
 }  // namespace
 }  // namespace lodforge

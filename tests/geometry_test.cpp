@@ -123,6 +123,21 @@ TEST(Geometry, RemoveDegenerateVertices) {
   EXPECT_DOUBLE_EQ(signed_area(clean), 4.0);
 }
 
+TEST(Geometry, FlattenAlongLineDropsShallowNotchesBetweenItsVerticesOnTheLine) {
+  // A 10 x 5 rectangle clipped along y = 0, where the outline dipped 0.3 in and 0.2 out, and
+  // bit 2 deep.
+  const Ring ring = {{0, 0}, {2, 0}, {2, 0.3}, {3, 0.3}, {3, 0}, {4, 0}, {4.5, -0.2}, {5, 0}, {6, 0}, {6, 2}, {7, 2}, {7, 0},
+                     {10, 0}, {10, 5}, {0, 5}};
+  const Ring flat = remove_degenerate_vertices(flatten_along_line(ring, {0, 0}, {10, 0}, 0.5), 1e-9);
+  // The shallow dips go; the 2 deep bite stays, and so does the rest of the ring.
+  const Ring expected = {{0, 0}, {6, 0}, {6, 2}, {7, 2}, {7, 0}, {10, 0}, {10, 5}, {0, 5}};
+  EXPECT_EQ(flat, expected);
+  // Shallower than they are: nothing goes.
+  EXPECT_EQ(flatten_along_line(ring, {0, 0}, {10, 0}, 0.1), ring);
+  // Along another line of the ring (x = 10), nothing to flatten: its two vertices there are adjacent.
+  EXPECT_EQ(flatten_along_line(ring, {10, 0}, {10, 5}, 0.5), ring);
+}
+
 TEST(Geometry, DouglasPeuckerKeepsCornersWithinTolerance) {
   Ring ring;
   for (int i = 0; i < 10; ++i) ring.emplace_back(i, (i % 2) * 0.1);

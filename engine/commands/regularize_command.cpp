@@ -113,7 +113,8 @@ int run_regularize(int argc, char** argv) {
   const double pixel_size = raster.transform.pixel_size();
   spdlog::info("{}: {} x {} pixels of {:.3g} m, buildings = {}", mask_path, raster.mask.cols, raster.mask.rows, pixel_size,
                selector.describe());
-  const ContourResult contours = extract_contours(raster.mask, raster.transform, options.contour);
+  const ContourResult contours =
+      extract_contours(raster.mask, raster.transform, options.contour, {}, cv::Rect(0, 0, raster.mask.cols, raster.mask.rows));
   const std::size_t count = contours.buildings.size();
   if (count == 0) {
     std::string held;  // (what the raster holds, which may tell a wrong selector: a probability read by a value)
@@ -139,7 +140,8 @@ int run_regularize(int argc, char** argv) {
     // (Its time: each start and round, summed and shared by the buildings; the averaging and the
     // tracing, as the tracing at the pixel, are not a building's regularization.)
     const MaskRaster half = averaged(raster, 2);
-    const ContourResult coarse = extract_contours(half.mask, half.transform, options.contour);
+    const ContourResult coarse =
+        extract_contours(half.mask, half.transform, options.contour, {}, cv::Rect(0, 0, half.mask.cols, half.mask.rows));
     const MaskNoise noise = pooled_noise(coarse.buildings, half.transform.pixel_size(), options.core, &coarse_samples, &coarse_seconds);
     coarse_noise = coarse_noise_taken(noise, pixel_size, options.core);
     const bool resolved = coarse_noise.has_value();

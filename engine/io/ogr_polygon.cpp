@@ -46,6 +46,29 @@ PolygonWithHoles from_ogr_polygon(const OGRPolygon& p) {
   return out;
 }
 
+std::optional<PolygonWithHoles> clip_polygon(const PolygonWithHoles& polygon, const Ring& region) {
+  const std::unique_ptr<OGRPolygon> p = to_ogr_polygon(polygon), r = to_ogr_polygon({region, {}});
+  const std::unique_ptr<OGRGeometry> clipped(p->Intersection(r.get()));
+  if (!clipped) return std::nullopt;
+  std::optional<PolygonWithHoles> best;
+  double best_area = 0;
+  const auto take = [&](const OGRGeometry* g) {
+    if (wkbFlatten(g->getGeometryType()) != wkbPolygon) return;
+    const OGRPolygon* part = g->toPolygon();
+    if (part->get_Area() <= best_area) return;
+    PolygonWithHoles out = from_ogr_polygon(*part);
+    out.outer = remove_degenerate_vertices(out.outer, 1e-9);
+    for (Ring& h : out.holes) h = remove_degenerate_vertices(h, 1e-9);
+    if (out.outer.size() < 3) return;
+    best_area = part->get_Area();
+    best = std::move(out);
+  };
+  if (const auto* collection = dynamic_cast<const OGRGeometryCollection*>(clipped.get()))
+    for (const OGRGeometry* g : *collection) take(g);
+  else take(clipped.get());
+  return best;
+}
+
 std::vector<PolygonWithHoles> read_polygons(const std::string& path, const std::string& label, std::string* crs_wkt,
                                             std::vector<std::string>* names) {
   if (path.rfind("/vsi", 0) != 0 && !std::filesystem::exists(path)) throw InputError(label + " '" + path + "': file not found");

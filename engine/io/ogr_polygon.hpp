@@ -1,6 +1,7 @@
 // Conversions between the core's polygons and OGR geometries, and reading polygon files.
 #pragma once
 #include <memory>
+#include <optional>
 #include <ogr_geometry.h>
 #include <string>
 #include <vector>
@@ -14,6 +15,10 @@ OGRLinearRing to_ogr_ring(const Ring& ring);  // closed (first point repeated)
 
 // Oriented as the core expects: outer counter-clockwise, holes clockwise.
 PolygonWithHoles from_ogr_polygon(const OGRPolygon& polygon);
+
+// The polygon clipped to a convex region (a ring): its largest polygon part (GEOS), with the
+// vertices where an edge goes on straight removed; nothing where none is left.
+std::optional<PolygonWithHoles> clip_polygon(const PolygonWithHoles& polygon, const Ring& region);
 
 // Every polygon of every layer of a vector file (multipolygons split into their parts); of the
 // layer "footprints" alone when there is one (lodforge's GeoPackages: not the LOD1 faces). Throws

@@ -12,6 +12,7 @@
 
 #include "directions/lattice.hpp"
 #include "geometry/polygon.hpp"
+#include "io/ogr_polygon.hpp"
 #include "normals/smoothing.hpp"
 #include "run/tiles.hpp"
 
@@ -41,10 +42,24 @@ void start_each(const std::vector<std::size_t>& indices, double smoothing_noise_
   });
 }
 
-std::vector<NoiseSample> samples_of(const std::vector<BuildingStart>& starts) {
+std::vector<NoiseSample> samples_of(const std::vector<BuildingStart>& starts, bool whole_only = false) {
   std::vector<NoiseSample> samples;
-  for (const BuildingStart& s : starts) samples.push_back(s.sample);
+  for (const BuildingStart& s : starts) samples.push_back(whole_only && !s.cut.empty() ? NoiseSample{} : s.sample);
   return samples;
+}
+
+// Whether the buildings the raster's edge cuts are left out of the mask's noise: where enough
+// whole buildings measure it (noise.pooled_whole). cut: per sample, whether its building is cut.
+bool whole_only(const std::vector<NoiseSample>& samples, const std::vector<bool>& cut, const CoreOptions& options) {
+  if (options.noise.pooled_whole <= 0) return false;
+  std::size_t whole = 0;
+  for (std::size_t i = 0; i < samples.size(); ++i) whole += !cut[i] && samples[i].weight_m > 0;
+  return whole >= std::size_t(options.noise.pooled_whole);
+}
+std::vector<bool> cut_of(const std::vector<BuildingStart>& starts) {
+  std::vector<bool> cut;
+  for (const BuildingStart& s : starts) cut.push_back(!s.cut.empty());
+  return cut;
 }
 
 std::size_t measured(const std::vector<NoiseSample>& samples) {
@@ -110,9 +125,10 @@ PooledStarts pool_starts(const std::vector<BuildingContour>& buildings, double p
   pooled.starts.resize(buildings.size());
   std::vector<std::size_t> all(buildings.size());
   std::iota(all.begin(), all.end(), std::size_t(0));
-  start_each(all, 0.0, [&](std::size_t i) { return start_building(buildings[i].rings, pixel_size, options, true, 0.0); }, pooled.starts,
+  start_each(all, 0.0, [&](std::size_t i) { return start_building(buildings[i].rings, pixel_size, options, true, 0.0, buildings[i].cut); }, pooled.starts,
              seconds);
-  std::vector<NoiseSample> samples = samples_of(pooled.starts);
+  const bool whole = whole_only(samples_of(pooled.starts), cut_of(pooled.starts), options);
+  std::vector<NoiseSample> samples = samples_of(pooled.starts, whole);
   const std::vector<std::size_t> judged = spread_indices(buildings.size(), std::size_t(std::max(1, options.smoothing.noise_gain_buildings)));
   std::vector<std::size_t> rest;
   std::set_difference(all.begin(), all.end(), judged.begin(), judged.end(), std::back_inserter(rest));
@@ -124,7 +140,7 @@ PooledStarts pool_starts(const std::vector<BuildingContour>& buildings, double p
     start_each(judged, wider_m, [&](std::size_t i) { return restart_building(buildings[i].rings, pixel_size, options, pooled.starts[i], wider_m); },
                trial, seconds);
     std::vector<NoiseSample> judged_samples;
-    for (std::size_t i : judged) judged_samples.push_back(trial[i].sample);
+    for (std::size_t i : judged) judged_samples.push_back(whole && !trial[i].cut.empty() ? NoiseSample{} : trial[i].sample);
     return judged_samples;
   };
   const auto keep_judged = [&] {
@@ -134,7 +150,7 @@ PooledStarts pool_starts(const std::vector<BuildingContour>& buildings, double p
     start_each(rest, wider_m,
                [&](std::size_t i) { return restart_building(buildings[i].rings, pixel_size, options, std::move(pooled.starts[i]), wider_m); },
                pooled.starts, seconds);
-    return samples_of(pooled.starts);
+    return samples_of(pooled.starts, whole);
   };
   pooled.noise = pool_in_rounds(samples, judged, pixel_size, options, judge, keep_judged, finish);
   pooled.samples = measured(samples);
@@ -206,9 +222,11 @@ bool pools_rounding(const std::string& regularizer, const CoreOptions& options) 
   return regularizer == "deformation" && options.models.pooled_rounding_share > 0 && options.models.rounding_noise > 0;
 }
 
-RegularizedBatch regularize_batch(const std::string& regularizer, const std::vector<BuildingContour>& buildings,
-                                  double pixel_size, const CoreOptions& options, std::optional<MaskNoise> noise,
-                                  const Lenders& lenders, const std::function<void()>& on_done) {
+namespace {
+
+RegularizedBatch regularize_traced(const std::string& regularizer, const std::vector<BuildingContour>& buildings,
+                                   double pixel_size, const CoreOptions& options, std::optional<MaskNoise> noise,
+                                   const Lenders& lenders, const std::function<void()>& on_done) {
   RegularizedBatch batch;
   batch.results.resize(buildings.size());
   std::vector<BuildingStart> starts;
@@ -243,6 +261,14 @@ RegularizedBatch regularize_batch(const std::string& regularizer, const std::vec
     }
     for (BuildingStart& s : starts) s.mask_rounding_m = pool_rounding ? -1.0 : batch.rounding_m;
   }
+  // The buildings the raster's edge cuts measure their noise inside it (BuildingStart::cut).
+  if (regularizer == "deformation" && std::any_of(buildings.begin(), buildings.end(), [](const BuildingContour& b) { return !b.cut.empty(); })) {
+    if (starts.empty()) {
+      starts.resize(buildings.size());
+      for (BuildingStart& s : starts) s.smoothing_noise_m = batch.noise_smoothing_m;
+    }
+    for (std::size_t i = 0; i < buildings.size(); ++i) starts[i].cut = buildings[i].cut;
+  }
   tbb::parallel_for(std::size_t(0), buildings.size(), [&](std::size_t i) {
     batch.results[i] = regularize_with(regularizer, buildings[i].rings, pixel_size, options, batch.noise_floor_m,
                                        starts.empty() ? BuildingStart{} : std::move(starts[i]));
@@ -257,6 +283,35 @@ RegularizedBatch regularize_batch(const std::string& regularizer, const std::vec
   batch.rounding_m = pooled_rounding(measured_m, options);
   tbb::parallel_for(std::size_t(0), buildings.size(), [&](std::size_t i) {
     take_mask_rounding(buildings[i].rings, pixel_size, options, batch.rounding_m, batch.results[i]);
+  });
+  return batch;
+}
+
+}  // namespace
+
+RegularizedBatch regularize_batch(const std::string& regularizer, const std::vector<BuildingContour>& buildings,
+                                  double pixel_size, const CoreOptions& options, std::optional<MaskNoise> noise,
+                                  const Lenders& lenders, const std::function<void()>& on_done) {
+  RegularizedBatch batch = regularize_traced(regularizer, buildings, pixel_size, options, std::move(noise), lenders, on_done);
+  // The buildings the raster's edge cuts, traced swept out across it: clipped back to the raster,
+  // and the notches flattened that an outline crossing the edge back and forth within the mask's
+  // noise (at least two pixels) leaves along it.
+  const double depth = std::max(2 * pixel_size, batch.noise_floor_m);
+  tbb::parallel_for(std::size_t(0), buildings.size(), [&](std::size_t i) {
+    const Ring& cut = buildings[i].cut;
+    if (cut.empty()) return;
+    BuildingResult& r = batch.results[i];
+    std::optional<PolygonWithHoles> clipped = clip_polygon(r.footprint, cut);
+    if (!clipped) return;
+    PolygonWithHoles flat = *clipped;
+    for (std::size_t k = 0; k < cut.size(); ++k) {
+      const Vec2 &a = cut[k], &b = cut[(k + 1) % cut.size()];
+      flat.outer = flatten_along_line(flat.outer, a, b, depth);
+      for (Ring& h : flat.holes) h = flatten_along_line(h, a, b, depth);
+    }
+    flat.outer = remove_degenerate_vertices(flat.outer, 1e-9);
+    for (Ring& h : flat.holes) h = remove_degenerate_vertices(h, 1e-9);
+    r.footprint = polygon_problem(flat).empty() ? std::move(flat) : std::move(*clipped);
   });
   return batch;
 }
@@ -308,9 +363,12 @@ std::vector<LatticeLender> lattice_lenders(const MaskWindowReader& mask, cv::Siz
   // centre) comes within the radius of the centres' box.
   const cv::Rect zone = cv::Rect(cv::Point(int(std::floor(x0 - m.reach.x())) - window.x, int(std::floor(y0 - m.reach.y())) - window.y),
                                  cv::Point(int(std::ceil(x1 + m.reach.x())) - window.x, int(std::ceil(y1 + m.reach.y())) - window.y));
-  ContourResult traced = extract_contours(mask.read(window), transform.window(window.x, window.y), contour, [&](const cv::Rect& box, const cv::Point&) {
-    return !touches_inner_border(box, window, raster) && box.width <= m.extent.x() && box.height <= m.extent.y() && !(box & zone).empty();
-  });
+  ContourResult traced = extract_contours(
+      mask.read(window), transform.window(window.x, window.y), contour,
+      [&](const cv::Rect& box, const cv::Point&) {
+        return !touches_inner_border(box, window, raster) && box.width <= m.extent.x() && box.height <= m.extent.y() && !(box & zone).empty();
+      },
+      cv::Rect(-window.tl(), raster));
   // Each one's chords' lattice (the costly part) where its centre lies within the radius of one
   // of the buildings', or within half of it and its box's diagonal (its box may come within half
   // the radius): the others lend to none of them.
@@ -373,10 +431,10 @@ std::size_t visit_survey_cells(const std::function<cv::Mat(const cv::Rect&)>& re
   for (const cv::Rect& cell : cells) {
     const cv::Rect window = cv::Rect(cell.x - margin, cell.y - margin, cell.width + 2 * margin, cell.height + 2 * margin) &
                             cv::Rect(0, 0, raster.width, raster.height);
-    ContourResult traced =
-        extract_contours(read(window), transform.window(window.x, window.y), contour, [&](const cv::Rect& box, const cv::Point& at) {
-          return cell.contains(at + window.tl()) && !touches_inner_border(box, window, raster);
-        });
+    ContourResult traced = extract_contours(
+        read(window), transform.window(window.x, window.y), contour,
+        [&](const cv::Rect& box, const cv::Point& at) { return cell.contains(at + window.tl()) && !touches_inner_border(box, window, raster); },
+        cv::Rect(-window.tl(), raster));
     visit(first, traced.buildings);
     first += traced.buildings.size();
   }
@@ -408,37 +466,46 @@ NoiseSurvey survey_noise(const MaskWindowReader& mask, cv::Size fine_raster, con
   // judged on), not every surveyed building's.
   const auto each_window = [&](const SurveyVisit& visit) { return visit_survey_cells(read, raster, transform, contour, cells, window_px, visit); };
   // Every building's sample, its normals smoothed for smoothing_noise_m.
+  // (Whether the buildings the raster's edge cuts pool, as pool_starts decides: on the first round.)
+  std::optional<bool> whole;
   const auto measure_all = [&](double smoothing_noise_m) {
-    std::vector<NoiseSample> samples;
+    std::vector<BuildingStart> all_starts;
     each_window([&](std::size_t, std::vector<BuildingContour>& buildings) {
       std::vector<BuildingStart> starts(buildings.size());
       std::vector<std::size_t> all(buildings.size());
       std::iota(all.begin(), all.end(), std::size_t(0));
       start_each(all, smoothing_noise_m,
-                 [&](std::size_t i) { return start_building(buildings[i].rings, pixel_size, options, true, smoothing_noise_m); }, starts,
+                 [&](std::size_t i) { return start_building(buildings[i].rings, pixel_size, options, true, smoothing_noise_m, buildings[i].cut); }, starts,
                  nullptr);
-      for (const BuildingStart& start : starts) samples.push_back(start.sample);
+      for (BuildingStart& start : starts) {
+        start.normals.clear();  // (a survey keeps the samples only)
+        start.chord.chords.clear();
+        all_starts.push_back(std::move(start));
+      }
     });
-    return samples;
+    if (!whole) whole = whole_only(samples_of(all_starts), cut_of(all_starts), options);
+    return samples_of(all_starts, *whole);
   };
   std::vector<NoiseSample> samples = measure_all(0.0);
   const std::vector<std::size_t> judged = spread_indices(samples.size(), std::size_t(std::max(1, options.smoothing.noise_gain_buildings)));
-  std::vector<std::vector<Ring>> judged_rings;  // read when a round is first judged
+  std::vector<BuildingContour> judged_contours;  // read when a round is first judged
   const auto judge = [&](double wider_m) {
-    if (judged_rings.empty() && !judged.empty()) {
-      judged_rings.resize(judged.size());
+    if (judged_contours.empty() && !judged.empty()) {
+      judged_contours.resize(judged.size());
       each_window([&](std::size_t first, std::vector<BuildingContour>& buildings) {
         for (std::size_t k = std::lower_bound(judged.begin(), judged.end(), first) - judged.begin();
              k < judged.size() && judged[k] < first + buildings.size(); ++k)
-          judged_rings[k] = std::move(buildings[judged[k] - first].rings);
+          judged_contours[k] = std::move(buildings[judged[k] - first]);
       });
     }
     std::vector<BuildingStart> trial(judged.size());
     std::vector<std::size_t> order(judged.size());
     std::iota(order.begin(), order.end(), std::size_t(0));
-    start_each(order, wider_m, [&](std::size_t k) { return start_building(judged_rings[k], pixel_size, options, true, wider_m); }, trial,
+    start_each(order, wider_m, [&](std::size_t k) {
+      return start_building(judged_contours[k].rings, pixel_size, options, true, wider_m, judged_contours[k].cut);
+    }, trial,
                nullptr);
-    return samples_of(trial);
+    return samples_of(trial, *whole);
   };
   survey.noise = pool_in_rounds(samples, judged, pixel_size, options, judge, [] {}, measure_all);
   survey.buildings = measured(samples);

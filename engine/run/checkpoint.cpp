@@ -19,7 +19,7 @@ namespace fs = std::filesystem;
 namespace {
 
 constexpr std::uint32_t kMagic = 0x4c4f4446;  // "LODF"
-constexpr std::uint32_t kVersion = 5;  // 2: a checksum of the payload in the header; 3: each building's regularization seconds; 4: the heights' statistics; 5: each building's model
+constexpr std::uint32_t kVersion = 6;  // 2: a checksum of the payload in the header; 3: each building's regularization seconds; 4: the heights' statistics; 5: each building's model; 6: the contours' cut (the raster's extent where its edge cuts them)
 
 class Writer {
  public:
@@ -200,6 +200,7 @@ void CheckpointStore::save_contours(const std::string& tile, std::uint64_t key, 
     w.pod<std::int32_t>(b.bbox.width);
     w.pod<std::int32_t>(b.bbox.height);
     w.rings(b.rings);
+    w.ring(b.cut);
   }
   write_atomically(path("contours", tile), w.str(), key);
 }
@@ -226,6 +227,7 @@ std::optional<TileBuildings> CheckpointStore::load_contours(const std::string& t
       b.bbox.width = r->pod<std::int32_t>();
       b.bbox.height = r->pod<std::int32_t>();
       b.rings = r->rings();
+      b.cut = r->ring();
     }
     if (!r->at_end()) return std::nullopt;
     return t;

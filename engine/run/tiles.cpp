@@ -240,11 +240,14 @@ TileBuildings trace_tile(const TileWindow& w, const TileGrid& grid, int tile, co
   const cv::Rect window = w.window;
   const GeoTransform local = transform.window(window.x, window.y);
   const cv::Size raster = grid.raster;
-  const ContourResult contours = extract_contours(w.components, local, options, [&](const cv::Rect& box, const cv::Point& first) {
-    if (w.groups.count > 0) return owns_block(w, w.groups.label_at(first), tile_rect, raster);  // with a cadastre
-    // Owned (first pixel in the tile) and whole (else it was reported as too large).
-    return tile_rect.contains(first + window.tl()) && !touches_inner_border(box, window, raster);
-  });
+  const ContourResult contours = extract_contours(
+      w.components, local, options,
+      [&](const cv::Rect& box, const cv::Point& first) {
+        if (w.groups.count > 0) return owns_block(w, w.groups.label_at(first), tile_rect, raster);  // with a cadastre
+        // Owned (first pixel in the tile) and whole (else it was reported as too large).
+        return tile_rect.contains(first + window.tl()) && !touches_inner_border(box, window, raster);
+      },
+      cv::Rect(-window.tl(), raster));
   TileBuildings out;
   out.buildings = contours.buildings;
   for (BuildingContour& b : out.buildings) {

@@ -207,13 +207,167 @@ Components label_components(const cv::Mat& mask, int connectivity) {
   return c;
 }
 
+namespace {
+
+// The raster's edges a component's box touches.
+struct CutSides {
+  bool left = false, top = false, right = false, bottom = false;
+  bool any() const { return left || top || right || bottom; }
+};
+CutSides cut_sides(const cv::Rect& box, const cv::Rect& raster) {
+  return {box.x == raster.x, box.y == raster.y, box.x + box.width == raster.x + raster.width,
+          box.y + box.height == raster.y + raster.height};
+}
+
+// The chords a cut building's wall direction is read off (wall_direction), in metres: long enough
+// to average a wobble of a few metres' wavelength out (2 m chords tilted the sweep by several
+// degrees under half a metre of it; 16 m, the chain's lattice.chord_m, fit small pieces less).
+constexpr double kWallChordM = 8.0;
+
+// The main wall direction of a ring traced in its box's pixel corners (radians, modulo a quarter
+// turn): the peak of the length-weighted histogram, in degrees, of the directions of chords of
+// chord_px about each edge, leaving out the chords that reach a vertex on a cut side (the raster's
+// edge, not a wall), refined by their mean within 5 degrees of it. 0 where no chord is left.
+double wall_direction(const Ring& ring, const cv::Size& box, const CutSides& cut, double chord_px) {
+  const std::size_t n = ring.size();
+  if (n < 4) return 0.0;
+  std::vector<double> position(n + 1, 0.0);  // arc length at each vertex
+  std::vector<int> on_edge(2 * n + 1, 0);    // vertices on a cut side before each index, twice round
+  for (std::size_t i = 0; i < n; ++i) position[i + 1] = position[i] + (ring[(i + 1) % n] - ring[i]).norm();
+  for (std::size_t i = 0; i < 2 * n; ++i) {
+    const Vec2& v = ring[i % n];
+    const bool edge = (cut.left && v.x() <= 0) || (cut.top && v.y() <= 0) || (cut.right && v.x() >= box.width) ||
+                      (cut.bottom && v.y() >= box.height);
+    on_edge[i + 1] = on_edge[i] + (edge ? 1 : 0);
+  }
+  const double perimeter = position[n], half = 0.5 * std::min(chord_px, 0.25 * perimeter);
+  // The point at arc length s (any, taken modulo the perimeter) and the index of the vertex after it, unwrapped.
+  const auto at = [&](double s, std::size_t* after) {
+    const double turns = std::floor(s / perimeter), r = s - turns * perimeter;
+    std::size_t i = std::size_t(std::upper_bound(position.begin(), position.end(), r) - position.begin());
+    i = std::min(std::max<std::size_t>(i, 1), n);
+    const double t = (r - position[i - 1]) / std::max(position[i] - position[i - 1], 1e-12);
+    *after = i + std::size_t(std::max(0.0, turns + 1)) * n;  // (shifted by a turn: indices stay positive)
+    return Vec2(ring[i - 1] + t * (ring[i % n] - ring[i - 1]));
+  };
+  std::vector<double> histogram(90, 0.0);
+  std::vector<std::pair<double, double>> chords;  // direction (radians, modulo a quarter turn), weight
+  for (std::size_t i = 0; i < n; ++i) {
+    const double mid = 0.5 * (position[i] + position[i + 1]);
+    std::size_t a = 0, b = 0;
+    const Vec2 pa = at(mid - half, &a), pb = at(mid + half, &b);
+    if (b < a || on_edge[std::min(b, 2 * n)] - on_edge[std::min(a, 2 * n)] > 0 || (b - a >= n)) continue;
+    const Vec2 d = pb - pa;
+    if (d.squaredNorm() <= 0) continue;
+    double angle = std::fmod(std::atan2(d.y(), d.x()), M_PI / 2);
+    if (angle < 0) angle += M_PI / 2;
+    const double w = position[i + 1] - position[i];
+    histogram[std::size_t(std::min(89.0, std::floor(angle * 180 / M_PI)))] += w;
+    chords.emplace_back(angle, w);
+  }
+  if (chords.empty()) return 0.0;
+  int peak = 0;
+  double best = -1;
+  for (int k = 0; k < 90; ++k) {
+    double sum = 0;
+    for (int j = -3; j <= 3; ++j) sum += histogram[std::size_t((k + j + 90) % 90)];
+    if (sum > best) best = sum, peak = k;
+  }
+  const double centre = (peak + 0.5) * M_PI / 180;
+  double c = 0, s = 0;
+  for (const auto& [angle, w] : chords) {
+    const double gap = std::remainder(angle - centre, M_PI / 2);
+    if (std::abs(gap) > 5 * M_PI / 180) continue;
+    c += w * std::cos(4 * angle), s += w * std::sin(4 * angle);
+  }
+  return c == 0 && s == 0 ? centre : std::atan2(s, c) / 4;
+}
+
+// The component (0/1, its box) swept out across each cut side by band_px, along the one of its
+// wall direction's four axes nearest that side's outward normal: the walls along that axis go
+// on straight past the raster's edge, the others turn onto it there. Returns the image, with
+// band_px (rounded up) more on every side and one of padding beyond that.
+cv::Mat swept_across_cut(const cv::Mat& component, const CutSides& cut, double direction, int band, int connectivity) {
+  const int w = component.cols, h = component.rows, o = band + 1;
+  cv::Mat out = cv::Mat::zeros(h + 2 * o, w + 2 * o, CV_8U);
+  component.copyTo(out(cv::Rect(o, o, w, h)));
+  // The axis nearest a side's outward normal: how far it moves along the side (the way j, the
+  // pixel's index along it, grows) a pixel across it (at most one: it is within 45 degrees).
+  const auto slope = [&](const Vec2& normal, const Vec2& along_j) {
+    double best = -2, along = 0;
+    for (int k = 0; k < 4; ++k) {
+      const Vec2 axis(std::cos(direction + k * M_PI / 2), std::sin(direction + k * M_PI / 2));
+      const double across = axis.dot(normal);
+      if (across > best) best = across, along = axis.dot(along_j) / std::max(across, 1e-9);
+    }
+    return along;
+  };
+  const auto put = [&](int x, int y) {
+    if (x >= 0 && y >= 0 && x < out.cols && y < out.rows) out.at<uint8_t>(y, x) = 1;
+  };
+  const auto pixel = [&](int x, int y) { return x >= 0 && y >= 0 && x < w && y < h && component.at<uint8_t>(y, x) != 0; };
+  // A side's pixels, j along it and i inward from it, swept out by k along the axis: what is swept
+  // at j is what the axis's line through j crosses over the band inside, by the majority of its
+  // pixels (a wall along the axis goes on at its line over the band, not at where its wobble
+  // crosses the edge).
+  const auto sweep = [&](bool on, const Vec2& normal, const Vec2& along_j, auto&& inside, auto&& target) {
+    if (!on) return;
+    const double s = slope(normal, along_j);
+    const int length = normal.x() != 0 ? h : w, depth = std::min(band, normal.x() != 0 ? w : h);
+    // Not where the building is less than half as wide at the edge as a band inside: it ends
+    // there (a corner, or an end wall its wobble pushes across the edge), it does not go on.
+    int at_edge = 0, at_depth = 0, first = length, last = -1;
+    for (int j = 0; j < length; ++j) {
+      if (inside(0, j)) ++at_edge, first = std::min(first, j), last = j;
+      at_depth += inside(depth - 1, j - int(std::lround(s * (depth - 1)))) ? 1 : 0;
+    }
+    if (2 * at_edge < at_depth) return;
+    // (Between its first and last pixels on the edge: past them, a wall across the axis meets the
+    // edge, and the band's majority would carry it on beyond where it does.)
+    for (int j = first; j <= last; ++j) {
+      int set = 0;
+      for (int i = 0; i < depth; ++i) set += inside(i, j - int(std::lround(s * i))) ? 1 : 0;
+      if (2 * set < depth) continue;
+      for (int k = 1; k <= band; ++k) target(k, j + int(std::lround(s * k)));
+    }
+  };
+  sweep(cut.left, Vec2(-1, 0), Vec2(0, 1), [&](int i, int j) { return pixel(i, j); }, [&](int k, int j) { put(o - k, o + j); });
+  sweep(cut.right, Vec2(1, 0), Vec2(0, 1), [&](int i, int j) { return pixel(w - 1 - i, j); },
+        [&](int k, int j) { put(o + w - 1 + k, o + j); });
+  sweep(cut.top, Vec2(0, -1), Vec2(1, 0), [&](int i, int j) { return pixel(j, i); }, [&](int k, int j) { put(o + j, o - k); });
+  sweep(cut.bottom, Vec2(0, 1), Vec2(1, 0), [&](int i, int j) { return pixel(j, h - 1 - i); },
+        [&](int k, int j) { put(o + j, o + h - 1 + k); });
+  // The swept pixels that do not join the component (a band's majority across the edge where
+  // the edge's own pixels are not the building's) are left out, and the holes the sweep closed
+  // (a shallow bay's mouth) are filled: it adds no ring, and takes no pixel of the raster away.
+  cv::Mat labels;
+  cv::connectedComponents(out, labels, connectivity, CV_32S);
+  cv::Point any;
+  for (int y = 0; y < h && any == cv::Point(); ++y)
+    for (int x = 0; x < w; ++x)
+      if (component.at<uint8_t>(y, x)) { any = cv::Point(o + x, o + y); break; }
+  cv::Mat kept = labels == labels.at<int>(any);
+  kept &= 1;
+  const auto holes = [](const cv::Mat& m) {  // (a zero border round m: the background is what a flood from a corner reaches)
+    cv::Mat flooded = m.clone();
+    cv::floodFill(flooded, cv::Point(0, 0), cv::Scalar(2), nullptr, 0, 0, 4);
+    return cv::Mat(flooded == 0);
+  };
+  cv::Mat before = cv::Mat::zeros(out.size(), CV_8U);
+  component.copyTo(before(cv::Rect(o, o, w, h)));
+  kept.setTo(1, holes(kept) & ~holes(before));
+  return kept;
+}
+
+}  // namespace
+
 ContourResult extract_contours(const cv::Mat& mask, const GeoTransform& transform,
-                               const ContourOptions& options, const ComponentFilter& keep) {
-  return extract_contours(label_components(mask, options.connectivity), transform, options, keep);
+                               const ContourOptions& options, const ComponentFilter& keep, const std::optional<cv::Rect>& raster) {
+  return extract_contours(label_components(mask, options.connectivity), transform, options, keep, raster);
 }
 
 ContourResult extract_contours(const Components& components, const GeoTransform& transform,
-                               const ContourOptions& options, const ComponentFilter& keep) {
+                               const ContourOptions& options, const ComponentFilter& keep, const std::optional<cv::Rect>& raster) {
   ContourResult result;
   const int count = components.count;
   // First pixel of each component in raster order, its stable identity: the leftmost in its top row.
@@ -234,8 +388,24 @@ ContourResult extract_contours(const Components& components, const GeoTransform&
     b.first_col = first[std::size_t(k)].x;
     b.first_row = first[std::size_t(k)].y;
     cv::Mat component = components.mask_of(k, 1);  // padded, so that neighbours never fall outside
+    cv::Point origin = b.bbox.tl();                  // of the traced image's first pixel, past its padding
+    const CutSides cut = raster && options.edge_sweep_m > 0 ? cut_sides(b.bbox, *raster) : CutSides{};
+    if (cut.any()) {
+      // Cut by the raster's edge: swept out across it along its own walls (swept_across_cut).
+      const double px = transform.pixel_size();
+      cv::Mat traced = component.clone();
+      const std::vector<Ring> rings = trace_padded(traced);
+      const double direction = rings.empty() ? 0.0 : wall_direction(rings[0], b.bbox.size(), cut, std::max(6.0, kWallChordM / px));
+      const int band = std::max(4, int(std::ceil(options.edge_sweep_m / px)));
+      component = swept_across_cut(components.mask_of(k, 0), cut, direction, band, options.connectivity);
+      origin -= cv::Point(band, band);
+      for (const cv::Point& c : {raster->tl(), cv::Point(raster->x, raster->y + raster->height), raster->br(),
+                                 cv::Point(raster->x + raster->width, raster->y)})
+        b.cut.push_back(transform.to_map(c.x, c.y));
+      if (orientation > 0) std::reverse(b.cut.begin(), b.cut.end());
+    }
     for (Ring& ring : trace_padded(component)) {
-      for (Vec2& p : ring) p = transform.to_map(p.x() + b.bbox.x, p.y() + b.bbox.y);
+      for (Vec2& p : ring) p = transform.to_map(p.x() + origin.x, p.y() + origin.y);
       // A north-up raster (negative determinant) maps pixel orientation to map orientation
       // flipped, which is what trace_component assumes; any other transform is fixed here.
       if (orientation > 0) std::reverse(ring.begin(), ring.end());

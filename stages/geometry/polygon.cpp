@@ -253,6 +253,35 @@ std::size_t remove_spikes(PolygonWithHoles& polygon, double max_angle_deg, doubl
   return changes;
 }
 
+Ring flatten_along_line(const Ring& ring, const Vec2& a, const Vec2& b, double depth) {
+  const std::size_t n = ring.size();
+  const double length = (b - a).norm();
+  if (n < 4 || !(length > 0) || !(depth > 0)) return ring;
+  const Vec2 u = (b - a) / length;
+  const double eps = 1e-9 * std::max(1.0, std::max(length, (ring[0] - a).norm()));
+  std::vector<double> offset(n);
+  std::vector<std::size_t> on;  // the vertices on the line, in order
+  for (std::size_t i = 0; i < n; ++i) {
+    offset[i] = std::abs(cross(u, ring[i] - a));
+    if (offset[i] <= eps) on.push_back(i);
+  }
+  if (on.size() < 2) return ring;
+  std::vector<char> drop(n, 0);
+  for (std::size_t k = 0; k < on.size(); ++k) {
+    const std::size_t i = on[k], j = on[(k + 1) % on.size()];
+    const std::size_t between = (j + n - i - 1) % n;  // (j after i, going round)
+    if (between == 0 || between + 2 > n) continue;
+    bool shallow = true;
+    for (std::size_t s = 1; s <= between && shallow; ++s) shallow = offset[(i + s) % n] <= depth;
+    if (shallow)
+      for (std::size_t s = 1; s <= between; ++s) drop[(i + s) % n] = 1;
+  }
+  Ring out;
+  for (std::size_t i = 0; i < n; ++i)
+    if (!drop[i]) out.push_back(ring[i]);
+  return out.size() >= 3 ? out : ring;
+}
+
 Ring remove_degenerate_vertices(const Ring& ring, double eps) {
   Ring out = ring;
   bool changed = true;

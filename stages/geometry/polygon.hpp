@@ -55,6 +55,12 @@ bool untangle(Ring& ring, double max_width);
 // changes.
 std::size_t remove_spikes(PolygonWithHoles& polygon, double max_angle_deg, double max_side);
 
+// The ring with its dips along the line through a and b flattened: between two of its vertices
+// on the line (within 1e-9 of its length), where every vertex between lies within `depth` of it
+// (on either side), those are dropped and the ring goes along the line. (A clip's cut: where an
+// outline drawn past a raster's edge crossed it back and forth, the clip left notches.)
+Ring flatten_along_line(const Ring& ring, const Vec2& a, const Vec2& b, double depth);
+
 // Removes consecutive duplicates (closer than eps) and vertices whose two edges are collinear
 // (deviation below eps from the line through their neighbours).
 Ring remove_degenerate_vertices(const Ring& ring, double eps);

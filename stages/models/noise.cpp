@@ -107,7 +107,16 @@ std::vector<std::size_t> step_cuts(const std::vector<double>& t, const std::vect
 }  // namespace
 
 double lattice_noise(const std::vector<Ring>& rings, const std::vector<std::vector<Vec2>>& normals, const Vec2& lattice,
-                     double pixel_size, const NoiseOptions& o, double* arc_noise, double* measured) {
+                     double pixel_size, const NoiseOptions& o, double* arc_noise, double* measured, const Ring* within) {
+  const auto counts = [&](const Vec2& p) {
+    if (!within || within->size() < 3) return true;
+    for (std::size_t k = 0; k < within->size(); ++k) {
+      const Vec2 &a = (*within)[k], &b = (*within)[(k + 1) % within->size()];
+      const double side = (b - a).norm();
+      if (side > 0 && cross(b - a, p - a) < pixel_size * side) return false;
+    }
+    return true;
+  };
   const Vec2 axes[4] = {lattice, Vec2(-lattice.y(), lattice.x()), -lattice, Vec2(lattice.y(), -lattice.x())};
   std::vector<std::pair<double, double>> residuals, arc_residuals;  // |distance|, weight
   for (std::size_t r = 0; r < rings.size(); ++r) {
@@ -121,7 +130,8 @@ double lattice_noise(const std::vector<Ring>& rings, const std::vector<std::vect
       // direction held within max_tilt_deg of the lattice: a wall a little off the lattice is
       // still fitted, a wobble's flanks are not.
       double length = 0;
-      const std::vector<std::pair<Vec2, double>> middle = run_middle(ring, first, count, o.trim_m, ring[first], &length);  // midpoint, weight
+      std::vector<std::pair<Vec2, double>> middle = run_middle(ring, first, count, o.trim_m, ring[first], &length);  // midpoint, weight
+      if (within) std::erase_if(middle, [&](const std::pair<Vec2, double>& m) { return !counts(m.first + ring[first]); });
       Vec2 mean = Vec2::Zero();
       double total = 0;
       for (const auto& [p, w] : middle) {

@@ -143,7 +143,8 @@ double building_noise(const std::vector<Ring>& rings, const std::vector<std::vec
   *arc_noise = start.chord_arc_noise_m;
   const double own = std::max(noise_floor_m, follow_chords && start.chord_noise_m >= 0
                                                  ? start.chord_noise_m
-                                                 : lattice_noise(rings, normals, lattice, pixel_size, o.noise, arc_noise));
+                                                 : lattice_noise(rings, normals, lattice, pixel_size, o.noise, arc_noise, nullptr,
+                                                                 start.cut.empty() ? nullptr : &start.cut));
   const bool pooled = noise_floor_m > 0 && o.noise.pooled_floor > 0;
   // (The floor is pooled_floor times the pooled noise: a ceiling of c times the pooled noise is c / pooled_floor floors.)
   // (And a ceiling at least the floor and noise.ceiling_staircase_px's staircase added in quadrature.)
@@ -220,7 +221,7 @@ void run_chain(const std::vector<Ring>& rings, double pixel_size, const CoreOpti
     }
     ~Laps() { next(stage); }
   } laps{&result.chain_seconds.start};
-  if (!started) start = start_building(rings, pixel_size, o, false, start.smoothing_noise_m);
+  if (!started) start = start_building(rings, pixel_size, o, false, start.smoothing_noise_m, Ring(start.cut));
   laps.next(&result.chain_seconds.labeling);
   LabelingInput input = labeling_input(rings, std::move(start.normals));
   if (over_budget()) throw BudgetExceeded("smoothing", "time budget exceeded");
@@ -290,10 +291,18 @@ void run_chain(const std::vector<Ring>& rings, double pixel_size, const CoreOpti
 // The start's noise sample, from its normals and chords.
 void measure_sample(const std::vector<Ring>& rings, double pixel_size, const CoreOptions& o, BuildingStart& start) {
   double arc_noise = 0, measured = 0;
-  double noise = lattice_noise(rings, start.normals, start.chord.direction, pixel_size, o.noise, &arc_noise, &measured);
+  double noise = lattice_noise(rings, start.normals, start.chord.direction, pixel_size, o.noise, &arc_noise, &measured,
+                               start.cut.empty() ? nullptr : &start.cut);
   start.chord_noise_m = noise, start.chord_arc_noise_m = arc_noise;
   if (o.models.arc_noise_ratio > 0) noise = std::min(noise, o.models.arc_noise_ratio * arc_noise);
-  start.sample = measured > 0 ? NoiseSample{noise, perimeter(rings[0])} : NoiseSample{};  // (a clean contour may measure 0, and says so)
+  // Weighed by its perimeter; of a building the raster's edge cuts, by its perimeter inside the raster.
+  double weight = perimeter(rings[0]);
+  if (!start.cut.empty()) {
+    weight = 0;
+    for (std::size_t i = 0; i < rings[0].size(); ++i)
+      if (point_in_ring(rings[0][i] + 0.5 * edge_vector(rings[0], i), start.cut)) weight += edge_vector(rings[0], i).norm();
+  }
+  start.sample = measured > 0 && weight > 0 ? NoiseSample{noise, weight} : NoiseSample{};  // (a clean contour may measure 0, and says so)
 }
 
 }  // namespace
@@ -311,9 +320,10 @@ PolygonWithHoles fallback_footprint(const std::vector<Ring>& rings, double toler
 }
 
 BuildingStart start_building(const std::vector<Ring>& rings, double pixel_size, const CoreOptions& o, bool measure_noise,
-                             double smoothing_noise_m) {
+                             double smoothing_noise_m, const Ring& cut) {
   BuildingStart start;
   start.smoothing_noise_m = smoothing_noise_m;
+  start.cut = cut;
   if (!contour_problem(rings, o).empty()) return start;  // (the chain says why)
   for (const Ring& ring : rings) start.normals.push_back(smooth_normals(ring, pixel_size, o.smoothing, smoothing_noise_m));
   start.chord = chord_lattice(rings, o.lattice);

@@ -97,14 +97,15 @@ struct BuildingStart {
   double chord_noise_m = -1, chord_arc_noise_m = 0;
   double smoothing_noise_m = 0;  // the noise its normals are smoothed for; of an empty start, the noise the chain smooths for
   NeighbourLattice neighbour_lattice;  // the lattice of the buildings around it (neighbour_lattices)
+  Ring cut;  // where the raster's edge cuts the building: the raster's extent (BuildingContour::cut), inside which alone its noise is measured
   double mask_rounding_m = 0;  // the corner rounding pooled over its mask (pooled_rounding), which it takes where it
                                // measures none of its own (models.pooled_rounding_share; 0: none; negative: not known
                                // yet, BuildingResult::unsquared kept for take_mask_rounding)
 };
 // smoothing_noise_m: the boundary noise pooled over the mask that the normals are smoothed for
-// (smoothing.noise_neighbourhood; 0: none known).
+// (smoothing.noise_neighbourhood; 0: none known). cut: BuildingStart::cut.
 BuildingStart start_building(const std::vector<Ring>& rings, double pixel_size, const CoreOptions& options,
-                             bool measure_noise = true, double smoothing_noise_m = 0);
+                             bool measure_noise = true, double smoothing_noise_m = 0, const Ring& cut = {});
 // The same start with its normals smoothed again, for smoothing_noise_m, and its sample measured
 // again (the chords' lattice does not depend on the normals). An empty start stays empty.
 BuildingStart restart_building(const std::vector<Ring>& rings, double pixel_size, const CoreOptions& options, BuildingStart start,
