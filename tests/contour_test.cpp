@@ -294,50 +294,63 @@ TEST(Contour, TracedRingsHoldTheirComponentsPixelsAndOnlyDiagonalFills) {
   }
 }
 
-// A rectangle at 30 degrees on a canvas of 0.5 m pixels, the raster its columns from 40 on: the
-// raster's left edge cuts it (canvas: the whole rectangle).
+// A rectangle at 30 degrees on a canvas of 0.5 m pixels, and the raster: the canvas but 40
+// pixels on one side (left, right, top or bottom), whose edge there cuts the rectangle.
 struct CutRectangle {
   cv::Mat canvas = cv::Mat::zeros(240, 240, CV_8U);
+  cv::Rect raster_in_canvas;
   cv::Mat raster;
-  explicit CutRectangle(cv::Point2f centre, cv::Size2f size) {
+  CutRectangle(cv::Point2f centre, cv::Size2f size, char side = 'l') {
     cv::Point2f corners[4];
     cv::RotatedRect(centre, size, 30).points(corners);
     std::vector<cv::Point> polygon;
     for (const cv::Point2f& c : corners) polygon.emplace_back(int(std::lround(c.x)), int(std::lround(c.y)));
     cv::fillConvexPoly(canvas, polygon, cv::Scalar(1));
-    raster = canvas.colRange(40, 240).clone();
+    raster_in_canvas = side == 'l' ? cv::Rect(40, 0, 200, 240) : side == 'r' ? cv::Rect(0, 0, 200, 240)
+                     : side == 't' ? cv::Rect(0, 40, 240, 200) : cv::Rect(0, 0, 240, 200);
+    raster = canvas(raster_in_canvas).clone();
   }
 };
 
 TEST(Contour, ABuildingTheRastersEdgeCutsIsTracedGoingOnAlongItsWalls) {
-  const CutRectangle r(cv::Point2f(70, 120), cv::Size2f(170, 50));
-  ContourOptions o = no_minimum();
-  const GeoTransform t = transform(100, 200, 0.5);
-  // Not told where the raster's edge is: traced as it is, cut.
-  const auto plain = extract_contours(r.raster, t, o);
-  ASSERT_EQ(plain.buildings.size(), 1u);
-  EXPECT_TRUE(plain.buildings[0].cut.empty());
-  double plain_min = 1e9;
-  for (const Vec2& p : plain.buildings[0].rings[0]) plain_min = std::min(plain_min, p.x());
-  EXPECT_DOUBLE_EQ(plain_min, 100.0);
-  // Told: swept out 4 m (8 pixels) across the edge, and the raster's extent kept to clip to.
-  const auto swept = extract_contours(r.raster, t, o, {}, cv::Rect(0, 0, r.raster.cols, r.raster.rows));
-  ASSERT_EQ(swept.buildings.size(), 1u);
-  const BuildingContour& b = swept.buildings[0];
-  ASSERT_EQ(b.cut.size(), 4u);
-  EXPECT_DOUBLE_EQ(std::abs(signed_area(b.cut)), 100.0 * 120.0);
-  EXPECT_EQ(b.bbox, plain.buildings[0].bbox);
-  EXPECT_EQ(b.pixel_count, plain.buildings[0].pixel_count);
-  // Beyond the edge, the swept ring covers what the rectangle itself covers there: its walls go on.
-  cv::Mat drawn = cv::Mat::zeros(r.canvas.size(), CV_8U);
-  std::vector<cv::Point> pixels;
-  for (const Vec2& p : b.rings[0]) pixels.emplace_back(int(std::lround((p.x() - 100) / 0.5)) + 40, int(std::lround((200 - p.y()) / 0.5)));
-  cv::fillPoly(drawn, std::vector<std::vector<cv::Point>>{pixels}, cv::Scalar(1));
-  const cv::Rect band(32, 0, 8, 240);
-  const double both = cv::countNonZero(drawn(band) & r.canvas(band)), either = cv::countNonZero(drawn(band) | r.canvas(band));
-  ASSERT_GT(either, 200);
-  EXPECT_GT(both / either, 0.9) << "the sweep beyond the edge is not the rectangle going on";
-  EXPECT_LT(cv::countNonZero(drawn.colRange(0, 31)), 40) << "swept farther than 4 m";
+  // The rectangle 60 pixels from the cut side's edge of the canvas, cut 20 pixels into it.
+  for (const char side : {'l', 'r', 't', 'b'}) {
+    const cv::Point2f centre = side == 'l' ? cv::Point2f(70, 120) : side == 'r' ? cv::Point2f(170, 120)
+                             : side == 't' ? cv::Point2f(120, 70) : cv::Point2f(120, 170);
+    const CutRectangle r(centre, side == 'l' || side == 'r' ? cv::Size2f(170, 50) : cv::Size2f(50, 170), side);
+    SCOPED_TRACE(std::string("cut side ") + side);
+    const ContourOptions o = no_minimum();
+    const GeoTransform t = transform(100, 200, 0.5);
+    // Not told where the raster's edge is: traced as it is, cut.
+    const auto plain = extract_contours(r.raster, t, o);
+    ASSERT_EQ(plain.buildings.size(), 1u);
+    EXPECT_TRUE(plain.buildings[0].cut.empty());
+    // Told: swept out 4 m (8 pixels) across the edge, and the raster's extent kept to clip to
+    // (counter-clockwise, as the noise's measure inside it needs).
+    const auto swept = extract_contours(r.raster, t, o, {}, cv::Rect(0, 0, r.raster.cols, r.raster.rows));
+    ASSERT_EQ(swept.buildings.size(), 1u);
+    const BuildingContour& b = swept.buildings[0];
+    ASSERT_EQ(b.cut.size(), 4u);
+    EXPECT_DOUBLE_EQ(signed_area(b.cut), 0.25 * r.raster.cols * r.raster.rows);
+    EXPECT_EQ(b.bbox, plain.buildings[0].bbox);
+    EXPECT_EQ(b.pixel_count, plain.buildings[0].pixel_count);
+    // Beyond the edge, the swept ring covers what the rectangle itself covers there: its walls go on.
+    cv::Mat drawn = cv::Mat::zeros(r.canvas.size(), CV_8U);
+    std::vector<cv::Point> pixels;
+    for (const Vec2& p : b.rings[0])
+      pixels.emplace_back(int(std::lround((p.x() - 100) / 0.5)) + r.raster_in_canvas.x, int(std::lround((200 - p.y()) / 0.5)) + r.raster_in_canvas.y);
+    cv::fillPoly(drawn, std::vector<std::vector<cv::Point>>{pixels}, cv::Scalar(1));
+    const cv::Rect band = side == 'l' ? cv::Rect(32, 0, 8, 240) : side == 'r' ? cv::Rect(200, 0, 8, 240)
+                        : side == 't' ? cv::Rect(0, 32, 240, 8) : cv::Rect(0, 200, 240, 8);
+    const double both = cv::countNonZero(drawn(band) & r.canvas(band)), either = cv::countNonZero(drawn(band) | r.canvas(band));
+    ASSERT_GT(either, 200);
+    EXPECT_GT(both / either, 0.9) << "the sweep beyond the edge is not the rectangle going on";
+    // (The ring drawn on its pixel corners covers a pixel more on the right and bottom: a band one wider.)
+    const cv::Rect reach = (band + cv::Size(2, 2) - cv::Point(1, 1)) & cv::Rect(0, 0, 240, 240);
+    drawn(r.raster_in_canvas).setTo(0);
+    drawn(reach).setTo(0);
+    EXPECT_EQ(cv::countNonZero(drawn), 0) << "swept farther than 4 m";
+  }
 }
 
 TEST(Contour, ABuildingThatEndsAtTheRastersEdgeIsNotSwept) {

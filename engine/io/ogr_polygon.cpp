@@ -48,7 +48,11 @@ PolygonWithHoles from_ogr_polygon(const OGRPolygon& p) {
 
 std::optional<PolygonWithHoles> clip_polygon(const PolygonWithHoles& polygon, const Ring& region) {
   const std::unique_ptr<OGRPolygon> p = to_ogr_polygon(polygon), r = to_ogr_polygon({region, {}});
-  const std::unique_ptr<OGRGeometry> clipped(p->Intersection(r.get()));
+  std::unique_ptr<OGRGeometry> clipped(p->Intersection(r.get()));
+  if (!clipped) {  // (an invalid polygon: made valid first)
+    const std::unique_ptr<OGRGeometry> valid(p->MakeValid());
+    if (valid) clipped.reset(valid->Intersection(r.get()));
+  }
   if (!clipped) return std::nullopt;
   std::optional<PolygonWithHoles> best;
   double best_area = 0;
@@ -59,7 +63,7 @@ std::optional<PolygonWithHoles> clip_polygon(const PolygonWithHoles& polygon, co
     PolygonWithHoles out = from_ogr_polygon(*part);
     out.outer = remove_degenerate_vertices(out.outer, 1e-9);
     for (Ring& h : out.holes) h = remove_degenerate_vertices(h, 1e-9);
-    if (out.outer.size() < 3) return;
+    if (out.outer.size() < 3 || !polygon_problem(out).empty()) return;
     best_area = part->get_Area();
     best = std::move(out);
   };

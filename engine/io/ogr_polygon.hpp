@@ -16,8 +16,9 @@ OGRLinearRing to_ogr_ring(const Ring& ring);  // closed (first point repeated)
 // Oriented as the core expects: outer counter-clockwise, holes clockwise.
 PolygonWithHoles from_ogr_polygon(const OGRPolygon& polygon);
 
-// The polygon clipped to a convex region (a ring): its largest polygon part (GEOS), with the
-// vertices where an edge goes on straight removed; nothing where none is left.
+// The polygon clipped to a convex region (a ring): its largest valid polygon part (GEOS; an
+// invalid polygon made valid first), with the vertices where an edge goes on straight removed;
+// nothing where none is left.
 std::optional<PolygonWithHoles> clip_polygon(const PolygonWithHoles& polygon, const Ring& region);
 
 // Every polygon of every layer of a vector file (multipolygons split into their parts); of the

@@ -302,6 +302,13 @@ RegularizedBatch regularize_batch(const std::string& regularizer, const std::vec
     if (cut.empty()) return;
     BuildingResult& r = batch.results[i];
     std::optional<PolygonWithHoles> clipped = clip_polygon(r.footprint, cut);
+    // (Its outline not clipped, its fallback then: the traced contour, swept, clipped.)
+    if (!clipped && (clipped = clip_polygon(fallback_footprint(buildings[i].rings, options.fallback.tolerance_m), cut))) {
+      r.model.clear();
+      r.ok = false;
+      r.failed_stage = "clip";
+      r.reason = "the outline could not be clipped to the raster's edge (stages.contour.edge_sweep_m)";
+    }
     if (!clipped) return;
     PolygonWithHoles flat = *clipped;
     for (std::size_t k = 0; k < cut.size(); ++k) {
@@ -469,7 +476,8 @@ NoiseSurvey survey_noise(const MaskWindowReader& mask, cv::Size fine_raster, con
   // (Whether the buildings the raster's edge cuts pool, as pool_starts decides: on the first round.)
   std::optional<bool> whole;
   const auto measure_all = [&](double smoothing_noise_m) {
-    std::vector<BuildingStart> all_starts;
+    std::vector<NoiseSample> samples;
+    std::vector<bool> cut;
     each_window([&](std::size_t, std::vector<BuildingContour>& buildings) {
       std::vector<BuildingStart> starts(buildings.size());
       std::vector<std::size_t> all(buildings.size());
@@ -477,14 +485,13 @@ NoiseSurvey survey_noise(const MaskWindowReader& mask, cv::Size fine_raster, con
       start_each(all, smoothing_noise_m,
                  [&](std::size_t i) { return start_building(buildings[i].rings, pixel_size, options, true, smoothing_noise_m, buildings[i].cut); }, starts,
                  nullptr);
-      for (BuildingStart& start : starts) {
-        start.normals.clear();  // (a survey keeps the samples only)
-        start.chord.chords.clear();
-        all_starts.push_back(std::move(start));
-      }
+      for (const BuildingStart& start : starts) samples.push_back(start.sample), cut.push_back(!start.cut.empty());  // (the samples only)
     });
-    if (!whole) whole = whole_only(samples_of(all_starts), cut_of(all_starts), options);
-    return samples_of(all_starts, *whole);
+    if (!whole) whole = whole_only(samples, cut, options);
+    if (*whole)
+      for (std::size_t i = 0; i < samples.size(); ++i)
+        if (cut[i]) samples[i] = NoiseSample{};
+    return samples;
   };
   std::vector<NoiseSample> samples = measure_all(0.0);
   const std::vector<std::size_t> judged = spread_indices(samples.size(), std::size_t(std::max(1, options.smoothing.noise_gain_buildings)));

@@ -232,9 +232,9 @@ double wall_direction(const Ring& ring, const cv::Size& box, const CutSides& cut
   const std::size_t n = ring.size();
   if (n < 4) return 0.0;
   std::vector<double> position(n + 1, 0.0);  // arc length at each vertex
-  std::vector<int> on_edge(2 * n + 1, 0);    // vertices on a cut side before each index, twice round
+  std::vector<int> on_edge(3 * n + 1, 0);    // vertices on a cut side before each index, three times round
   for (std::size_t i = 0; i < n; ++i) position[i + 1] = position[i] + (ring[(i + 1) % n] - ring[i]).norm();
-  for (std::size_t i = 0; i < 2 * n; ++i) {
+  for (std::size_t i = 0; i < 3 * n; ++i) {
     const Vec2& v = ring[i % n];
     const bool edge = (cut.left && v.x() <= 0) || (cut.top && v.y() <= 0) || (cut.right && v.x() >= box.width) ||
                       (cut.bottom && v.y() >= box.height);
@@ -247,7 +247,7 @@ double wall_direction(const Ring& ring, const cv::Size& box, const CutSides& cut
     std::size_t i = std::size_t(std::upper_bound(position.begin(), position.end(), r) - position.begin());
     i = std::min(std::max<std::size_t>(i, 1), n);
     const double t = (r - position[i - 1]) / std::max(position[i] - position[i - 1], 1e-12);
-    *after = i + std::size_t(std::max(0.0, turns + 1)) * n;  // (shifted by a turn: indices stay positive)
+    *after = i + std::size_t(std::max(0.0, turns + 1)) * n;  // (shifted by a turn: indices stay positive, below 3n)
     return Vec2(ring[i - 1] + t * (ring[i % n] - ring[i - 1]));
   };
   std::vector<double> histogram(90, 0.0);
@@ -256,7 +256,7 @@ double wall_direction(const Ring& ring, const cv::Size& box, const CutSides& cut
     const double mid = 0.5 * (position[i] + position[i + 1]);
     std::size_t a = 0, b = 0;
     const Vec2 pa = at(mid - half, &a), pb = at(mid + half, &b);
-    if (b < a || on_edge[std::min(b, 2 * n)] - on_edge[std::min(a, 2 * n)] > 0 || (b - a >= n)) continue;
+    if (b < a || b - a >= n || b > 3 * n || on_edge[b] - on_edge[a] > 0) continue;
     const Vec2 d = pb - pa;
     if (d.squaredNorm() <= 0) continue;
     double angle = std::fmod(std::atan2(d.y(), d.x()), M_PI / 2);
@@ -319,7 +319,7 @@ cv::Mat swept_across_cut(const cv::Mat& component, const CutSides& cut, double d
     int at_edge = 0, at_depth = 0, first = length, last = -1;
     for (int j = 0; j < length; ++j) {
       if (inside(0, j)) ++at_edge, first = std::min(first, j), last = j;
-      at_depth += inside(depth - 1, j - int(std::lround(s * (depth - 1)))) ? 1 : 0;
+      at_depth += inside(depth - 1, j) ? 1 : 0;
     }
     if (2 * at_edge < at_depth) return;
     // (Between its first and last pixels on the edge: past them, a wall across the axis meets the
@@ -338,8 +338,9 @@ cv::Mat swept_across_cut(const cv::Mat& component, const CutSides& cut, double d
   sweep(cut.bottom, Vec2(0, 1), Vec2(1, 0), [&](int i, int j) { return pixel(j, h - 1 - i); },
         [&](int k, int j) { put(o + j, o + h - 1 + k); });
   // The swept pixels that do not join the component (a band's majority across the edge where
-  // the edge's own pixels are not the building's) are left out, and the holes the sweep closed
-  // (a shallow bay's mouth) are filled: it adds no ring, and takes no pixel of the raster away.
+  // the edge's own pixels are not the building's) are left out, and of the holes the sweep closed
+  // (a shallow bay's mouth) the part outside the raster is filled: the bay inside stays a hole,
+  // which the clip opens again, and the sweep adds no pixel inside the raster.
   cv::Mat labels;
   cv::connectedComponents(out, labels, connectivity, CV_32S);
   cv::Point any;
@@ -355,7 +356,9 @@ cv::Mat swept_across_cut(const cv::Mat& component, const CutSides& cut, double d
   };
   cv::Mat before = cv::Mat::zeros(out.size(), CV_8U);
   component.copyTo(before(cv::Rect(o, o, w, h)));
-  kept.setTo(1, holes(kept) & ~holes(before));
+  cv::Mat outside = cv::Mat::ones(out.size(), CV_8U) * 255;
+  outside(cv::Rect(o, o, w, h)).setTo(0);
+  kept.setTo(1, holes(kept) & ~holes(before) & outside);
   return kept;
 }
 
