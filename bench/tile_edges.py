@@ -33,10 +33,13 @@ def main(d):
         c = json.load(open(f'{t}.aoi.geojson'))['features'][0]['geometry']['coordinates'][0]
         x0, y0, x1, y1 = c[0][0], c[0][1], c[2][0], c[2][1]
         truth = ogr.Open(f'{t}.truth.gpkg')
+        layer = truth.GetLayer(0)
+        id_field = layer.GetLayerDefn().GetFieldIndex('id')  # (eval names a feature by its id field where there is one, else its FID)
         cut = {}
-        for f in truth.GetLayer(0):
+        for f in layer:
             e = f.GetGeometryRef().GetEnvelope()
-            cut[str(f.GetFID())] = e[0] < x0 + 0.05 or e[1] > x1 - 0.05 or e[2] < y0 + 0.05 or e[3] > y1 - 0.05
+            name = str(f.GetField(id_field)) if id_field >= 0 and f.IsFieldSetAndNotNull(id_field) else str(f.GetFID())
+            cut[name] = e[0] < x0 + 0.05 or e[1] > x1 - 0.05 or e[2] < y0 + 0.05 or e[3] > y1 - 0.05
         rows = [{row['truth']: row for row in csv.DictReader(open(f'{t}.{r}.csv')) if row['truth']} for r in RUNS]
         for k in set(rows[0]) & set(rows[1]):
             pairs[cut.get(k.split('.')[0], False)].append([rows[i][k] for i in range(len(RUNS))])

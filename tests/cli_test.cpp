@@ -498,8 +498,8 @@ TEST_F(Cli, AThinRowUnderAWobbleHasSquareEnds) {
 }
 
 // A tile cut from a larger mask: the buildings its edge cuts are drawn up to the edge and no
-// farther, their walls along their own directions (traced swept out across the edge,
-// stages.contour.edge_sweep_m, and clipped back).
+// farther (traced swept out across the edge, stages.contour.edge_sweep_m, and clipped back; that
+// the sweep carries their walls on along their own directions, Contour tests).
 TEST_F(Cli, TheBuildingsATilesEdgeCutsEndOnIt) {
   CommandRun r = lodforge("synth -q --size-m 200x200 --pixel-size 0.1 --seed 3 --set boundary_noise_m=0.5 --set noise_wavelength_m=8"
                           " --set corner_radius_m=1 --out " + path("sim"));

@@ -42,9 +42,13 @@ void start_each(const std::vector<std::size_t>& indices, double smoothing_noise_
   });
 }
 
+// A start's noise sample as the pool takes it: none of a building the raster's edge cuts where the
+// whole ones pool alone (whole_only).
+NoiseSample pooled_sample(const BuildingStart& s, bool whole_only) { return whole_only && !s.cut.empty() ? NoiseSample{} : s.sample; }
+
 std::vector<NoiseSample> samples_of(const std::vector<BuildingStart>& starts, bool whole_only = false) {
   std::vector<NoiseSample> samples;
-  for (const BuildingStart& s : starts) samples.push_back(whole_only && !s.cut.empty() ? NoiseSample{} : s.sample);
+  for (const BuildingStart& s : starts) samples.push_back(pooled_sample(s, whole_only));
   return samples;
 }
 
@@ -140,7 +144,7 @@ PooledStarts pool_starts(const std::vector<BuildingContour>& buildings, double p
     start_each(judged, wider_m, [&](std::size_t i) { return restart_building(buildings[i].rings, pixel_size, options, pooled.starts[i], wider_m); },
                trial, seconds);
     std::vector<NoiseSample> judged_samples;
-    for (std::size_t i : judged) judged_samples.push_back(whole && !trial[i].cut.empty() ? NoiseSample{} : trial[i].sample);
+    for (std::size_t i : judged) judged_samples.push_back(pooled_sample(trial[i], whole));
     return judged_samples;
   };
   const auto keep_judged = [&] {
@@ -231,14 +235,15 @@ RegularizedBatch regularize_traced(const std::string& regularizer, const std::ve
   batch.results.resize(buildings.size());
   std::vector<BuildingStart> starts;
   std::vector<double> start_seconds;  // each building's time counts its start's
+  // (Where none were made: empty starts, each building's chain starting itself, smoothed for the mask's noise.)
+  const auto ensure_starts = [&] {
+    if (!starts.empty()) return;
+    starts.resize(buildings.size());
+    for (BuildingStart& s : starts) s.smoothing_noise_m = batch.noise_smoothing_m;
+  };
   if (noise) {
     batch.noise_floor_m = noise->floor_m;
     batch.noise_smoothing_m = noise->smoothing_m;
-    // (Each building's chain starts itself, smoothed for that noise.)
-    if (regularizer == "deformation") {
-      starts.resize(buildings.size());
-      for (BuildingStart& s : starts) s.smoothing_noise_m = noise->smoothing_m;
-    }
   } else if (pools_noise(regularizer, options)) {
     PooledStarts pooled = pool_starts(buildings, pixel_size, options, &start_seconds);
     starts = std::move(pooled.starts);
@@ -255,18 +260,13 @@ RegularizedBatch regularize_traced(const std::string& regularizer, const std::ve
   const bool pool_rounding = rounds && !(noise && noise->rounding_m);
   if (rounds && noise && noise->rounding_m) batch.rounding_m = std::max(0.0, *noise->rounding_m);
   if (pool_rounding || batch.rounding_m > 0) {
-    if (starts.empty()) {
-      starts.resize(buildings.size());
-      for (BuildingStart& s : starts) s.smoothing_noise_m = batch.noise_smoothing_m;
-    }
+    ensure_starts();
     for (BuildingStart& s : starts) s.mask_rounding_m = pool_rounding ? -1.0 : batch.rounding_m;
   }
-  // The buildings the raster's edge cuts measure their noise inside it (BuildingStart::cut).
-  if (regularizer == "deformation" && std::any_of(buildings.begin(), buildings.end(), [](const BuildingContour& b) { return !b.cut.empty(); })) {
-    if (starts.empty()) {
-      starts.resize(buildings.size());
-      for (BuildingStart& s : starts) s.smoothing_noise_m = batch.noise_smoothing_m;
-    }
+  // The paper's chain starts from its start (the buildings the raster's edge cuts measure their
+  // noise inside it, BuildingStart::cut).
+  if (regularizer == "deformation") {
+    ensure_starts();
     for (std::size_t i = 0; i < buildings.size(); ++i) starts[i].cut = buildings[i].cut;
   }
   tbb::parallel_for(std::size_t(0), buildings.size(), [&](std::size_t i) {
@@ -488,9 +488,8 @@ NoiseSurvey survey_noise(const MaskWindowReader& mask, cv::Size fine_raster, con
       for (const BuildingStart& start : starts) samples.push_back(start.sample), cut.push_back(!start.cut.empty());  // (the samples only)
     });
     if (!whole) whole = whole_only(samples, cut, options);
-    if (*whole)
-      for (std::size_t i = 0; i < samples.size(); ++i)
-        if (cut[i]) samples[i] = NoiseSample{};
+    for (std::size_t i = 0; i < samples.size(); ++i)
+      if (*whole && cut[i]) samples[i] = NoiseSample{};  // (as pooled_sample)
     return samples;
   };
   std::vector<NoiseSample> samples = measure_all(0.0);

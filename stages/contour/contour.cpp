@@ -396,11 +396,11 @@ ContourResult extract_contours(const Components& components, const GeoTransform&
     if (cut.any()) {
       // Cut by the raster's edge: swept out across it along its own walls (swept_across_cut).
       const double px = transform.pixel_size();
-      cv::Mat traced = component.clone();
-      const std::vector<Ring> rings = trace_padded(traced);
+      const cv::Mat pixels = component(cv::Rect(1, 1, b.bbox.width, b.bbox.height)).clone();  // (tracing alters its image)
+      const std::vector<Ring> rings = trace_padded(component);
       const double direction = rings.empty() ? 0.0 : wall_direction(rings[0], b.bbox.size(), cut, std::max(6.0, kWallChordM / px));
       const int band = std::max(4, int(std::ceil(options.edge_sweep_m / px)));
-      component = swept_across_cut(components.mask_of(k, 0), cut, direction, band, options.connectivity);
+      component = swept_across_cut(pixels, cut, direction, band, options.connectivity);
       origin -= cv::Point(band, band);
       for (const cv::Point& c : {raster->tl(), cv::Point(raster->x, raster->y + raster->height), raster->br(),
                                  cv::Point(raster->x + raster->width, raster->y)})

@@ -253,6 +253,15 @@ std::size_t remove_spikes(PolygonWithHoles& polygon, double max_angle_deg, doubl
   return changes;
 }
 
+bool inside_convex(const Vec2& p, const Ring& convex, double margin) {
+  for (std::size_t k = 0; k < convex.size(); ++k) {
+    const Vec2 &a = convex[k], &b = convex[(k + 1) % convex.size()];
+    const double side = (b - a).norm();
+    if (side > 0 && cross(b - a, p - a) < margin * side) return false;
+  }
+  return true;
+}
+
 Ring flatten_along_line(const Ring& ring, const Vec2& a, const Vec2& b, double depth) {
   const std::size_t n = ring.size();
   const double length = (b - a).norm();

@@ -16,6 +16,9 @@ std::size_t vertex_count(const PolygonWithHoles& polygon);  // of its outer ring
 std::vector<const Ring*> rings_of(const PolygonWithHoles& polygon);  // the outer ring, then the holes
 Ring& ring_at(PolygonWithHoles& polygon, std::size_t r);  // ring r: 0 the outer ring, r the hole r - 1
 bool point_in_ring(const Vec2& p, const Ring& ring);  // even-odd rule, boundary undefined
+// Whether p lies inside a convex counter-clockwise ring, at least `margin` from each of its sides
+// (margin 0: its boundary counts as inside).
+bool inside_convex(const Vec2& p, const Ring& convex, double margin = 0);
 
 // The squared distance from p to the segment [a, b], and the distance (its square root). Inline:
 // the models measure every contour edge against an outline's walls several times a building.

@@ -8,6 +8,7 @@
 #include <utility>
 
 #include "corners/corners.hpp"
+#include "geometry/polygon.hpp"
 #include "labeling/mrf.hpp"
 #include "models/statistics.hpp"
 
@@ -108,15 +109,6 @@ std::vector<std::size_t> step_cuts(const std::vector<double>& t, const std::vect
 
 double lattice_noise(const std::vector<Ring>& rings, const std::vector<std::vector<Vec2>>& normals, const Vec2& lattice,
                      double pixel_size, const NoiseOptions& o, double* arc_noise, double* measured, const Ring* within) {
-  const auto counts = [&](const Vec2& p) {
-    if (!within || within->size() < 3) return true;
-    for (std::size_t k = 0; k < within->size(); ++k) {
-      const Vec2 &a = (*within)[k], &b = (*within)[(k + 1) % within->size()];
-      const double side = (b - a).norm();
-      if (side > 0 && cross(b - a, p - a) < pixel_size * side) return false;
-    }
-    return true;
-  };
   const Vec2 axes[4] = {lattice, Vec2(-lattice.y(), lattice.x()), -lattice, Vec2(lattice.y(), -lattice.x())};
   std::vector<std::pair<double, double>> residuals, arc_residuals;  // |distance|, weight
   for (std::size_t r = 0; r < rings.size(); ++r) {
@@ -131,7 +123,8 @@ double lattice_noise(const std::vector<Ring>& rings, const std::vector<std::vect
       // still fitted, a wobble's flanks are not.
       double length = 0;
       std::vector<std::pair<Vec2, double>> middle = run_middle(ring, first, count, o.trim_m, ring[first], &length);  // midpoint, weight
-      if (within) std::erase_if(middle, [&](const std::pair<Vec2, double>& m) { return !counts(m.first + ring[first]); });
+      if (within && within->size() >= 3)
+        std::erase_if(middle, [&](const std::pair<Vec2, double>& m) { return !inside_convex(m.first + ring[first], *within, pixel_size); });
       Vec2 mean = Vec2::Zero();
       double total = 0;
       for (const auto& [p, w] : middle) {
