@@ -26,6 +26,7 @@ struct RefineOptions {
   double min_round_px = 40;        // ... unless its outline is shorter than this many pixels
   double min_round_m = 20;         // ... or than this (m)
   double min_round_noise = 60;     // ... or than this many times the mask's boundary noise
+  double round_fit_ratio = 1;      // ... or whose best rectangle explains its contour as well as this many times its moments' ellipse does
   double missing_axis_deg = 10;    // a building on a lattice with no direction this near one of its axes and a curve gets it (0 = off)
 
   template <class V>
@@ -42,6 +43,7 @@ struct RefineOptions {
     v("min_round_px", min_round_px, "... unless its outer ring is shorter than this many pixels (too few to tell a round shape from a rectangle)", Check::at_least(0));
     v("min_round_m", min_round_m, "... or than this (m; the traced outline, whose pixel steps make it up to 1.4 times the true one): a shed of 3 x 4 m whose corners a network rounds by a metre shows no more of a wall than of an arc, and is taken as on a lattice (a rectangle when that explains it, models.rectangle_tolerance)", Check::at_least(0));
     v("min_round_noise", min_round_noise, "... or than this many times the boundary noise pooled over the mask's buildings: under a noise that large a small house's walls are no straighter than an arc (0 = off)", Check::at_least(0));
+    v("round_fit_ratio", round_fit_ratio, "... or whose contour lies no farther from its best rectangle (mean distance, models' best_rectangle) than this many times its distance to the ellipse of its area, centroid and second moments: two shapes of five parameters each, a rectangle's four corners against a smooth bow. Its shape then does not tell its own lattice: where its neighbours agree on one it takes theirs (lattice.neighbour_*), as one under min_round_noise does. Under a wobble of a metre the smoothed normals of a house of 12 x 9 m, or of 17 x 12 m, spread off its walls and turn back and forth too little to count, and the house read as round was drawn along its wobble's crests; a disc, an oval or a hexagon stays round (0 = off)", Check::at_least(0));
     v("missing_axis_deg", missing_axis_deg, "a building held to its lattice none of whose directions lies within this of one of the lattice's two axes (either way), whose regular outline keeps a curve, gets that axis's two directions, is labeled again and its outline drawn from those labels: a long thin building whose ends a wobble's flanks spread, so that no direction was found for them, has only its long walls' two, its ends join their runs, and those bow round the ends as curves drawn along the wobble (corners.curve_*; degrees, 0 = off)", Check::between(0, 45));
     v("release_px", release_px, "a long run whose own least-squares direction differs from its label's so much that its ends move by more than this (pixels, and twice its noise) gets its own direction (0 = off)", Check::at_least(0));
   }

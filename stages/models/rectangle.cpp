@@ -167,6 +167,23 @@ bool leaves_a_stretch(const std::vector<std::pair<double, double>>& simple, cons
   return false;
 }
 
+double moment_ellipse_fit(const Ring& ring) {
+  if (ring.size() < 3) return std::numeric_limits<double>::infinity();
+  const Moments m = moments_of(ring);
+  if (m.area <= 0) return std::numeric_limits<double>::infinity();
+  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> eig(m.central);
+  // An ellipse of semi-axes a, b: area pi a b, second moments a^2 / 4 and b^2 / 4 of it along its axes.
+  const double a = 2 * std::sqrt(std::max(0.0, eig.eigenvalues()[1]) / m.area), b = 2 * std::sqrt(std::max(0.0, eig.eigenvalues()[0]) / m.area);
+  if (!(a > 0) || !(b > 0)) return std::numeric_limits<double>::infinity();
+  const Vec2 u = eig.eigenvectors().col(1), v = eig.eigenvectors().col(0);
+  Ring ellipse;
+  for (int k = 0; k < 90; ++k) {
+    const double t = 2 * M_PI * k / 90;
+    ellipse.push_back(m.centroid + a * std::cos(t) * u + b * std::sin(t) * v);
+  }
+  return mean_distance_to_boundary(ring, {ellipse, {}});
+}
+
 Ring best_rectangle(const Ring& ring, const std::vector<Vec2>& normals, double* fit) {
   *fit = std::numeric_limits<double>::infinity();
   if (ring.size() < 3) return {};

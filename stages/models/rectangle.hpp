@@ -104,6 +104,11 @@ double mean_distance(const std::vector<std::pair<double, double>>& distances);
 bool leaves_a_stretch(const std::vector<std::pair<double, double>>& simple, const std::vector<std::pair<double, double>>& fine,
                       double noise, double correlation, double k);
 
+// The mean distance (mean_distance_to_boundary) of the ring to the ellipse of its area, centroid
+// and second moments (drawn with 90 vertices); infinity for a degenerate ring. A round building's
+// contour lies near it, a rectangle's corners reach about a fifth of its half-diagonal beyond it.
+double moment_ellipse_fit(const Ring& ring);
+
 // The best moment rectangle of the ring over the candidate normals, its principal axes and
 // every 3 degrees: the one whose boundary lies closest to the ring, its sides then moved onto
 // the walls as moment_rectangle's are. *fit: its mean distance (mean_distance_to_boundary).

@@ -160,15 +160,25 @@ double building_noise(const std::vector<Ring>& rings, const std::vector<std::vec
 
 // Whether the building's walls are held to its lattice: not a round or oblique shape (little of
 // it along the lattice, its outline turning about once, as a convex one does, not back and forth as
-// a wobble does). A building of a few dozen pixels, or of a few dozen times its mask's noise
-// (*small_for_noise), shows no curvature: it is taken as on its lattice.
+// a wobble does). A building of a few dozen pixels, or of a few dozen times its mask's noise,
+// shows no curvature: it is taken as on its lattice. So is one that its normals read as round or
+// oblique but whose best rectangle explains its contour as well as its moments' ellipse does
+// (refinement.round_fit_ratio): under a wobble of a metre a house's normals spread off its walls.
+// *undetermined: taken so because its shape does not tell (too small for its noise, or no rounder
+// than a rectangle), not by its walls: its neighbours' lattice is lent to it (outline_lattice).
 bool holds_to_lattice(const std::vector<Ring>& rings, const LabelingInput& input, const Vec2& lattice, double pixel_size,
-                      double noise_floor_m, const RefineOptions& o, bool* small_for_noise) {
+                      double noise_floor_m, const RefineOptions& o, bool* undetermined) {
   const double outline_m = perimeter(rings[0]);
-  *small_for_noise = outline_m < o.min_round_noise * noise_floor_m;
-  return *small_for_noise || outline_m < std::max(o.min_round_px * pixel_size, o.min_round_m) ||
-         lattice_share(input.normals, input.lengths, lattice, o.lattice_deg) >= o.min_lattice_share ||
-         total_turning(rings[0], input.normals[0], std::max(1.0, 2 * pixel_size)) >= o.min_turning;
+  *undetermined = outline_m < o.min_round_noise * noise_floor_m;
+  if (*undetermined || outline_m < std::max(o.min_round_px * pixel_size, o.min_round_m) ||
+      lattice_share(input.normals, input.lengths, lattice, o.lattice_deg) >= o.min_lattice_share ||
+      total_turning(rings[0], input.normals[0], std::max(1.0, 2 * pixel_size)) >= o.min_turning)
+    return true;
+  if (o.round_fit_ratio <= 0) return false;
+  double rectangle_fit = 0;
+  best_rectangle(rings[0], {lattice}, &rectangle_fit);
+  *undetermined = rectangle_fit <= o.round_fit_ratio * moment_ellipse_fit(rings[0]);
+  return *undetermined;
 }
 
 // The lattice fitted to the contour's runs along it (lattice.fit_*), its direction's standard error
@@ -182,12 +192,13 @@ struct FittedLattice {
 // one (main direction or chords'), or the fitted one unless the labeled one lies within its
 // uncertainty (on a clean wall the labeled direction is exact). A building whose own lattice is
 // undetermined takes its neighbours' (lattice.neighbour_*, result.lattice_lent): one too small to
-// show its walls under its mask's noise (refinement.min_round_noise), one whose fitted lattice
+// show its walls under its mask's noise (refinement.min_round_noise) or no rounder than its best
+// rectangle (refinement.round_fit_ratio), one whose fitted lattice
 // lies within fit_keep_uncertainty standard errors of theirs, or, without a fit, one whose chords
 // give it no lattice. (A fitted lattice is held only to its near neighbours', those whose centres
 // are near: the lattice of the walls whose boxes alone come near is the street's, which a
 // building with walls of its own need not follow.)
-Vec2 outline_lattice(const Vec2& labeled, const FittedLattice& fitted, bool small_for_noise, const ChordLattice& chord,
+Vec2 outline_lattice(const Vec2& labeled, const FittedLattice& fitted, bool undetermined, const ChordLattice& chord,
                      const NeighbourLattice& neighbours, const LatticeOptions& o, BuildingResult& result) {
   Vec2 lattice = labeled;
   if (fitted.direction && angle_between_lattices_deg(*fitted.direction, lattice) * M_PI / 180.0 > o.fit_keep_uncertainty * fitted.uncertainty)
@@ -195,7 +206,7 @@ Vec2 outline_lattice(const Vec2& labeled, const FittedLattice& fitted, bool smal
   const Vec2& lent = neighbours.direction;
   if (lent.squaredNorm() > 0) {
     const double gap = angle_between_lattices_deg(lent, lattice) * M_PI / 180.0;
-    result.lattice_lent = small_for_noise || (fitted.direction ? !neighbours.from_boxes && gap <= o.fit_keep_uncertainty * fitted.uncertainty
+    result.lattice_lent = undetermined || (fitted.direction ? !neighbours.from_boxes && gap <= o.fit_keep_uncertainty * fitted.uncertainty
                                                                : chord.share < o.min_share);
     if (result.lattice_lent) lattice = lent;
   }
@@ -247,8 +258,8 @@ void run_chain(const std::vector<Ring>& rings, double pixel_size, const CoreOpti
   if (o.lattice.fit_max_turn_deg > 0)
     fitted.direction = fit_lattice(rings, input.normals, chord.share >= o.lattice.min_share ? chord.direction : first_main, pixel_size,
                                    o.lattice, o.noise, o.corners.snap_correlation_m, &fitted.uncertainty, &fitted.spread, noise);
-  bool small_for_noise = false;
-  const bool on_lattice = holds_to_lattice(rings, input, lattice, pixel_size, noise_floor_m, o.refinement, &small_for_noise);
+  bool undetermined = false;
+  const bool on_lattice = holds_to_lattice(rings, input, lattice, pixel_size, noise_floor_m, o.refinement, &undetermined);
   result.noise_m = noise;
   result.regularity_noise_m = regularity_noise;
   result.arc_noise_m = arc_noise;
@@ -278,7 +289,7 @@ void run_chain(const std::vector<Ring>& rings, double pixel_size, const CoreOpti
   const std::vector<Ring> fit_rings = chain::route_rings(rings, origin, pixel_size, labels, input.directions, o, over_budget, result);
   CornerContext context;
   if (on_lattice)
-    context.lattice = outline_lattice(building_lattice(labels, input, follow_chords, chord, o.lattice), fitted, small_for_noise, chord,
+    context.lattice = outline_lattice(building_lattice(labels, input, follow_chords, chord, o.lattice), fitted, undetermined, chord,
                                       neighbour_lattice, o.lattice, result);
   context.noise = noise;
   context.regularity_noise = regularity_noise;
