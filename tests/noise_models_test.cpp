@@ -514,9 +514,9 @@ TEST(Models, MomentRectangleOfARectangleIsItself) {
   EXPECT_NEAR(test::iou({best, {}}, truth), 1.0, 1e-6);
 }
 
-// The ellipse of a ring's moments: a disc's contour lies on it, a rectangle's corners beyond it.
-// A disc, an oval and a hexagon are nearer their ellipse than their best rectangle; a rectangle,
-// also one whose corners are rounded by 2 m, is nearer its best rectangle
+// The ellipse of a ring's centroid and second moments: a disc's contour lies on it, a rectangle's
+// corners beyond it. A disc, an oval and a hexagon are nearer their ellipse than their best
+// rectangle; a rectangle, also one whose corners are rounded by 2 m, is nearer its best rectangle
 // (refinement.round_fit_ratio compares the two).
 TEST(Models, TheMomentEllipseExplainsRoundShapesAndNotRectangles) {
   const auto polygon = [](int n, double a, double b) {
@@ -530,16 +530,30 @@ TEST(Models, TheMomentEllipseExplainsRoundShapesAndNotRectangles) {
     return fit;
   };
   const Ring disc = polygon(360, 10, 10), oval = polygon(360, 15, 8);
-  Ring hexagon;  // (its sides in ten edges each, as a traced contour's: six midpoints alone lie on a rectangle)
-  const Ring corners = polygon(6, 10, 10);
-  for (std::size_t i = 0; i < 6; ++i)
-    for (int k = 0; k < 10; ++k) hexagon.push_back(corners[i] + k / 10.0 * (corners[(i + 1) % 6] - corners[i]));
+  // (A traced contour's edges are a pixel or so long: a ring of a few long edges is measured at
+  // their middles alone, the six of a hexagon's on a rectangle.)
+  const auto densified = [](const Ring& r) {
+    Ring out;
+    for (std::size_t i = 0; i < r.size(); ++i) {
+      const Vec2 e = edge_vector(r, i);
+      const int pieces = std::max(1, int(std::ceil(e.norm() / 0.25)));
+      for (int k = 0; k < pieces; ++k) out.push_back(r[i] + double(k) / pieces * e);
+    }
+    return out;
+  };
+  const Ring hexagon = densified(polygon(6, 10, 10));
+  // A clean triangle or trapezoid is nearer its rectangle than its ellipse: round_fit_noise keeps
+  // it oblique (its rectangle leaves a corner out by metres).
+  const Ring triangle = densified({{5e5, 5e6}, {5e5 + 20, 5e6}, {5e5, 5e6 + 12}});
+  double triangle_fit = 0;
+  best_rectangle(triangle, {}, &triangle_fit);
+  EXPECT_GT(triangle_fit, 1.0);
   EXPECT_LT(moment_ellipse_fit(disc), 0.01);
   EXPECT_LT(moment_ellipse_fit(oval), 0.01);
-  for (const Ring* r : {&disc, &oval, static_cast<const Ring*>(&hexagon)}) EXPECT_LT(moment_ellipse_fit(*r), rectangle_fit(*r)) << r->size();
-  const PolygonWithHoles house = test::rotated(kHouse, 30.0);
-  EXPECT_GT(moment_ellipse_fit(house.outer), 1.0);  // (25 x 18 m: its corners 3.5 m out)
-  EXPECT_LT(rectangle_fit(house.outer), 1e-6);
+  for (const Ring* r : {&disc, &oval, &hexagon}) EXPECT_LT(moment_ellipse_fit(*r), rectangle_fit(*r)) << r->size();
+  const Ring house = densified(test::rotated(kHouse, 30.0).outer);
+  EXPECT_GT(moment_ellipse_fit(house), 1.0);  // (25 x 18 m: 1.15 m on the mean)
+  EXPECT_LT(rectangle_fit(house), 1e-6);
   // Rounded by 2 m (each corner a quarter circle, so the moments are a rounded rectangle's).
   Ring rounded;
   const Vec2 c(5e5, 5e6);
@@ -551,6 +565,7 @@ TEST(Models, TheMomentEllipseExplainsRoundShapesAndNotRectangles) {
       rounded.push_back(centre + 2.0 * Vec2(std::cos(t), std::sin(t)));
     }
   }
+  rounded = densified(rounded);
   EXPECT_LT(rectangle_fit(rounded), 0.5 * moment_ellipse_fit(rounded));
   EXPECT_EQ(moment_ellipse_fit(Ring{c, c + Vec2(1, 0)}), std::numeric_limits<double>::infinity());
 }
@@ -698,9 +713,10 @@ constexpr double kMetreWobblePooledNoise = 0.69, kMetreWobbleSmoothingNoise = 0.
 TEST(NoisyMasks, UnderAMetreOfWobbleASmallHouseIsARectangle) {
   const PolygonWithHoles truth = small_house(27.0);
   const double pixel = 0.25, pooled_noise = kMetreWobblePooledNoise, smoothing_noise = kMetreWobbleSmoothingNoise;
-  CoreOptions off;
+  CoreOptions on, off;
+  on.refinement.round_fit_ratio = 0;  // (this rule alone: round_fit_ratio takes most of them as on a lattice too)
   off.refinement.min_round_noise = 0;
-  off.refinement.round_fit_ratio = 0;  // (which takes most of them as on a lattice too)
+  off.refinement.round_fit_ratio = 0;
   int squared = 0, squared_off = 0;
   double iou = 0, iou_off = 0;
   const int masks = 8;
@@ -709,7 +725,7 @@ TEST(NoisyMasks, UnderAMetreOfWobbleASmallHouseIsARectangle) {
     ASSERT_EQ(shape.buildings.size(), 1u);
     BuildingStart start;
     start.smoothing_noise_m = smoothing_noise;
-    const BuildingResult r = regularize_building(shape.buildings[0].rings, pixel, CoreOptions{}, pooled_noise, start);
+    const BuildingResult r = regularize_building(shape.buildings[0].rings, pixel, on, pooled_noise, start);
     const BuildingResult r_off = regularize_building(shape.buildings[0].rings, pixel, off, pooled_noise, start);
     ASSERT_TRUE(r.ok && r_off.ok) << "seed " << seed << ": " << r.reason << r_off.reason;
     const auto is_square = [](const BuildingResult& b) {
@@ -765,6 +781,22 @@ TEST(NoisyMasks, UnderAMetreOfWobbleAHouseNoRounderThanItsRectangleHoldsToItsLat
   EXPECT_GE(double(right), 0.8 * corners);
   EXPECT_LE(double(right_off), 0.6 * corners_off);
   EXPECT_GE(iou, iou_off - 0.01);
+}
+
+// A clean right triangle of 20 x 12 m and an isosceles trapezoid, at 25 cm pixels: round or oblique
+// by their normals, and nearer their best rectangle than their moments' ellipse, but their
+// rectangles leave a corner out by metres, beyond twice their noise or pixel
+// (refinement.round_fit_noise, which holds them to no lattice; held to one, the model choice kept
+// them too): they keep their own walls.
+TEST(NoisyMasks, ACleanTriangleOrTrapezoidKeepsItsObliqueWalls) {
+  const PolygonWithHoles triangle = test::rotated({{{0, 0}, {20, 0}, {0, 12}}, {}}, 17.0);
+  const PolygonWithHoles trapezoid = test::rotated({{{0, 0}, {24, 0}, {17, 10}, {7, 10}}, {}}, 17.0);
+  for (const PolygonWithHoles* truth : {&triangle, &trapezoid}) {
+    const BuildingResult r = regularize(test::rasterize_shape_m(*truth, 0.25, 0.0, 8.0, 0.0, 1), 0.25);
+    ASSERT_TRUE(r.ok) << r.reason;
+    EXPECT_EQ(r.footprint.outer.size(), truth->outer.size());
+    EXPECT_GT(test::iou(r.footprint, *truth), 0.97);
+  }
 }
 
 // The largest angle of an outline's walls to a lattice (degrees).

@@ -104,9 +104,10 @@ double mean_distance(const std::vector<std::pair<double, double>>& distances);
 bool leaves_a_stretch(const std::vector<std::pair<double, double>>& simple, const std::vector<std::pair<double, double>>& fine,
                       double noise, double correlation, double k);
 
-// The mean distance (mean_distance_to_boundary) of the ring to the ellipse of its area, centroid
-// and second moments (drawn with 90 vertices); infinity for a degenerate ring. A round building's
-// contour lies near it, a rectangle's corners reach about a fifth of its half-diagonal beyond it.
+// The mean distance (mean_distance_to_boundary) of the ring to the ellipse of its centroid and
+// second moments per unit area (drawn with 90 vertices); infinity for a degenerate ring or a
+// clockwise one. A round building's contour lies near it; a rectangle's corners reach beyond it,
+// its sides' middles lie inside it.
 double moment_ellipse_fit(const Ring& ring);
 
 // The best moment rectangle of the ring over the candidate normals, its principal axes and

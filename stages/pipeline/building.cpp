@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <limits>
 #include <optional>
 #include <stdexcept>
 
@@ -162,12 +163,14 @@ double building_noise(const std::vector<Ring>& rings, const std::vector<std::vec
 // it along the lattice, its outline turning about once, as a convex one does, not back and forth as
 // a wobble does). A building of a few dozen pixels, or of a few dozen times its mask's noise,
 // shows no curvature: it is taken as on its lattice. So is one that its normals read as round or
-// oblique but whose best rectangle explains its contour as well as its moments' ellipse does
-// (refinement.round_fit_ratio): under a wobble of a metre a house's normals spread off its walls.
+// oblique but whose best rectangle explains its contour as well as its moments' ellipse does, and
+// within twice its noise, noise_m, or pixel (refinement.round_fit_ratio, round_fit_noise): under a
+// wobble of a metre a house's normals spread off its walls; a clean triangle's rectangle leaves a
+// corner out by metres.
 // *undetermined: taken so because its shape does not tell (too small for its noise, or no rounder
 // than a rectangle), not by its walls: its neighbours' lattice is lent to it (outline_lattice).
 bool holds_to_lattice(const std::vector<Ring>& rings, const LabelingInput& input, const Vec2& lattice, double pixel_size,
-                      double noise_floor_m, const RefineOptions& o, bool* undetermined) {
+                      double noise_floor_m, double noise_m, const RefineOptions& o, bool* undetermined) {
   const double outline_m = perimeter(rings[0]);
   *undetermined = outline_m < o.min_round_noise * noise_floor_m;
   if (*undetermined || outline_m < std::max(o.min_round_px * pixel_size, o.min_round_m) ||
@@ -175,9 +178,10 @@ bool holds_to_lattice(const std::vector<Ring>& rings, const LabelingInput& input
       total_turning(rings[0], input.normals[0], std::max(1.0, 2 * pixel_size)) >= o.min_turning)
     return true;
   if (o.round_fit_ratio <= 0) return false;
-  double rectangle_fit = 0;
+  double rectangle_fit = std::numeric_limits<double>::infinity();
   best_rectangle(rings[0], {lattice}, &rectangle_fit);
-  *undetermined = rectangle_fit <= o.round_fit_ratio * moment_ellipse_fit(rings[0]);
+  const bool within_noise = o.round_fit_noise <= 0 || rectangle_fit <= o.round_fit_noise * std::max(noise_m, pixel_size);
+  *undetermined = std::isfinite(rectangle_fit) && within_noise && rectangle_fit <= o.round_fit_ratio * moment_ellipse_fit(rings[0]);
   return *undetermined;
 }
 
@@ -259,7 +263,7 @@ void run_chain(const std::vector<Ring>& rings, double pixel_size, const CoreOpti
     fitted.direction = fit_lattice(rings, input.normals, chord.share >= o.lattice.min_share ? chord.direction : first_main, pixel_size,
                                    o.lattice, o.noise, o.corners.snap_correlation_m, &fitted.uncertainty, &fitted.spread, noise);
   bool undetermined = false;
-  const bool on_lattice = holds_to_lattice(rings, input, lattice, pixel_size, noise_floor_m, o.refinement, &undetermined);
+  const bool on_lattice = holds_to_lattice(rings, input, lattice, pixel_size, noise_floor_m, noise, o.refinement, &undetermined);
   result.noise_m = noise;
   result.regularity_noise_m = regularity_noise;
   result.arc_noise_m = arc_noise;
