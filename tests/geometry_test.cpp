@@ -123,7 +123,7 @@ TEST(Geometry, RemoveDegenerateVertices) {
   EXPECT_DOUBLE_EQ(signed_area(clean), 4.0);
 }
 
-TEST(Geometry, FlattenAlongLineDropsShallowNotchesBetweenItsVerticesOnTheLine) {
+TEST(Geometry, FlattenAlongLineDropsShallowNotchesAndThoseTheMaskFills) {
   // A 10 x 5 rectangle clipped along y = 0, where the outline dipped 0.3 in and 0.2 out, and
   // bit 2 deep.
   const Ring ring = {{0, 0}, {2, 0}, {2, 0.3}, {3, 0.3}, {3, 0}, {4, 0}, {4.5, -0.2}, {5, 0}, {6, 0}, {6, 2}, {7, 2}, {7, 0},
@@ -136,6 +136,14 @@ TEST(Geometry, FlattenAlongLineDropsShallowNotchesBetweenItsVerticesOnTheLine) {
   EXPECT_EQ(flatten_along_line(ring, {0, 0}, {10, 0}, 0.1), ring);
   // Along another line of the ring (x = 10), nothing to flatten: its two vertices there are adjacent.
   EXPECT_EQ(flatten_along_line(ring, {10, 0}, {10, 5}, 0.5), ring);
+  // Where the mask fills the 2 deep bite (a dip the outline drew past the raster's edge), it goes
+  // too; the rest of the ring, between the same line's vertices the other way round, stays.
+  const auto all = [](const Vec2& p) { return p.x() > -1 && p.x() < 11 && p.y() > -1 && p.y() < 6; };  // (the whole ring too)
+  const Ring filled = remove_degenerate_vertices(flatten_along_line(ring, {0, 0}, {10, 0}, 0.5, all), 1e-9);
+  EXPECT_EQ(filled, (Ring{{0, 0}, {10, 0}, {10, 5}, {0, 5}}));
+  // Where the mask has the bite too (a yard reaching the edge), it stays.
+  const auto bitten = [&all](const Vec2& p) { return all(p) && !(p.x() > 6 && p.x() < 7 && p.y() < 2); };
+  EXPECT_EQ(remove_degenerate_vertices(flatten_along_line(ring, {0, 0}, {10, 0}, 0.5, bitten), 1e-9), expected);
 }
 
 TEST(Geometry, DouglasPeuckerKeepsCornersWithinTolerance) {

@@ -294,8 +294,8 @@ RegularizedBatch regularize_batch(const std::string& regularizer, const std::vec
                                   const Lenders& lenders, const std::function<void()>& on_done) {
   RegularizedBatch batch = regularize_traced(regularizer, buildings, pixel_size, options, std::move(noise), lenders, on_done);
   // The buildings the raster's edge cuts, traced swept out across it: clipped back to the raster,
-  // and the notches flattened that an outline crossing the edge back and forth within the mask's
-  // noise (at least two pixels) leaves along it.
+  // and the notches flattened that an outline crossing the edge back and forth leaves along it:
+  // within the mask's noise (at least two pixels), or deeper where the mask fills them.
   const double depth = std::max(2 * pixel_size, batch.noise_floor_m);
   tbb::parallel_for(std::size_t(0), buildings.size(), [&](std::size_t i) {
     const Ring& cut = buildings[i].cut;
@@ -311,9 +311,15 @@ RegularizedBatch regularize_batch(const std::string& regularizer, const std::vec
     }
     if (!clipped) return;
     PolygonWithHoles flat = *clipped;
+    // (A dip the mask fills, deeper than that: inside the raster the traced contour is the mask's.)
+    const std::vector<Ring>& traced = buildings[i].rings;
+    const auto in_mask = [&traced](const Vec2& p) {
+      if (traced.empty() || !point_in_ring(p, traced[0])) return false;
+      return std::none_of(traced.begin() + 1, traced.end(), [&p](const Ring& hole) { return point_in_ring(p, hole); });
+    };
     for (std::size_t k = 0; k < cut.size(); ++k) {
       const Vec2 &a = cut[k], &b = cut[(k + 1) % cut.size()];
-      flat.outer = flatten_along_line(flat.outer, a, b, depth);
+      flat.outer = flatten_along_line(flat.outer, a, b, depth, in_mask);
       for (Ring& h : flat.holes) h = flatten_along_line(h, a, b, depth);
     }
     flat.outer = remove_degenerate_vertices(flat.outer, 1e-9);

@@ -262,7 +262,7 @@ bool inside_convex(const Vec2& p, const Ring& convex, double margin) {
   return true;
 }
 
-Ring flatten_along_line(const Ring& ring, const Vec2& a, const Vec2& b, double depth) {
+Ring flatten_along_line(const Ring& ring, const Vec2& a, const Vec2& b, double depth, const std::function<bool(const Vec2&)>& filled) {
   const std::size_t n = ring.size();
   const double length = (b - a).norm();
   if (n < 4 || !(length > 0) || !(depth > 0)) return ring;
@@ -276,13 +276,32 @@ Ring flatten_along_line(const Ring& ring, const Vec2& a, const Vec2& b, double d
   }
   if (on.size() < 2) return ring;
   std::vector<char> drop(n, 0);
+  const double ring_area = filled ? signed_area(ring) : 0.0;
   for (std::size_t k = 0; k < on.size(); ++k) {
     const std::size_t i = on[k], j = on[(k + 1) % on.size()];
     const std::size_t between = (j + n - i - 1) % n;  // (j after i, going round)
     if (between == 0 || between + 2 > n) continue;
     bool shallow = true;
     for (std::size_t s = 1; s <= between && shallow; ++s) shallow = offset[(i + s) % n] <= depth;
-    if (shallow)
+    // (A dip: the path from i to j and the line back from j to i turn against the ring, its area
+    // outside; the points from the line to each vertex between and to each of their edges'
+    // middles.)
+    const auto dip_filled = [&] {
+      Ring loop;
+      for (std::size_t s = 0; s <= between + 1; ++s) loop.push_back(ring[(i + s) % n]);
+      if (!(signed_area(loop) * ring_area < 0)) return false;
+      for (std::size_t s = 0; s <= between; ++s) {
+        const Vec2 &p = ring[(i + s) % n], &q = ring[(i + s + 1) % n];
+        for (const Vec2& v : {p, Vec2(0.5 * (p + q))}) {
+          const Vec2 foot = a + u.dot(v - a) * u;
+          if ((v - foot).norm() <= eps) continue;  // (a vertex on the line: no dip there)
+          for (const double t : {0.25, 0.5, 0.75})
+            if (!filled(foot + t * (v - foot))) return false;
+        }
+      }
+      return true;
+    };
+    if (shallow || (filled && dip_filled()))
       for (std::size_t s = 1; s <= between; ++s) drop[(i + s) % n] = 1;
   }
   Ring out;
