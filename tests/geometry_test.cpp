@@ -139,11 +139,23 @@ TEST(Geometry, FlattenAlongLineDropsShallowNotchesAndThoseTheMaskFills) {
   // Where the mask fills the 2 deep bite (a dip the outline drew past the raster's edge), it goes
   // too; the rest of the ring, between the same line's vertices the other way round, stays.
   const auto all = [](const Vec2& p) { return p.x() > -1 && p.x() < 11 && p.y() > -1 && p.y() < 6; };  // (the whole ring too)
-  const Ring filled = remove_degenerate_vertices(flatten_along_line(ring, {0, 0}, {10, 0}, 0.5, all), 1e-9);
+  const Ring filled = remove_degenerate_vertices(flatten_along_line(ring, {0, 0}, {10, 0}, 0.5, all, 0.1), 1e-9);
   EXPECT_EQ(filled, (Ring{{0, 0}, {10, 0}, {10, 5}, {0, 5}}));
-  // Where the mask has the bite too (a yard reaching the edge), it stays.
+  // Where the mask has the bite too (a yard reaching the edge), it stays; also where it has a
+  // narrower yard in a part of it (a third of its width).
   const auto bitten = [&all](const Vec2& p) { return all(p) && !(p.x() > 6 && p.x() < 7 && p.y() < 2); };
-  EXPECT_EQ(remove_degenerate_vertices(flatten_along_line(ring, {0, 0}, {10, 0}, 0.5, bitten), 1e-9), expected);
+  EXPECT_EQ(remove_degenerate_vertices(flatten_along_line(ring, {0, 0}, {10, 0}, 0.5, bitten, 0.1), 1e-9), expected);
+  const auto narrow = [&all](const Vec2& p) { return all(p) && !(p.x() > 6.05 && p.x() < 6.4 && p.y() < 1.95); };
+  EXPECT_EQ(remove_degenerate_vertices(flatten_along_line(ring, {0, 0}, {10, 0}, 0.5, narrow, 0.1), 1e-9), expected);
+  // A hooked dip (a yard whose wall turns back over itself) that the mask has, a little smaller, stays.
+  const Ring hooked = {{0, 0}, {6, 0}, {6, 3}, {3, 3}, {3, 4}, {7, 4}, {7, 0}, {10, 0}, {10, 5}, {0, 5}};
+  const auto yard = [&all](const Vec2& p) {
+    const bool in_yard = (p.x() > 6.05 && p.x() < 6.95 && p.y() < 3.95) || (p.x() > 3.05 && p.x() < 6.95 && p.y() > 3.05 && p.y() < 3.95);
+    return all(p) && !in_yard;
+  };
+  EXPECT_EQ(flatten_along_line(hooked, {0, 0}, {10, 0}, 0.5, yard, 0.1), hooked);
+  EXPECT_EQ(remove_degenerate_vertices(flatten_along_line(hooked, {0, 0}, {10, 0}, 0.5, all, 0.1), 1e-9),
+            (Ring{{0, 0}, {10, 0}, {10, 5}, {0, 5}}));
 }
 
 TEST(Geometry, DouglasPeuckerKeepsCornersWithinTolerance) {

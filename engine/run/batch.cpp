@@ -319,7 +319,7 @@ RegularizedBatch regularize_batch(const std::string& regularizer, const std::vec
     };
     for (std::size_t k = 0; k < cut.size(); ++k) {
       const Vec2 &a = cut[k], &b = cut[(k + 1) % cut.size()];
-      flat.outer = flatten_along_line(flat.outer, a, b, depth, in_mask);
+      flat.outer = flatten_along_line(flat.outer, a, b, depth, in_mask, pixel_size);
       for (Ring& h : flat.holes) h = flatten_along_line(h, a, b, depth);
     }
     flat.outer = remove_degenerate_vertices(flat.outer, 1e-9);

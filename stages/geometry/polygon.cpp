@@ -262,7 +262,8 @@ bool inside_convex(const Vec2& p, const Ring& convex, double margin) {
   return true;
 }
 
-Ring flatten_along_line(const Ring& ring, const Vec2& a, const Vec2& b, double depth, const std::function<bool(const Vec2&)>& filled) {
+Ring flatten_along_line(const Ring& ring, const Vec2& a, const Vec2& b, double depth, const std::function<bool(const Vec2&)>& filled,
+                        double sample_step) {
   const std::size_t n = ring.size();
   const double length = (b - a).norm();
   if (n < 4 || !(length > 0) || !(depth > 0)) return ring;
@@ -284,22 +285,26 @@ Ring flatten_along_line(const Ring& ring, const Vec2& a, const Vec2& b, double d
     bool shallow = true;
     for (std::size_t s = 1; s <= between && shallow; ++s) shallow = offset[(i + s) % n] <= depth;
     // (A dip: the path from i to j and the line back from j to i turn against the ring, its area
-    // outside; the points from the line to each vertex between and to each of their edges'
-    // middles.)
+    // outside it; sampled on a grid of sample_step, coarser where that would take more than 400
+    // points, the points inside the dip, at least one, at least 95 % of them filled.)
     const auto dip_filled = [&] {
       Ring loop;
       for (std::size_t s = 0; s <= between + 1; ++s) loop.push_back(ring[(i + s) % n]);
-      if (!(signed_area(loop) * ring_area < 0)) return false;
-      for (std::size_t s = 0; s <= between; ++s) {
-        const Vec2 &p = ring[(i + s) % n], &q = ring[(i + s + 1) % n];
-        for (const Vec2& v : {p, Vec2(0.5 * (p + q))}) {
-          const Vec2 foot = a + u.dot(v - a) * u;
-          if ((v - foot).norm() <= eps) continue;  // (a vertex on the line: no dip there)
-          for (const double t : {0.25, 0.5, 0.75})
-            if (!filled(foot + t * (v - foot))) return false;
+      const double loop_area = signed_area(loop);
+      if (!(loop_area * ring_area < 0)) return false;
+      Vec2 low = loop[0], high = loop[0];
+      for (const Vec2& v : loop) low = low.cwiseMin(v), high = high.cwiseMax(v);
+      const double step = std::max(sample_step, std::sqrt(std::abs(loop_area) / 400));
+      if (!(step > 0)) return false;
+      std::size_t inside = 0, full = 0;
+      for (double y = low.y() + 0.5 * step; y < high.y(); y += step)
+        for (double x = low.x() + 0.5 * step; x < high.x(); x += step) {
+          const Vec2 p(x, y);
+          if (!point_in_ring(p, loop)) continue;
+          ++inside;
+          full += filled(p);
         }
-      }
-      return true;
+      return inside > 0 && double(full) >= 0.95 * double(inside);
     };
     if (shallow || (filled && dip_filled()))
       for (std::size_t s = 1; s <= between; ++s) drop[(i + s) % n] = 1;

@@ -64,11 +64,11 @@ std::size_t remove_spikes(PolygonWithHoles& polygon, double max_angle_deg, doubl
 // (on either side), those are dropped and the ring goes along the line. (A clip's cut: where an
 // outline drawn past a raster's edge crossed it back and forth, the clip left notches.) Given
 // `filled`, also where the dip's area is: where the path between and the line enclose an area
-// outside the ring (turning against it) and filled(p) holds at the points a quarter, half and
-// three quarters of the way from the line to each vertex between and to each of their edges'
-// middles (a dip deeper than `depth` that the mask fills, which the outline drew past the edge).
+// outside the ring (turning against it) and filled(p) holds at 95 % or more of the points of a
+// grid of sample_step inside it (coarser where that would take more than 400; at least one
+// point): a dip deeper than `depth` that the mask fills, which the outline drew past the edge.
 Ring flatten_along_line(const Ring& ring, const Vec2& a, const Vec2& b, double depth,
-                        const std::function<bool(const Vec2&)>& filled = {});
+                        const std::function<bool(const Vec2&)>& filled = {}, double sample_step = 0);
 
 // Removes consecutive duplicates (closer than eps) and vertices whose two edges are collinear
 // (deviation below eps from the line through their neighbours).
