@@ -1,7 +1,8 @@
 #!/usr/bin/python3
 """tile_edges.py DIR: the summary bench/tile_edges.sh prints. Over the tiles in DIR (tX.Y.tif, their
 aoi, truth and each run's eval JSON and --scores CSV): the tiles' mean overall IoU, N-ratio, right
-angles (the prediction's and the truth's), max tangent angle and PoLiS per run; then, over the truth
+angles (the prediction's and the truth's), max tangent angle and PoLiS per run (and per peer, CGAL
+and Douglas-Peucker, where --peers scored them on every tile); then, over the truth
 features both runs match, their mean IoU, max tangent and PoLiS, for those the tile's edge cuts
 (the truth clipped there reaches the edge) and the others."""
 import csv
@@ -13,6 +14,7 @@ import sys
 from osgeo import ogr
 
 RUNS = ('default', 'cut')
+PEERS = ('cgal', 'douglas_peucker')  # (bench/tile_edges.sh --peers)
 KEYS = (('overall_iou', 'IoU', 4), ('n_ratio', 'N-ratio', 2), ('right_angle_share', 'right angles', 3),
         ('truth_right_angle_share', 'truth', 3), ('max_tangent_angle_deg', 'max tangent', 1), ('polis_m', 'PoLiS', 3))
 
@@ -22,10 +24,12 @@ def main(d):
     tiles = [t for t in tiles if all(os.path.exists(f'{t}.{r}.json') for r in RUNS)]
     if not tiles:
         sys.exit(f'tile_edges.py: no tile of {d} was scored by both runs')
+    # The peers where every tile has their scores too.
+    runs = RUNS + tuple(p for p in PEERS if all(os.path.exists(f'{t}.{p}.json') for t in tiles))
     print(f'{len(tiles)} tiles of {d}')
     print('| run | ' + ' | '.join(label for _, label, _ in KEYS) + ' |')
     print('|---' * (len(KEYS) + 1) + '|')
-    for r in RUNS:
+    for r in runs:
         js = [json.load(open(f'{t}.{r}.json')) for t in tiles]
         print(f'| {r} | ' + ' | '.join(f'{sum(j[k] for j in js) / len(js):.{p}f}' for k, _, p in KEYS) + ' |')
     pairs = {True: [], False: []}

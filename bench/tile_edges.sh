@@ -8,7 +8,11 @@
 # angle and PoLiS, then the same for the buildings the tile's edge cuts and the others
 # (bench/tile_edges.py).
 #
-#   bench/tile_edges.sh ROW TRUTH TILE_M [--work DIR] [--every K] [--lodforge BIN]
+#   bench/tile_edges.sh ROW TRUTH TILE_M [--work DIR] [--every K] [--lodforge BIN] [--peers]
+#
+# --peers: also CGAL's and Douglas-Peucker's regularizers on each tile, on its contour as traced
+# (stages.contour.edge_sweep_m=0: as a tool that knows nothing of the tile's edge runs them), the
+# tiles' means printed beside ours.
 #
 # TILE_M: the tiles' width (their height 1.25 times it, as the 0.09 m tiles of issue 14); every
 # K-th tile of the grid is taken (default 1). TRUTH: the row's true footprints (the campus's BAG
@@ -18,12 +22,13 @@
 set -euo pipefail
 root=$(cd "$(dirname "$0")/.." && pwd)
 row=$1; truth=$(realpath "$2"); tile_m=$3; shift 3
-work=$root/build/tile-edges; every=1; lf=$root/build/lodforge
+work=$root/build/tile-edges; every=1; lf=$root/build/lodforge; peers=0
 while [[ $# -gt 0 ]]; do
   case $1 in
     --work) work=$2; shift 2;;
     --every) every=$2; shift 2;;
     --lodforge) lf=$2; shift 2;;
+    --peers) peers=1; shift;;
     *) echo "tile_edges.sh: unknown option '$1'" >&2; exit 2;;
   esac
 done
@@ -44,7 +49,10 @@ for ((r = 0; r + th <= height; r += th)); do
     ogr2ogr -q -f GPKG $t.truth.gpkg "$truth" -clipsrc $a $b $d $e -nlt MULTIPOLYGON
     printf '{"type":"FeatureCollection","features":[{"type":"Feature","properties":{},"geometry":{"type":"Polygon","coordinates":[[[%s,%s],[%s,%s],[%s,%s],[%s,%s],[%s,%s]]]}}]}\n' \
       $a $b $d $b $d $e $a $e $a $b > $t.aoi.geojson
-    for run in default:"" cut:"--set stages.contour.edge_sweep_m=0"; do
+    runs=(default:"" cut:"--set stages.contour.edge_sweep_m=0")
+    [[ $peers == 1 ]] && runs+=(cgal:"--regularizer cgal --set stages.contour.edge_sweep_m=0"
+                                douglas_peucker:"--regularizer douglas_peucker --set stages.contour.edge_sweep_m=0")
+    for run in "${runs[@]}"; do
       name=${run%%:*}; options=${run#*:}
       # (A tile without a building is skipped: regularize refuses an empty mask.)
       if "$lf" regularize -q --mask $t.tif $options --threads 1 --out $t.$name.gpkg 2> $t.$name.log; then
