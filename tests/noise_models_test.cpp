@@ -783,20 +783,30 @@ TEST(NoisyMasks, UnderAMetreOfWobbleAHouseNoRounderThanItsRectangleHoldsToItsLat
   EXPECT_GE(iou, iou_off - 0.01);
 }
 
-// A clean right triangle of 20 x 12 m and an isosceles trapezoid, at 25 cm pixels: round or oblique
-// by their normals, and nearer their best rectangle than their moments' ellipse, but their
-// rectangles leave a corner out by metres, beyond twice their noise or pixel
-// (refinement.round_fit_noise, which holds them to no lattice; held to one, the model choice kept
-// them too): they keep their own walls.
+// A clean right triangle of 20 x 12 m and an isosceles trapezoid, at 25 cm pixels, their
+// neighbours agreeing on a lattice 8 degrees off theirs: round or oblique by their normals. The
+// triangle lies nearer its best rectangle than its moments' ellipse, but its rectangle leaves a
+// corner out by metres, beyond twice its noise or pixel (refinement.round_fit_noise): it is held
+// to no lattice and takes none from its neighbours (without the bound it took theirs; the model
+// choice kept its walls either way). Both keep their own walls.
 TEST(NoisyMasks, ACleanTriangleOrTrapezoidKeepsItsObliqueWalls) {
   const PolygonWithHoles triangle = test::rotated({{{0, 0}, {20, 0}, {0, 12}}, {}}, 17.0);
   const PolygonWithHoles trapezoid = test::rotated({{{0, 0}, {24, 0}, {17, 10}, {7, 10}}, {}}, 17.0);
+  BuildingStart start;
+  start.neighbour_lattice.direction = Vec2(std::cos(25.0 * M_PI / 180), std::sin(25.0 * M_PI / 180));
+  CoreOptions unbounded;
+  unbounded.refinement.round_fit_noise = 0;
   for (const PolygonWithHoles* truth : {&triangle, &trapezoid}) {
-    const BuildingResult r = regularize(test::rasterize_shape_m(*truth, 0.25, 0.0, 8.0, 0.0, 1), 0.25);
+    const test::RasterizedShape shape = test::rasterize_shape_m(*truth, 0.25, 0.0, 8.0, 0.0, 1);
+    ASSERT_EQ(shape.buildings.size(), 1u);
+    const BuildingResult r = regularize_building(shape.buildings[0].rings, 0.25, CoreOptions{}, 0.0, start);
     ASSERT_TRUE(r.ok) << r.reason;
+    EXPECT_FALSE(r.lattice_lent) << truth->outer.size();
     EXPECT_EQ(r.footprint.outer.size(), truth->outer.size());
     EXPECT_GT(test::iou(r.footprint, *truth), 0.97);
   }
+  EXPECT_TRUE(regularize_building(test::rasterize_shape_m(triangle, 0.25, 0.0, 8.0, 0.0, 1).buildings[0].rings, 0.25, unbounded, 0.0, start)
+                  .lattice_lent);
 }
 
 // The largest angle of an outline's walls to a lattice (degrees).
