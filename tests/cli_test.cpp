@@ -497,6 +497,34 @@ TEST_F(Cli, AThinRowUnderAWobbleHasSquareEnds) {
       << without.right << " of " << without.corners << " corners square): the test no longer shows the case";
 }
 
+// Row houses of the TU Delft campus (BAG) in a simulated segmentation at 25 cm under half a metre
+// of wobble (8 m wavelength), corners rounded by 1 m: three buildings' chosen outlines (one drawn
+// with its steps merged, two the chain's regular outline) followed the contour closer than its
+// noise leaves it, along the wobble, with more vertices than their lattice outlines, which explain
+// the contour within that noise (models.noise_fit). With the rule the right angles rise from
+// 0.83 to 0.87 of the corners, the overall IoU from 0.9226 to 0.9238.
+TEST_F(Cli, AnOutlineDrawnCloserThanTheNoiseGivesWayToTheLatticeOutline) {
+  const std::string extract = test::test_data() + "/tudelft-campus-bag/campus_row_extract.geojson";
+  CommandRun r = lodforge("synth -q --from " + extract + " --pixel-size 0.25 --seed 3 --set boundary_noise_m=0.5" +
+                          " --set noise_wavelength_m=8 --set corner_radius_m=1 --set speckle_per_km2=400 --set speckle_size_m=0.5" +
+                          " --out " + path("sim"));
+  ASSERT_EQ(r.code, 0) << r.output;
+  const auto scored = [&](const std::string& name, const std::string& options) {
+    r = lodforge("regularize -q --mask " + path("sim/seg_class.tif") + " " + options + " --out " + path(name + ".gpkg"));
+    EXPECT_EQ(r.code, 0) << r.output;
+    r = lodforge("eval -q --pred " + path(name + ".gpkg") + " --gt " + extract + " --json " + path(name + ".json"));
+    EXPECT_EQ(r.code, 0) << r.output;
+    return nlohmann::json::parse(test::slurp(dir / (name + ".json")));
+  };
+  const nlohmann::json with = scored("default", "");
+  const nlohmann::json without = scored("without", "--set stages.models.noise_fit=0");
+  const double right = with.at("right_angle_share").get<double>(), right_without = without.at("right_angle_share").get<double>();
+  const double iou = with.at("overall_iou").get<double>(), iou_without = without.at("overall_iou").get<double>();
+  std::cerr << "right angles " << right << " (without the rule " << right_without << "), IoU " << iou << " (" << iou_without << ")\n";
+  EXPECT_GE(right, right_without + 0.03);
+  EXPECT_GE(iou, iou_without - 0.001);
+}
+
 // A tile cut from a larger mask: the buildings its edge cuts are drawn up to the edge and no
 // farther (traced swept out across the edge, stages.contour.edge_sweep_m, and clipped back; that
 // the sweep carries their walls on along their own directions, Contour tests).

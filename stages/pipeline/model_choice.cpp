@@ -308,6 +308,7 @@ struct ModelChoice : LabeledBuilding {
   const std::vector<PolygonWithHoles>& coarse_lattice_outlines();
   void draw_lattice_outline();
   void take_lattice_outline_if_as_good();
+  void take_lattice_outline_within_noise();
   void redraw_stretches();
   void simplify_by_criterion();
   bool offer_coarse_lattices(Criterion& criterion);
@@ -440,6 +441,33 @@ void ModelChoice::take_lattice_outline_if_as_good() {
     lattice_outline = {};  // (taken: no candidate of its own after this, rounding_candidates)
     result.model = "lattice";
   }
+}
+
+// The lattice outline in place of a chosen outline with more vertices (neither a rectangle nor
+// the lattice outline) that follows the contour closer than the noise would leave it
+// (models.noise_fit noises, a Gaussian's mean distance): such an outline follows the noise, and
+// the lattice outline explains the contour as well where it lies within the larger of the two
+// plus fit_tolerance. Unless it leaves a stretch of contour that the chosen outline explains
+// (a wing or a real setback: models.criterion_stretch_noise) or reaches farther from the contour
+// than it by models.noise_fit_reach_noise noises (lattice walls meeting beyond an oblique cut).
+// (A building whose lattice came from its chords has its own test, take_lattice_outline_if_as_good.)
+void ModelChoice::take_lattice_outline_within_noise() {
+  if (o.models.noise_fit <= 0 || !lattice_ok || lattice_outline.outer.empty() || follow_chords || result.model == "rectangle" ||
+      result.model == "lattice" || vertex_count(lattice_outline) >= vertex_count(result.footprint) || over_budget())
+    return;
+  const double noise_m = model_noise(result, pixel_size, o.models);
+  const double lattice_fit = contour_fit(rings, lattice_outline);
+  if (lattice_fit > std::max(contour_fit(rings, result.footprint), o.models.noise_fit * noise_m) + fit_tolerance(rings, pixel_size, result, o))
+    return;
+  if (o.models.criterion_stretch_noise > 0 &&
+      StretchGuard(rings, result.footprint, noise_m, noise_correlation_m(o.corners, pixel_size), o.models.criterion_stretch_noise)
+          .leaves_stretch(lattice_outline))
+    return;
+  const PolygonWithHoles contour{rings[0], {rings.begin() + 1, rings.end()}};
+  if (outline_reach(lattice_outline, contour) > outline_reach(result.footprint, contour) + o.models.noise_fit_reach_noise * noise_m) return;
+  result.footprint = std::move(lattice_outline);
+  lattice_outline = {};  // (taken: no candidate of its own after this, rounding_candidates)
+  result.model = "lattice";
 }
 
 // Per stretch of contour, the simpler model where it explains the stretch as well: the regular
@@ -647,6 +675,7 @@ void choose_outline(const LabeledBuilding& b, const CoreOptions& o, const std::f
   choice.first_outline();
   if (b.on_lattice)  // (a round shape is no rectangle)
     choose_rectangle(b.rings, b.pixel_size, o, result, result.lattice_lent ? &b.context.lattice : nullptr);
+  choice.take_lattice_outline_within_noise();
   choice.redraw_stretches();
   choice.simplify_by_criterion();
   // (Its mask's rounding not known yet: the outline kept for take_mask_rounding, where it measures
