@@ -498,10 +498,10 @@ TEST_F(Cli, AThinRowUnderAWobbleHasSquareEnds) {
 }
 
 // Row houses of the TU Delft campus (BAG) in a simulated segmentation at 25 cm under half a metre
-// of wobble (8 m wavelength), corners rounded by 1 m: three buildings' chosen outlines (one drawn
-// with its steps merged, two the chain's regular outline) followed the contour closer than its
-// noise leaves it, along the wobble, with more vertices than their lattice outlines, which explain
-// the contour within that noise (models.noise_fit). With the rule the right angles rise from
+// of wobble (8 m wavelength), corners rounded by 1 m: three buildings' outlines (the chain's
+// regular one, one of them then simplified by merging its steps) followed the contour closer than
+// its noise leaves it, along the wobble, with more vertices than their lattice outlines, which
+// explain the contour within that noise (models.noise_fit). With the rule the right angles rise from
 // 0.83 to 0.87 of the corners, the overall IoU from 0.9226 to 0.9238.
 TEST_F(Cli, AnOutlineDrawnCloserThanTheNoiseGivesWayToTheLatticeOutline) {
   const std::string extract = test::test_data() + "/tudelft-campus-bag/campus_row_extract.geojson";

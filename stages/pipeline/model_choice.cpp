@@ -296,6 +296,7 @@ struct ModelChoice : LabeledBuilding {
   // Left by the first outline for the steps after it.
   double min_run_px = 0;  // of the regular outline's runs
   double chosen_fit = -1;  // the chosen outline's contour_fit, -1 while unknown
+  double lattice_fit = -1;  // lattice_outline's contour_fit, -1 while unknown
   PolygonWithHoles lattice_outline;
   bool lattice_ok = false;  // lattice_outline was drawn
   EdgeLabels axis_labels;   // the contour labeled among the lattice's four directions (input.directions now)
@@ -428,7 +429,7 @@ void ModelChoice::draw_lattice_outline() {
 void ModelChoice::take_lattice_outline_if_as_good() {
   if (!lattice_ok || vertex_count(lattice_outline) > vertex_count(result.footprint)) return;
   if (chosen_fit < 0) chosen_fit = contour_fit(rings, result.footprint);
-  const double lattice_fit = contour_fit(rings, lattice_outline);
+  lattice_fit = contour_fit(rings, lattice_outline);
   // (A building whose lattice came from its chords: its wobble, which the chosen outline may
   // follow, is what the lattice outline leaves within the noise; a wing it leaves out would
   // cost more than lattice_fit_gap_noise over the chosen outline.)
@@ -450,15 +451,25 @@ void ModelChoice::take_lattice_outline_if_as_good() {
 // plus fit_tolerance. Unless it leaves a stretch of contour that the chosen outline explains
 // (a wing or a real setback: models.criterion_stretch_noise) or reaches farther from the contour
 // than it by models.noise_fit_reach_noise noises (lattice walls meeting beyond an oblique cut).
-// (A building whose lattice came from its chords has its own test, take_lattice_outline_if_as_good.)
+// (A building whose lattice came from its chords has its own test, take_lattice_outline_if_as_good.
+// An outline that draws an arc is not kept from it, as it is from the information criterion's
+// outlines: the stretch guard keeps a real arc; kept from it, 9 sweep rows changed, right angles
+// -0.06 and max tangent +1.0 degree summed.) The
+// noise is the one its steps are judged by (model_noise), the standard errors are
+// fit_tolerance's (its regularity noise), as lattice_tolerance's are. Where the chosen outline
+// lies within 0.8 noises of the contour, the test before (take_lattice_outline_if_as_good) found
+// the lattice outline farther than the chosen outline's fit plus the standard errors; this one
+// asks no more of it than the noise's own mean distance plus them.
 void ModelChoice::take_lattice_outline_within_noise() {
   if (o.models.noise_fit <= 0 || !lattice_ok || lattice_outline.outer.empty() || follow_chords || result.model == "rectangle" ||
       result.model == "lattice" || vertex_count(lattice_outline) >= vertex_count(result.footprint) || over_budget())
     return;
   const double noise_m = model_noise(result, pixel_size, o.models);
-  const double lattice_fit = contour_fit(rings, lattice_outline);
-  if (lattice_fit > std::max(contour_fit(rings, result.footprint), o.models.noise_fit * noise_m) + fit_tolerance(rings, pixel_size, result, o))
-    return;
+  // (The chosen outline is still the first one, regular or plain: its fit is known, as the
+  // lattice outline's is from the test before.)
+  if (chosen_fit < 0) chosen_fit = contour_fit(rings, result.footprint);
+  if (lattice_fit < 0) lattice_fit = contour_fit(rings, lattice_outline);
+  if (lattice_fit > std::max(chosen_fit, o.models.noise_fit * noise_m) + fit_tolerance(rings, pixel_size, result, o)) return;
   if (o.models.criterion_stretch_noise > 0 &&
       StretchGuard(rings, result.footprint, noise_m, noise_correlation_m(o.corners, pixel_size), o.models.criterion_stretch_noise)
           .leaves_stretch(lattice_outline))

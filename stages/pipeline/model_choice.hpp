@@ -1,7 +1,8 @@
 // The chain's model choice (after its labeling, docs/models.md and docs/paper-reading.md): the
 // regular outline (walls held to the building's lattice, steps and curves judged against the
 // noise) or the plain one (the paper's corners with pixel thresholds), the lattice outline (every
-// wall on the lattice), the moment rectangle, the regular outline's oblique stretches redrawn on
+// wall on the lattice), the moment rectangle, the lattice outline in place of an outline drawn
+// closer to the contour than its noise leaves it, the regular outline's oblique stretches redrawn on
 // the lattice, simpler outlines by an information criterion (the coarse lattice outline, the
 // staircases drawn as lines, the steps merged); last the short connectors squared and the needles
 // taken away, and, under its mask's rounding, the lattice outlines against the outline once more.
