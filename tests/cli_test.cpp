@@ -523,6 +523,26 @@ TEST_F(Cli, AnOutlineDrawnCloserThanTheNoiseGivesWayToTheLatticeOutline) {
   std::cerr << "right angles " << right << " (without the rule " << right_without << "), IoU " << iou << " (" << iou_without << ")\n";
   EXPECT_GE(right, right_without + 0.03);
   EXPECT_GE(iou, iou_without - 0.001);
+  // At 2 m pixels the noise (half a metre of wobble) is under a pixel: an outline drawn closer than
+  // it follows the staircase and jogs of a pixel or two, and the rule stays out
+  // (models.noise_fit_min_px). The default draws every building as without the rule; at any noise
+  // (noise_fit_min_px=0) one of them would take its lattice outline.
+  r = lodforge("synth -q --from " + extract + " --pixel-size 2 --seed 3 --set boundary_noise_m=0.5 --set noise_wavelength_m=8" +
+               " --set corner_radius_m=1 --set speckle_per_km2=400 --set speckle_size_m=0.5 --out " + path("coarse"));
+  ASSERT_EQ(r.code, 0) << r.output;
+  GDALAllRegister();
+  const auto outlines = [&](const std::string& name, const std::string& options) {
+    r = lodforge("regularize -q --mask " + path("coarse/seg_class.tif") + " " + options + " --out " + path(name));
+    EXPECT_EQ(r.code, 0) << r.output;
+    std::vector<std::vector<Vec2>> rings;
+    for (const PolygonWithHoles& p : read_polygons(path(name), name)) rings.push_back(p.outer);
+    return rings;
+  };
+  const auto coarse = outlines("coarse.gpkg", "");
+  EXPECT_FALSE(coarse.empty());
+  EXPECT_EQ(coarse, outlines("coarse_without.gpkg", "--set stages.models.noise_fit=0"));
+  EXPECT_NE(coarse, outlines("coarse_any.gpkg", "--set stages.models.noise_fit_min_px=0"))
+      << "at any noise the rule no longer changes a building at 2 m: the test no longer shows the bound";
 }
 
 // A tile cut from a larger mask: the buildings its edge cuts are drawn up to the edge and no

@@ -170,28 +170,18 @@ TEST(CoarseMasks, ARowOfHousesAt2mHasNoNeedle) {
   ASSERT_EQ(polygon_problem(truth), "");
   const test::RasterizedShape shape = test::rasterize_shape(truth, 2.0, 0.0, 0.0, 1);
   ASSERT_EQ(shape.buildings.size(), 1u);
-  // (This rule alone: models.noise_fit gives the row its lattice outline, which has no needle
-  // either.)
-  CoreOptions spike_only;
-  spike_only.models.noise_fit = 0;
-  CoreOptions without = spike_only;
+  CoreOptions without;
   without.models.spike_deg = 0;
   // (Regularized with the noise its mask's other buildings have, as in a batch: 0.3-0.6 m give
   // the needle.)
   const BuildingResult before = regularize_building(shape.buildings[0].rings, 2.0, without, 0.5);
-  const BuildingResult r = regularize_building(shape.buildings[0].rings, 2.0, spike_only, 0.5);
+  const BuildingResult r = regularize_building(shape.buildings[0].rings, 2.0, CoreOptions{}, 0.5);
   ASSERT_TRUE(before.ok && r.ok) << before.reason << r.reason;
   ASSERT_LT(sharpest_corner_deg(before.footprint), 20.0);  // the case this test is about
   EXPECT_GE(sharpest_corner_deg(r.footprint), 20.0);
   EXPECT_LT(r.footprint.outer.size(), before.footprint.outer.size());
   EXPECT_EQ(polygon_problem(r.footprint), "");
   EXPECT_GE(test::iou(r.footprint, truth), test::iou(before.footprint, truth) - 0.01);
-  const BuildingResult defaults = regularize_building(shape.buildings[0].rings, 2.0, CoreOptions{}, 0.5);
-  ASSERT_TRUE(defaults.ok) << defaults.reason;
-  EXPECT_EQ(defaults.model, "lattice");
-  EXPECT_EQ(polygon_problem(defaults.footprint), "");
-  EXPECT_GE(sharpest_corner_deg(defaults.footprint), 20.0);
-  EXPECT_GE(test::iou(defaults.footprint, truth), test::iou(before.footprint, truth) - 0.01);
 }
 
 // A T under a wobble of a quarter metre: the wobble tilts its walls' own fitted directions, the

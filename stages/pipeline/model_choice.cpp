@@ -450,7 +450,9 @@ void ModelChoice::take_lattice_outline_if_as_good() {
 // the lattice outline explains the contour as well where it lies within the larger of the two
 // plus fit_tolerance. Unless it leaves a stretch of contour that the chosen outline explains
 // (a wing or a real setback: models.criterion_stretch_noise) or reaches farther from the contour
-// than it by models.noise_fit_reach_noise noises (lattice walls meeting beyond an oblique cut).
+// than it by models.noise_fit_reach_noise noises (lattice walls meeting beyond an oblique cut). Only
+// where the pixels resolve the noise (models.noise_fit_min_px): under a pixel an outline drawn
+// closer than the noise follows the staircase and real jogs of a pixel or two, not the noise.
 // (A building whose lattice came from its chords has its own test, take_lattice_outline_if_as_good.
 // An outline that draws an arc is not kept from it, as it is from the information criterion's
 // outlines: the stretch guard keeps a real arc; kept from it, 9 sweep rows changed, right angles
@@ -465,6 +467,7 @@ void ModelChoice::take_lattice_outline_within_noise() {
       result.model == "lattice" || vertex_count(lattice_outline) >= vertex_count(result.footprint) || over_budget())
     return;
   const double noise_m = model_noise(result, pixel_size, o.models);
+  if (noise_m < o.models.noise_fit_min_px * pixel_size) return;
   // (The chosen outline is still the first one, regular or plain: its fit is known, as the
   // lattice outline's is from the test before.)
   if (chosen_fit < 0) chosen_fit = contour_fit(rings, result.footprint);
