@@ -457,6 +457,16 @@ TEST_F(Cli, SynthFromFootprintsRegularizeWithEachMethodAndEvaluate) {
   EXPECT_NE(r.output.find("--from '" + path("missing.geojson") + "': file not found"), std::string::npos) << r.output;
 }
 
+// `lodforge synth` arguments that simulate a network's segmentation of the campus's row-house
+// extract (tests/data): pixel size, seed, wobble amplitude and wavelength, corner radius (m), with
+// 400 speckles of 0.5 m a square kilometre; into the directory `out`.
+std::string extract_segmentation(const std::string& pixel, int seed, const std::string& wobble_m, const std::string& wavelength_m,
+                                 const std::string& radius_m, const std::string& out) {
+  return "synth -q --from " + test::test_data() + "/tudelft-campus-bag/campus_row_extract.geojson --pixel-size " + pixel +
+         " --seed " + std::to_string(seed) + " --set boundary_noise_m=" + wobble_m + " --set noise_wavelength_m=" + wavelength_m +
+         " --set corner_radius_m=" + radius_m + " --set speckle_per_km2=400 --set speckle_size_m=0.5 --out " + out;
+}
+
 // A long thin row of houses of the TU Delft campus (BAG), about 100 m x 8 m, in a simulated
 // segmentation at 15 cm under 0.7 m of wobble: no direction was found for its ends (their normals
 // spread by the wobble's flanks), its ends' contour joined its long walls' runs, those bowed round
@@ -464,10 +474,7 @@ TEST_F(Cli, SynthFromFootprintsRegularizeWithEachMethodAndEvaluate) {
 // With the lattice's missing axis added where that happens (refinement.missing_axis_deg) the row
 // has square ends and straight walls.
 TEST_F(Cli, AThinRowUnderAWobbleHasSquareEnds) {
-  const std::string extract = test::test_data() + "/tudelft-campus-bag/campus_row_extract.geojson";
-  CommandRun r = lodforge("synth -q --from " + extract + " --pixel-size 0.15 --seed 1 --set boundary_noise_m=0.7" +
-                          " --set noise_wavelength_m=6 --set corner_radius_m=1.4 --set speckle_per_km2=400 --set speckle_size_m=0.5" +
-                          " --out " + path("sim"));
+  CommandRun r = lodforge(extract_segmentation("0.15", 1, "0.7", "6", "1.4", path("sim")));
   ASSERT_EQ(r.code, 0) << r.output;
   GDALAllRegister();
   // The row's outline (the footprint holding a point inside it): its vertices, and its corners
@@ -505,9 +512,7 @@ TEST_F(Cli, AThinRowUnderAWobbleHasSquareEnds) {
 // 0.83 to 0.87 of the corners, the overall IoU from 0.9226 to 0.9238.
 TEST_F(Cli, AnOutlineDrawnCloserThanTheNoiseGivesWayToTheLatticeOutline) {
   const std::string extract = test::test_data() + "/tudelft-campus-bag/campus_row_extract.geojson";
-  CommandRun r = lodforge("synth -q --from " + extract + " --pixel-size 0.25 --seed 3 --set boundary_noise_m=0.5" +
-                          " --set noise_wavelength_m=8 --set corner_radius_m=1 --set speckle_per_km2=400 --set speckle_size_m=0.5" +
-                          " --out " + path("sim"));
+  CommandRun r = lodforge(extract_segmentation("0.25", 3, "0.5", "8", "1", path("sim")));
   ASSERT_EQ(r.code, 0) << r.output;
   const auto scored = [&](const std::string& name, const std::string& options) {
     r = lodforge("regularize -q --mask " + path("sim/seg_class.tif") + " " + options + " --out " + path(name + ".gpkg"));
@@ -527,8 +532,7 @@ TEST_F(Cli, AnOutlineDrawnCloserThanTheNoiseGivesWayToTheLatticeOutline) {
   // it follows the staircase and jogs of a pixel or two, and the rule stays out
   // (models.noise_fit_min_px). The default draws every building as without the rule; at any noise
   // (noise_fit_min_px=0) one of them would take its lattice outline.
-  r = lodforge("synth -q --from " + extract + " --pixel-size 2 --seed 3 --set boundary_noise_m=0.5 --set noise_wavelength_m=8" +
-               " --set corner_radius_m=1 --set speckle_per_km2=400 --set speckle_size_m=0.5 --out " + path("coarse"));
+  r = lodforge(extract_segmentation("2", 3, "0.5", "8", "1", path("coarse")));
   ASSERT_EQ(r.code, 0) << r.output;
   GDALAllRegister();
   const auto outlines = [&](const std::string& name, const std::string& options) {

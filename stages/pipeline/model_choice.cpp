@@ -191,6 +191,9 @@ std::vector<Stretch> lattice_stretches(const std::vector<Ring>& rings, const Edg
   return stretches;
 }
 
+// The contour's rings as one polygon: the first ring outer, the others its holes.
+PolygonWithHoles contour_polygon(const std::vector<Ring>& rings) { return {rings[0], {rings.begin() + 1, rings.end()}}; }
+
 // How far the polygon's boundary reaches from the contour (its rings as one polygon): the largest
 // distance to it of the points a quarter and three quarters along each of the polygon's edges
 // (the midpoints of the edges halved). Not of its vertices: a square corner lies beyond a contour
@@ -453,18 +456,18 @@ void ModelChoice::take_lattice_outline_if_as_good() {
 // than it by models.noise_fit_reach_noise noises (lattice walls meeting beyond an oblique cut). Only
 // where the pixels resolve the noise (models.noise_fit_min_px): under a pixel an outline drawn
 // closer than the noise follows the staircase and real jogs of a pixel or two, not the noise.
-// (A building whose lattice came from its chords has its own test, take_lattice_outline_if_as_good.
-// An outline that draws an arc is not kept from it, as it is from the information criterion's
-// outlines: the stretch guard keeps a real arc; kept from it, 9 sweep rows changed, right angles
-// -0.06 and max tangent +1.0 degree summed.) The
-// noise is the one its steps are judged by (model_noise), the standard errors are
-// fit_tolerance's (its regularity noise), as lattice_tolerance's are. Where the chosen outline
-// lies within 0.8 noises of the contour, the test before (take_lattice_outline_if_as_good) found
-// the lattice outline farther than the chosen outline's fit plus the standard errors; this one
-// asks no more of it than the noise's own mean distance plus them.
+// The noise is the one its steps are judged by (model_noise), the standard errors fit_tolerance's
+// (its regularity noise), as lattice_tolerance's are: where the chosen outline lies within 0.8
+// noises of the contour, the test before (take_lattice_outline_if_as_good) asked the lattice
+// outline for the chosen outline's fit plus those, this one for the noise's own mean distance plus
+// them. (A building whose lattice came from its chords has its own test there. An outline that
+// draws an arc is not kept from this one, as it is from the information criterion's outlines: the
+// stretch guard keeps a real arc; kept from it, 9 sweep rows changed, right angles -0.06 and max
+// tangent +1.0 degree summed.)
 void ModelChoice::take_lattice_outline_within_noise() {
+  // (A lattice outline taken before is cleared: lattice_outline empty.)
   if (o.models.noise_fit <= 0 || !lattice_ok || lattice_outline.outer.empty() || follow_chords || result.model == "rectangle" ||
-      result.model == "lattice" || vertex_count(lattice_outline) >= vertex_count(result.footprint) || over_budget())
+      vertex_count(lattice_outline) >= vertex_count(result.footprint) || over_budget())
     return;
   const double noise_m = model_noise(result, pixel_size, o.models);
   if (noise_m < o.models.noise_fit_min_px * pixel_size) return;
@@ -477,7 +480,7 @@ void ModelChoice::take_lattice_outline_within_noise() {
       StretchGuard(rings, result.footprint, noise_m, noise_correlation_m(o.corners, pixel_size), o.models.criterion_stretch_noise)
           .leaves_stretch(lattice_outline))
     return;
-  const PolygonWithHoles contour{rings[0], {rings.begin() + 1, rings.end()}};
+  const PolygonWithHoles contour = contour_polygon(rings);
   if (outline_reach(lattice_outline, contour) > outline_reach(result.footprint, contour) + o.models.noise_fit_reach_noise * noise_m) return;
   result.footprint = std::move(lattice_outline);
   lattice_outline = {};  // (taken: no candidate of its own after this, rounding_candidates)
@@ -516,7 +519,7 @@ void ModelChoice::redraw_stretches() {
   if (!outline(fit_rings, mixed, mixed_directions, o.corners, origin, pixel_size, context, min_run_px, candidate).second.empty() ||
       contour_fit(rings, candidate) > chosen_fit + tolerance)
     return;
-  const PolygonWithHoles contour{rings[0], {rings.begin() + 1, rings.end()}};
+  const PolygonWithHoles contour = contour_polygon(rings);
   if (outline_reach(candidate, contour) <= outline_reach(chosen, contour) + noise_m) result.footprint = std::move(candidate);
 }
 
