@@ -2,6 +2,7 @@
 
 #include <cmath>
 #include <functional>
+#include <random>
 
 #include "directions/refine.hpp"
 #include "labeling/mrf.hpp"
@@ -98,6 +99,47 @@ TEST(Mrf, EdgesFacingAlikeAreLabeledAsOneAtTheSameEnergy) {
   const auto runs = label_runs(together[0]);
   ASSERT_EQ(runs.size(), 2u);
   for (const auto& [first, count] : runs) EXPECT_NEAR(normals[std::size_t(first)], 45.0, 2.5) << first;
+}
+
+// Alpha-expansion stops where no expansion move lowers the energy: on small problems of two rings
+// (every move tried by brute force), none does. The moves are solved on a cut that leaves out the
+// edges whose move a bound settles; a bound that settled one wrongly would leave a lower move.
+// The normals lie near the directions (so that the bound settles most edges) or anywhere, the
+// smoothness and label costs weak or strong.
+TEST(Mrf, NoExpansionMoveLowersTheReturnedLabeling) {
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<double> unit_interval(0.0, 1.0);
+  for (int trial = 0; trial < 60; ++trial) {
+    LabelingInput in;
+    const std::vector<double> directions = {0, 90, 180, 270, 45 + 10 * unit_interval(rng)};
+    for (double a : directions) in.directions.push_back(unit(a));
+    for (std::size_t l = 0; l < directions.size(); ++l) in.support.push_back(1 + 20 * unit_interval(rng));
+    const double spread = trial % 2 ? 25.0 : 360.0;  // near the directions, or anywhere
+    for (int ring_size : {7, 4}) {
+      in.normals.emplace_back();
+      in.lengths.emplace_back();
+      for (int i = 0; i < ring_size; ++i) {
+        const double near = directions[std::size_t(unit_interval(rng) * 4.0)];
+        in.normals.back().push_back(unit(near + spread * (unit_interval(rng) - 0.5)));
+        in.lengths.back().push_back(0.05 + 0.5 * unit_interval(rng));
+      }
+    }
+    MrfOptions o;
+    o.group_deg = 0;
+    o.kappa1 = trial % 3 == 0 ? 0.2 : trial % 3 == 1 ? 1.0 : 6.0;
+    o.kappa2 = trial % 4 < 2 ? 10.0 : 1.0;
+    const EdgeLabels labels = label_edges(in, o);
+    const double found = labeling_energy(in, labels, o);
+    const std::size_t n0 = labels[0].size(), n = n0 + labels[1].size();
+    for (int alpha = 0; alpha < int(directions.size()); ++alpha)
+      for (unsigned move = 1; move < (1u << n); ++move) {
+        EdgeLabels moved = labels;
+        for (std::size_t k = 0; k < n; ++k)
+          if (move >> k & 1u) (k < n0 ? moved[0][k] : moved[1][k - n0]) = alpha;
+        if (moved == labels) continue;
+        EXPECT_GE(labeling_energy(in, moved, o), found - 1e-9 * std::max(1.0, found)) << "trial " << trial << " alpha " << alpha << " move " << move;
+      }
+  }
 }
 
 TEST(Mrf, RunsAreCyclic) {

@@ -17,10 +17,6 @@ double label_cost(const LabelingInput& in, std::size_t l, const MrfOptions& o) {
   return o.kappa2 * (1.0 - h) * (1.0 - h);
 }
 
-double data_term(const LabelingInput& in, std::size_t r, std::size_t i, int l, const MrfOptions& o) {
-  return in.lengths[r][i] / o.unit_length_m * (in.normals[r][i] - in.directions[l]).norm();
-}
-
 // Weight of the smoothness term between edge i and its successor (eq. 6, read as intended: the
 // more alike the two normals, the dearer a label change; the printed sqrt(2) - exp(...) rises
 // with the difference, the opposite of what the text says).
@@ -48,9 +44,12 @@ struct Terms {
   std::vector<double> smooth;         // per flat group: weight to its ring successor
   std::vector<double> distance;       // per pair of labels
   std::vector<double> label_cost;     // per label
+  std::vector<int> next, prev;        // per flat group: its ring successor and predecessor (-1: a ring of one group)
 
   Terms(const LabelingInput& in, const MrfOptions& o) : labels(int(in.directions.size())), offset(in.normals.size() + 1, 0) {
     const double tolerance = 2.0 * std::sin(0.5 * o.group_deg * M_PI / 180.0);
+    std::vector<double> dx, dy;  // the directions' coordinates
+    for (const Vec2& d : in.directions) dx.push_back(d.x()), dy.push_back(d.y());
     for (std::size_t r = 0; r < in.normals.size(); ++r) {
       const std::size_t m = in.normals[r].size();
       std::size_t groups = 0;
@@ -60,8 +59,16 @@ struct Terms {
         first.push_back(int(i));
         const std::size_t g = std::size_t(offset[r]) + groups;
         data.resize(data.size() + std::size_t(labels), 0.0);
-        for (std::size_t k = i; k < j; ++k)
-          for (int l = 0; l < labels; ++l) data[g * labels + l] += data_term(in, r, k, l, o);
+        double* sums = data.data() + g * labels;
+        for (std::size_t k = i; k < j; ++k) {
+          // The data term of eq. 5: the edge's length (in unit_length_m) times its normal's
+          // distance to the label's direction; every label's in one loop over arrays.
+          const double scale = in.lengths[r][k] / o.unit_length_m, nx = in.normals[r][k].x(), ny = in.normals[r][k].y();
+          for (int l = 0; l < labels; ++l) {
+            const double ex = nx - dx[std::size_t(l)], ey = ny - dy[std::size_t(l)];
+            sums[l] += scale * std::sqrt(ex * ex + ey * ey);
+          }
+        }
         // The weight to the next group: from this group's last edge (the ring's last edge's
         // to edge 0, the first group's first edge).
         smooth.push_back(m >= 2 ? smooth_weight(in, r, j - 1, o) : 0.0);
@@ -69,6 +76,10 @@ struct Terms {
         i = j;
       }
       offset[r + 1] = offset[r] + int(groups);
+      for (int g = 0; g < int(groups); ++g) {
+        next.push_back(groups < 2 ? -1 : offset[r] + (g + 1 < int(groups) ? g + 1 : 0));
+        prev.push_back(groups < 2 ? -1 : offset[r] + (g > 0 ? g - 1 : int(groups) - 1));
+      }
     }
     distance.resize(std::size_t(labels) * labels);
     for (int a = 0; a < labels; ++a)
@@ -89,22 +100,6 @@ struct Terms {
   }
 };
 
-double energy(const Terms& t, const EdgeLabels& labels) {
-  double e = 0;
-  std::vector<char> used(std::size_t(t.labels), 0);
-  for (std::size_t r = 0; r < labels.size(); ++r) {
-    const std::size_t m = labels[r].size();
-    for (std::size_t i = 0; i < m; ++i) {
-      const int p = t.offset[r] + int(i);
-      e += t.d(p, labels[r][i]);
-      used[labels[r][i]] = 1;
-      if (m >= 2) e += t.smooth[p] * t.dist(labels[r][i], labels[r][next_index(i, m)]);
-    }
-  }
-  for (std::size_t l = 0; l < used.size(); ++l) if (used[l]) e += t.label_cost[l];
-  return e;
-}
-
 // Adds E(x) with x = 0 (source side, keep) and x = 1 (sink side, switch to alpha).
 void add_unary(Graph& g, int node, double e0, double e1) { g.add_tweights(node, e1, e0); }
 
@@ -117,51 +112,157 @@ void add_pairwise(Graph& g, int p, int q, double e00, double e01, double e10, do
   // the constant e00 does not change the minimizer
 }
 
-// (g: emptied and built again, its memory kept from one expansion to the next; members: the
-// same, per label its nodes.)
-EdgeLabels expand(const Terms& t, const EdgeLabels& labels, int alpha, Graph& g, std::vector<std::vector<int>>& members) {
+// The expansion's scratch, kept from one expansion to the next (its memory reused).
+struct Scratch {
+  std::vector<signed char> state;      // per group: 0 keeps, 1 switches to alpha (either way), 2 the cut decides
+  std::vector<int> node;               // per group left to the cut: its graph node
+  std::vector<char> anchored;          // per label: one of its groups keeps it
+  std::vector<int> open;               // groups to try again
+  std::vector<std::vector<int>> members;  // per label: its groups
+  bool members_stale = true;           // (members are those of the labeling given to expand unless set)
+};
+
+// The groups whose move every minimizer of the expansion shares, found before the cut (a
+// persistency bound): a group keeps its label where switching it costs more than it could save
+// whatever its neighbours do (its data term's rise against the most its two smoothness terms
+// and its label's cost can give back), and switches where keeping it does; a group labeled
+// alpha is alpha either way. Their terms with the groups left to the cut are those groups' own:
+// the cut, smaller, has the same minimizers. (A margin keeps a group whose bound is within
+// rounding of 0 to the cut.)
+void fix_groups(const Terms& t, const std::vector<int>& labels, int alpha, bool alpha_unused, Scratch& s) {
   const int n = t.offset.back();
-  g.reset();
-  g.add_node(n);
-  for (std::size_t r = 0; r < labels.size(); ++r) {
-    const std::size_t m = labels[r].size();
-    for (std::size_t i = 0; i < m; ++i) {
-      const int p = t.offset[r] + int(i);
-      add_unary(g, p, t.d(p, labels[r][i]), t.d(p, alpha));
-      if (m < 2) continue;
-      const std::size_t j = next_index(i, m);
-      const int q = t.offset[r] + int(j);
-      const double w = t.smooth[p];
-      const int a = labels[r][i], b = labels[r][j];
-      add_pairwise(g, p, q, w * t.dist(a, b), w * t.dist(a, alpha), w * t.dist(alpha, b), 0.0);
+  s.state.assign(std::size_t(n), 2);
+  s.anchored.assign(std::size_t(t.labels), 0);
+  for (int p = 0; p < n; ++p)
+    if (labels[std::size_t(p)] == alpha) s.state[std::size_t(p)] = 1;
+  // Whether group p is fixed, its bound taken with the neighbours fixed so far (a fixed
+  // neighbour's term is known, an open one's the least or most it can be); the open neighbours
+  // and label members of one fixed, to try again.
+  const auto try_fix = [&](int p) {
+    const int a = labels[std::size_t(p)], q = t.next[std::size_t(p)], o = t.prev[std::size_t(p)];
+    double low = 0, high = 0, scale = 1;
+    if (q >= 0) {
+      // The term to the successor (p first) and from the predecessor (p second).
+      const double w = t.smooth[std::size_t(p)], v = t.smooth[std::size_t(o)];
+      const int b = labels[std::size_t(q)], c = labels[std::size_t(o)];
+      // E(switch) - E(keep) of each term, for the neighbour keeping (0) and switching (1).
+      const double next0 = w * (t.dist(alpha, b) - t.dist(a, b)), next1 = -w * t.dist(a, alpha);
+      const double prev0 = v * (t.dist(c, alpha) - t.dist(c, a)), prev1 = -v * t.dist(alpha, a);
+      const signed char sq = s.state[std::size_t(q)], so = s.state[std::size_t(o)];
+      low = (sq == 2 ? std::min(next0, next1) : sq == 0 ? next0 : next1) + (so == 2 ? std::min(prev0, prev1) : so == 0 ? prev0 : prev1);
+      high = (sq == 2 ? std::max(next0, next1) : sq == 0 ? next0 : next1) + (so == 2 ? std::max(prev0, prev1) : so == 0 ? prev0 : prev1);
+      scale += 2.0 * (w + v);
     }
+    const double rise = t.d(p, alpha) - t.d(p, a);
+    const double gives_back = s.anchored[std::size_t(a)] ? 0.0 : t.label_cost[std::size_t(a)];
+    const double margin = 1e-9 * (scale + t.d(p, alpha) + t.d(p, a) + t.label_cost[std::size_t(a)] + t.label_cost[std::size_t(alpha)]);
+    if (rise + low - gives_back > margin) {
+      s.state[std::size_t(p)] = 0;
+      if (!s.anchored[std::size_t(a)]) {
+        s.anchored[std::size_t(a)] = 1;
+        for (int k : s.members[std::size_t(a)])
+          if (s.state[std::size_t(k)] == 2) s.open.push_back(k);
+      }
+    } else if (rise + high + (alpha_unused ? t.label_cost[std::size_t(alpha)] : 0.0) < -margin) {
+      s.state[std::size_t(p)] = 1;
+    } else {
+      return;
+    }
+    if (q >= 0) {
+      if (s.state[std::size_t(q)] == 2) s.open.push_back(q);
+      if (s.state[std::size_t(o)] == 2) s.open.push_back(o);
+    }
+  };
+  // Every open group once, then those whose neighbour or label was settled since, until none is.
+  s.open.clear();
+  for (int p = 0; p < n; ++p)
+    if (s.state[std::size_t(p)] == 2) try_fix(p);
+  while (!s.open.empty()) {
+    const int p = s.open.back();
+    s.open.pop_back();
+    if (s.state[std::size_t(p)] == 2) try_fix(p);
   }
-  // Label costs (Delong et al. 2012, §3): one auxiliary node per label that may vanish or appear.
-  members.resize(std::size_t(t.labels));
-  for (std::vector<int>& m : members) m.clear();
-  for (std::size_t r = 0; r < labels.size(); ++r)
-    for (std::size_t i = 0; i < labels[r].size(); ++i) members[labels[r][i]].push_back(t.offset[r] + int(i));
+}
+
+// One expansion move: labels (flat, per group) with some groups switched to alpha, the least
+// energy of all such (g: emptied and built again, its memory kept from one expansion to the next).
+std::vector<int> expand(const Terms& t, const std::vector<int>& labels, int alpha, Graph& g, Scratch& s) {
+  const int n = t.offset.back();
+  if (s.members_stale) {
+    s.members.resize(std::size_t(t.labels));
+    for (std::vector<int>& m : s.members) m.clear();
+    for (int p = 0; p < n; ++p) s.members[std::size_t(labels[std::size_t(p)])].push_back(p);
+    s.members_stale = false;
+  }
+  const bool alpha_unused = s.members[std::size_t(alpha)].empty();
+  fix_groups(t, labels, alpha, alpha_unused, s);
+  std::vector<int> result = labels;
+  s.node.assign(std::size_t(n), -1);
+  int nodes = 0;
+  for (int p = 0; p < n; ++p)
+    if (s.state[std::size_t(p)] == 2) s.node[std::size_t(p)] = nodes++;
+    else if (s.state[std::size_t(p)] == 1) result[std::size_t(p)] = alpha;
+  if (nodes == 0) return result;
+  g.reset();
+  g.add_node(nodes);
+  for (int p = 0; p < n; ++p) {
+    const int np = s.node[std::size_t(p)];
+    if (np >= 0) add_unary(g, np, t.d(p, labels[std::size_t(p)]), t.d(p, alpha));
+    const int q = t.next[std::size_t(p)];
+    if (q < 0) continue;
+    const int nq = s.node[std::size_t(q)];
+    if (np < 0 && nq < 0) continue;
+    const double w = t.smooth[std::size_t(p)];
+    const int a = labels[std::size_t(p)], b = labels[std::size_t(q)];
+    const double e[2][2] = {{w * t.dist(a, b), w * t.dist(a, alpha)}, {w * t.dist(alpha, b), 0.0}};
+    if (np >= 0 && nq >= 0) add_pairwise(g, np, nq, e[0][0], e[0][1], e[1][0], e[1][1]);
+    else if (np >= 0) add_unary(g, np, e[0][s.state[std::size_t(q)]], e[1][s.state[std::size_t(q)]]);
+    else add_unary(g, nq, e[s.state[std::size_t(p)]][0], e[s.state[std::size_t(p)]][1]);
+  }
+  // Label costs (Delong et al. 2012, §3): one auxiliary node per label that may vanish or appear
+  // (neither where a group the bound fixed settles it).
   for (int l = 0; l < t.labels; ++l) {
-    const double h = t.label_cost[l];
+    const double h = t.label_cost[std::size_t(l)];
     if (h <= 0) continue;
-    if (l != alpha && !members[l].empty()) {
+    const std::vector<int>& members = s.members[std::size_t(l)];
+    if (l != alpha && !members.empty()) {
+      bool kept = false, open = false;
+      for (int p : members) kept |= s.state[std::size_t(p)] == 0, open |= s.state[std::size_t(p)] == 2;
+      if (kept || !open) continue;
       // h * [some member keeps l] = h - h * prod(x_p): aux y = 1 only if all switch.
       const int y = g.add_node();
       add_unary(g, y, 0.0, -h);
-      for (int p : members[l]) g.add_edge(p, y, h, 0.0);  // y on sink while p on source costs h
-    } else if (l == alpha && members[l].empty()) {
+      for (int p : members)
+        if (s.node[std::size_t(p)] >= 0) g.add_edge(s.node[std::size_t(p)], y, h, 0.0);  // y on sink while p on source costs h
+    } else if (l == alpha && alpha_unused) {
+      if (std::find(s.state.begin(), s.state.end(), 1) != s.state.end()) continue;
       // h * [some node switches to alpha] = h - h * prod(1 - x_p): aux z = 0 only if none does.
       const int z = g.add_node();
       add_unary(g, z, -h, 0.0);
-      for (int p = 0; p < n; ++p) g.add_edge(z, p, h, 0.0);  // z on source while p on sink costs h
+      for (int k = 0; k < nodes; ++k) g.add_edge(z, k, h, 0.0);  // z on source while p on sink costs h
     }
   }
   g.maxflow();
-  EdgeLabels result = labels;
-  for (std::size_t r = 0; r < labels.size(); ++r)
-    for (std::size_t i = 0; i < labels[r].size(); ++i)
-      if (g.what_segment(t.offset[r] + int(i)) == Graph::SINK) result[r][i] = alpha;
+  for (int p = 0; p < n; ++p)
+    if (s.node[std::size_t(p)] >= 0 && g.what_segment(s.node[std::size_t(p)]) == Graph::SINK) result[std::size_t(p)] = alpha;
   return result;
+}
+
+double flat_energy(const Terms& t, const std::vector<int>& labels) {
+  double e = 0;
+  std::vector<char> used(std::size_t(t.labels), 0);
+  for (std::size_t r = 0; r + 1 < t.offset.size(); ++r) {
+    const std::size_t m = std::size_t(t.groups(r));
+    for (std::size_t i = 0; i < m; ++i) {
+      const int p = t.offset[r] + int(i);
+      const int l = labels[std::size_t(p)];
+      e += t.d(p, l);
+      used[std::size_t(l)] = 1;
+      if (m >= 2) e += t.smooth[std::size_t(p)] * t.dist(l, labels[std::size_t(t.offset[r]) + next_index(i, m)]);
+    }
+  }
+  for (std::size_t l = 0; l < used.size(); ++l) if (used[l]) e += t.label_cost[l];
+  return e;
 }
 
 }  // namespace
@@ -169,7 +270,9 @@ EdgeLabels expand(const Terms& t, const EdgeLabels& labels, int alpha, Graph& g,
 double labeling_energy(const LabelingInput& in, const EdgeLabels& labels, const MrfOptions& o) {
   MrfOptions each_edge = o;  // any labeling, edge by edge
   each_edge.group_deg = 0;
-  return energy(Terms(in, each_edge), labels);
+  std::vector<int> flat;
+  for (const std::vector<int>& ring : labels) flat.insert(flat.end(), ring.begin(), ring.end());
+  return flat_energy(Terms(in, each_edge), flat);
 }
 
 EdgeLabels label_edges(const LabelingInput& in, const MrfOptions& o) {
@@ -179,49 +282,46 @@ EdgeLabels label_edges(const LabelingInput& in, const MrfOptions& o) {
     return labels;
   }
   const Terms terms(in, o);
-  // From the nearest direction of every group (the least data term).
-  EdgeLabels labels(in.normals.size());
-  for (std::size_t r = 0; r < in.normals.size(); ++r) {
-    labels[r].resize(std::size_t(terms.groups(r)));
-    for (int g = 0; g < terms.groups(r); ++g) {
-      const int p = terms.offset[r] + g;
-      int best = 0;
-      for (int l = 1; l < terms.labels; ++l)
-        if (terms.d(p, l) < terms.d(p, best)) best = l;
-      labels[r][std::size_t(g)] = best;
-    }
-  }
-  double e0 = energy(terms, labels);
+  // From the nearest direction of every group (the least data term); the groups of every ring in
+  // one flat numbering.
+  const int groups = terms.offset.back();
+  std::vector<int> labels(std::size_t(groups), 0);
+  for (int p = 0; p < groups; ++p)
+    for (int l = 1; l < terms.labels; ++l)
+      if (terms.d(p, l) < terms.d(p, labels[std::size_t(p)])) labels[std::size_t(p)] = l;
+  double e0 = flat_energy(terms, labels);
   // An expansion is a function of the labeling: one already tried and refused on the current
   // labeling would be refused again, so it is skipped until the labeling changes.
   std::vector<char> refused(std::size_t(terms.labels), 0);
   // (At most a node per group, one per label and one more; an edge per group to its successor,
   // one per group to its label's node, one per group from alpha's: no reallocation.)
-  const int groups = terms.offset.back();
   Graph graph(groups + terms.labels + 1, 3 * groups);
-  std::vector<std::vector<int>> members;
+  Scratch scratch;
   for (int cycle = 0; cycle < o.max_cycles; ++cycle) {
     bool improved = false;
     for (int alpha = 0; alpha < terms.labels; ++alpha) {
-      if (refused[alpha]) continue;
-      EdgeLabels candidate = expand(terms, labels, alpha, graph, members);
-      const double e = energy(terms, candidate);
+      if (refused[std::size_t(alpha)]) continue;
+      std::vector<int> candidate = expand(terms, labels, alpha, graph, scratch);
+      const double e = flat_energy(terms, candidate);
       if (e < e0 - 1e-9 * std::max(1.0, std::abs(e0))) {
         e0 = e;
         labels.swap(candidate);
+        scratch.members_stale = true;
         improved = true;
         // (Expanding alpha again at once is refused: every labeling that move reaches, this one's
         // move reached too, and this is the least of them.)
         std::fill(refused.begin(), refused.end(), 0);
-        refused[alpha] = 1;
+        refused[std::size_t(alpha)] = 1;
       } else {
-        refused[alpha] = 1;
+        refused[std::size_t(alpha)] = 1;
       }
     }
     if (!improved) break;
   }
-  for (std::size_t r = 0; r < labels.size(); ++r) labels[r] = terms.edge_labels(labels[r], r, in.normals[r].size());
-  return labels;
+  EdgeLabels out(in.normals.size());
+  for (std::size_t r = 0; r < out.size(); ++r)
+    out[r] = terms.edge_labels(std::vector<int>(labels.begin() + terms.offset[r], labels.begin() + terms.offset[r + 1]), r, in.normals[r].size());
+  return out;
 }
 
 std::vector<std::pair<int, int>> label_runs(const std::vector<int>& labels) {
