@@ -116,6 +116,9 @@ void add_pairwise(Graph& g, int p, int q, double e00, double e01, double e10, do
 struct Scratch {
   std::vector<signed char> state;      // per group: 0 keeps, 1 switches to alpha (either way), 2 the cut decides
   std::vector<int> node;               // per group left to the cut: its graph node
+  std::vector<int> opened;             // per graph node: its group
+  std::vector<int> open_members;       // per label: its groups left to the cut
+  std::vector<int> wrapped;            // graph nodes whose settled predecessor closes their ring
   std::vector<char> anchored;          // per label: one of its groups keeps it
   std::vector<int> open;               // groups to try again
   std::vector<std::vector<int>> members;  // per label: its groups
@@ -138,6 +141,12 @@ void fix_groups(const Terms& t, const std::vector<int>& labels, int alpha, bool 
   // Whether group p is fixed, its bound taken with the neighbours fixed so far (a fixed
   // neighbour's term is known, an open one's the least or most it can be); the open neighbours
   // and label members of one fixed, to try again.
+  const double* to_alpha = &t.distance[std::size_t(alpha) * std::size_t(t.labels)];  // (dist is symmetric, bit for bit)
+  const double alpha_cost = t.label_cost[std::size_t(alpha)], appears = alpha_unused ? alpha_cost : 0.0;
+  int visited = -1;  // the first pass's group: those after it are tried there, not again
+  const auto reopen = [&](int k) {
+    if (k <= visited && s.state[std::size_t(k)] == 2) s.open.push_back(k);
+  };
   const auto try_fix = [&](int p) {
     const int a = labels[std::size_t(p)], q = t.next[std::size_t(p)], o = t.prev[std::size_t(p)];
     double low = 0, high = 0, scale = 1;
@@ -146,37 +155,37 @@ void fix_groups(const Terms& t, const std::vector<int>& labels, int alpha, bool 
       const double w = t.smooth[std::size_t(p)], v = t.smooth[std::size_t(o)];
       const int b = labels[std::size_t(q)], c = labels[std::size_t(o)];
       // E(switch) - E(keep) of each term, for the neighbour keeping (0) and switching (1).
-      const double next0 = w * (t.dist(alpha, b) - t.dist(a, b)), next1 = -w * t.dist(a, alpha);
-      const double prev0 = v * (t.dist(c, alpha) - t.dist(c, a)), prev1 = -v * t.dist(alpha, a);
+      const double next0 = w * (to_alpha[b] - t.dist(a, b)), next1 = -w * to_alpha[a];
+      const double prev0 = v * (to_alpha[c] - t.dist(c, a)), prev1 = -v * to_alpha[a];
       const signed char sq = s.state[std::size_t(q)], so = s.state[std::size_t(o)];
       low = (sq == 2 ? std::min(next0, next1) : sq == 0 ? next0 : next1) + (so == 2 ? std::min(prev0, prev1) : so == 0 ? prev0 : prev1);
       high = (sq == 2 ? std::max(next0, next1) : sq == 0 ? next0 : next1) + (so == 2 ? std::max(prev0, prev1) : so == 0 ? prev0 : prev1);
       scale += 2.0 * (w + v);
     }
-    const double rise = t.d(p, alpha) - t.d(p, a);
+    const double keep = t.d(p, a), move = t.d(p, alpha), rise = move - keep;
     const double gives_back = s.anchored[std::size_t(a)] ? 0.0 : t.label_cost[std::size_t(a)];
-    const double margin = 1e-9 * (scale + t.d(p, alpha) + t.d(p, a) + t.label_cost[std::size_t(a)] + t.label_cost[std::size_t(alpha)]);
+    const double margin = 1e-9 * (scale + move + keep + t.label_cost[std::size_t(a)] + alpha_cost);
     if (rise + low - gives_back > margin) {
       s.state[std::size_t(p)] = 0;
       if (!s.anchored[std::size_t(a)]) {
         s.anchored[std::size_t(a)] = 1;
-        for (int k : s.members[std::size_t(a)])
-          if (s.state[std::size_t(k)] == 2) s.open.push_back(k);
+        for (int k : s.members[std::size_t(a)]) reopen(k);
       }
-    } else if (rise + high + (alpha_unused ? t.label_cost[std::size_t(alpha)] : 0.0) < -margin) {
+    } else if (rise + high + appears < -margin) {
       s.state[std::size_t(p)] = 1;
     } else {
       return;
     }
-    if (q >= 0) {
-      if (s.state[std::size_t(q)] == 2) s.open.push_back(q);
-      if (s.state[std::size_t(o)] == 2) s.open.push_back(o);
-    }
+    if (q >= 0) reopen(q), reopen(o);
   };
-  // Every open group once, then those whose neighbour or label was settled since, until none is.
+  // Every open group once, then those whose neighbour or label was settled after they were
+  // tried, until none is.
   s.open.clear();
-  for (int p = 0; p < n; ++p)
+  for (int p = 0; p < n; ++p) {
+    visited = p;
     if (s.state[std::size_t(p)] == 2) try_fix(p);
+  }
+  visited = n;
   while (!s.open.empty()) {
     const int p = s.open.back();
     s.open.pop_back();
@@ -184,9 +193,11 @@ void fix_groups(const Terms& t, const std::vector<int>& labels, int alpha, bool 
   }
 }
 
-// One expansion move: labels (flat, per group) with some groups switched to alpha, the least
-// energy of all such (g: emptied and built again, its memory kept from one expansion to the next).
-std::vector<int> expand(const Terms& t, const std::vector<int>& labels, int alpha, Graph& g, Scratch& s) {
+// One expansion move: into result, labels (flat, per group) with some groups switched to alpha,
+// the least energy of all such; whether any was (g: emptied and built again, its memory kept from
+// one expansion to the next). The graph is built in the order of the groups, as over every group
+// with the settled ones' terms added to their open neighbours where the loop reaches them.
+bool expand(const Terms& t, const std::vector<int>& labels, int alpha, Graph& g, Scratch& s, std::vector<int>& result) {
   const int n = t.offset.back();
   if (s.members_stale) {
     s.members.resize(std::size_t(t.labels));
@@ -196,46 +207,69 @@ std::vector<int> expand(const Terms& t, const std::vector<int>& labels, int alph
   }
   const bool alpha_unused = s.members[std::size_t(alpha)].empty();
   fix_groups(t, labels, alpha, alpha_unused, s);
-  std::vector<int> result = labels;
-  s.node.assign(std::size_t(n), -1);
-  int nodes = 0;
-  for (int p = 0; p < n; ++p)
-    if (s.state[std::size_t(p)] == 2) s.node[std::size_t(p)] = nodes++;
-    else if (s.state[std::size_t(p)] == 1) result[std::size_t(p)] = alpha;
-  if (nodes == 0) return result;
+  result = labels;
+  bool changed = false, any_switch = false;
+  s.opened.clear();
+  s.open_members.assign(std::size_t(t.labels), 0);
+  s.node.resize(std::size_t(n));
+  for (int p = 0; p < n; ++p) {
+    const signed char state = s.state[std::size_t(p)];
+    if (state == 2) {
+      s.node[std::size_t(p)] = int(s.opened.size());
+      s.opened.push_back(p);
+      ++s.open_members[std::size_t(labels[std::size_t(p)])];
+    } else if (state == 1) {
+      any_switch = true;
+      changed |= result[std::size_t(p)] != alpha;
+      result[std::size_t(p)] = alpha;
+    }
+  }
+  const int nodes = int(s.opened.size());
+  if (nodes == 0) return changed;
   g.reset();
   g.add_node(nodes);
-  for (int p = 0; p < n; ++p) {
-    const int np = s.node[std::size_t(p)];
-    if (np >= 0) add_unary(g, np, t.d(p, labels[std::size_t(p)]), t.d(p, alpha));
-    const int q = t.next[std::size_t(p)];
-    if (q < 0) continue;
-    const int nq = s.node[std::size_t(q)];
-    if (np < 0 && nq < 0) continue;
+  // The smoothness term of group p and its successor q, as a table over their moves.
+  const auto pair_terms = [&](int p, int q, double e[2][2]) {
     const double w = t.smooth[std::size_t(p)];
     const int a = labels[std::size_t(p)], b = labels[std::size_t(q)];
-    const double e[2][2] = {{w * t.dist(a, b), w * t.dist(a, alpha)}, {w * t.dist(alpha, b), 0.0}};
-    if (np >= 0 && nq >= 0) add_pairwise(g, np, nq, e[0][0], e[0][1], e[1][0], e[1][1]);
-    else if (np >= 0) add_unary(g, np, e[0][s.state[std::size_t(q)]], e[1][s.state[std::size_t(q)]]);
-    else add_unary(g, nq, e[s.state[std::size_t(p)]][0], e[s.state[std::size_t(p)]][1]);
+    e[0][0] = w * t.dist(a, b), e[0][1] = w * t.dist(a, alpha), e[1][0] = w * t.dist(alpha, b), e[1][1] = 0.0;
+  };
+  double e[2][2];
+  s.wrapped.clear();
+  for (int np = 0; np < nodes; ++np) {
+    const int p = s.opened[std::size_t(np)], q = t.next[std::size_t(p)], o = t.prev[std::size_t(p)];
+    // From a settled predecessor: before p's own terms, or after them where it closes the ring.
+    if (o >= 0 && s.state[std::size_t(o)] != 2) {
+      if (o < p) pair_terms(o, p, e), add_unary(g, np, e[s.state[std::size_t(o)]][0], e[s.state[std::size_t(o)]][1]);
+      else s.wrapped.push_back(np);
+    }
+    add_unary(g, np, t.d(p, labels[std::size_t(p)]), t.d(p, alpha));
+    if (q < 0) continue;
+    pair_terms(p, q, e);
+    const int nq = s.node[std::size_t(q)];
+    if (s.state[std::size_t(q)] == 2) add_pairwise(g, np, nq, e[0][0], e[0][1], e[1][0], e[1][1]);
+    else add_unary(g, np, e[0][s.state[std::size_t(q)]], e[1][s.state[std::size_t(q)]]);
+  }
+  for (int np : s.wrapped) {
+    const int p = s.opened[std::size_t(np)], o = t.prev[std::size_t(p)];
+    pair_terms(o, p, e);
+    add_unary(g, np, e[s.state[std::size_t(o)]][0], e[s.state[std::size_t(o)]][1]);
   }
   // Label costs (Delong et al. 2012, §3): one auxiliary node per label that may vanish or appear
-  // (neither where a group the bound fixed settles it).
+  // (neither where a group the bound settled settles it).
   for (int l = 0; l < t.labels; ++l) {
     const double h = t.label_cost[std::size_t(l)];
     if (h <= 0) continue;
     const std::vector<int>& members = s.members[std::size_t(l)];
     if (l != alpha && !members.empty()) {
-      bool kept = false, open = false;
-      for (int p : members) kept |= s.state[std::size_t(p)] == 0, open |= s.state[std::size_t(p)] == 2;
-      if (kept || !open) continue;
+      if (s.anchored[std::size_t(l)] || s.open_members[std::size_t(l)] == 0) continue;
       // h * [some member keeps l] = h - h * prod(x_p): aux y = 1 only if all switch.
       const int y = g.add_node();
       add_unary(g, y, 0.0, -h);
       for (int p : members)
-        if (s.node[std::size_t(p)] >= 0) g.add_edge(s.node[std::size_t(p)], y, h, 0.0);  // y on sink while p on source costs h
+        if (s.state[std::size_t(p)] == 2) g.add_edge(s.node[std::size_t(p)], y, h, 0.0);  // y on sink while p on source costs h
     } else if (l == alpha && alpha_unused) {
-      if (std::find(s.state.begin(), s.state.end(), 1) != s.state.end()) continue;
+      if (any_switch) continue;
       // h * [some node switches to alpha] = h - h * prod(1 - x_p): aux z = 0 only if none does.
       const int z = g.add_node();
       add_unary(g, z, -h, 0.0);
@@ -243,9 +277,9 @@ std::vector<int> expand(const Terms& t, const std::vector<int>& labels, int alph
     }
   }
   g.maxflow();
-  for (int p = 0; p < n; ++p)
-    if (s.node[std::size_t(p)] >= 0 && g.what_segment(s.node[std::size_t(p)]) == Graph::SINK) result[std::size_t(p)] = alpha;
-  return result;
+  for (int np = 0; np < nodes; ++np)
+    if (g.what_segment(np) == Graph::SINK) result[std::size_t(s.opened[std::size_t(np)])] = alpha, changed = true;
+  return changed;
 }
 
 double flat_energy(const Terms& t, const std::vector<int>& labels) {
@@ -297,12 +331,14 @@ EdgeLabels label_edges(const LabelingInput& in, const MrfOptions& o) {
   // one per group to its label's node, one per group from alpha's: no reallocation.)
   Graph graph(groups + terms.labels + 1, 3 * groups);
   Scratch scratch;
+  std::vector<int> candidate;
   for (int cycle = 0; cycle < o.max_cycles; ++cycle) {
     bool improved = false;
     for (int alpha = 0; alpha < terms.labels; ++alpha) {
       if (refused[std::size_t(alpha)]) continue;
-      std::vector<int> candidate = expand(terms, labels, alpha, graph, scratch);
-      const double e = flat_energy(terms, candidate);
+      // (A move that switches nothing leaves the energy as it is.)
+      const bool changed = expand(terms, labels, alpha, graph, scratch, candidate);
+      const double e = changed ? flat_energy(terms, candidate) : e0;
       if (e < e0 - 1e-9 * std::max(1.0, std::abs(e0))) {
         e0 = e;
         labels.swap(candidate);
