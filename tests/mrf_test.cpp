@@ -101,8 +101,8 @@ TEST(Mrf, EdgesFacingAlikeAreLabeledAsOneAtTheSameEnergy) {
   for (const auto& [first, count] : runs) EXPECT_NEAR(normals[std::size_t(first)], 45.0, 2.5) << first;
 }
 
-// Alpha-expansion stops where no expansion move lowers the energy: on small problems of two rings
-// (every move tried by brute force), none does. The moves are solved on a cut that leaves out the
+// Alpha-expansion stops where no expansion move lowers the energy: on small problems of two or
+// three rings (every move tried by brute force), none does. The moves are solved on a cut that leaves out the
 // edges whose move a bound settles; a bound that settled one wrongly would leave a lower move.
 // The normals lie near the directions (so that the bound settles most edges) or anywhere, the
 // smoothness and label costs weak or strong.
@@ -115,7 +115,9 @@ TEST(Mrf, NoExpansionMoveLowersTheReturnedLabeling) {
     for (double a : directions) in.directions.push_back(unit(a));
     for (std::size_t l = 0; l < directions.size(); ++l) in.support.push_back(1 + 20 * unit_interval(rng));
     const double spread = trial % 2 ? 25.0 : 360.0;  // near the directions, or anywhere
-    for (int ring_size : {7, 4}) {
+    // Two rings of several edges, or rings of one and two edges (no smoothness term; both terms
+    // between the same two edges) beside one of six.
+    for (int ring_size : trial % 5 == 4 ? std::vector<int>{1, 2, 6} : std::vector<int>{7, 4}) {
       in.normals.emplace_back();
       in.lengths.emplace_back();
       for (int i = 0; i < ring_size; ++i) {
@@ -130,12 +132,15 @@ TEST(Mrf, NoExpansionMoveLowersTheReturnedLabeling) {
     o.kappa2 = trial % 4 < 2 ? 10.0 : 1.0;
     const EdgeLabels labels = label_edges(in, o);
     const double found = labeling_energy(in, labels, o);
-    const std::size_t n0 = labels[0].size(), n = n0 + labels[1].size();
+    std::vector<std::pair<std::size_t, std::size_t>> edges;  // (ring, edge)
+    for (std::size_t r = 0; r < labels.size(); ++r)
+      for (std::size_t i = 0; i < labels[r].size(); ++i) edges.emplace_back(r, i);
+    const std::size_t n = edges.size();
     for (int alpha = 0; alpha < int(directions.size()); ++alpha)
       for (unsigned move = 1; move < (1u << n); ++move) {
         EdgeLabels moved = labels;
         for (std::size_t k = 0; k < n; ++k)
-          if (move >> k & 1u) (k < n0 ? moved[0][k] : moved[1][k - n0]) = alpha;
+          if (move >> k & 1u) moved[edges[k].first][edges[k].second] = alpha;
         if (moved == labels) continue;
         EXPECT_GE(labeling_energy(in, moved, o), found - 1e-9 * std::max(1.0, found)) << "trial " << trial << " alpha " << alpha << " move " << move;
       }

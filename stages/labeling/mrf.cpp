@@ -122,7 +122,7 @@ struct Scratch {
   std::vector<char> anchored;          // per label: one of its groups keeps it
   std::vector<int> open;               // groups to try again
   std::vector<std::vector<int>> members;  // per label: its groups
-  bool members_stale = true;           // (members are those of the labeling given to expand unless set)
+  bool members_stale = true;           // set where the labeling changes: members are built again
 };
 
 // The groups whose move every minimizer of the expansion shares, found before the cut (a
@@ -197,6 +197,7 @@ void fix_groups(const Terms& t, const std::vector<int>& labels, int alpha, bool 
 // the least energy of all such; whether any was (g: emptied and built again, its memory kept from
 // one expansion to the next). The graph is built in the order of the groups, as over every group
 // with the settled ones' terms added to their open neighbours where the loop reaches them.
+// (result is not labels: the terms are read from labels while result is written.)
 bool expand(const Terms& t, const std::vector<int>& labels, int alpha, Graph& g, Scratch& s, std::vector<int>& result) {
   const int n = t.offset.back();
   if (s.members_stale) {
