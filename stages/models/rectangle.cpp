@@ -209,7 +209,9 @@ Ring best_rectangle(const Ring& ring, const std::vector<Vec2>& normals, double* 
     double sum = 0, weight = 0;
     for (const auto& [p, w] : mids) {
       const double u = std::abs(t.dot(p)) - a, v = std::abs(n.dot(p)) - b;
-      const double d = u <= 0 && v <= 0 ? std::min(-u, -v) : std::hypot(std::max(u, 0.0), std::max(v, 0.0));
+      // (Beside one side, the distance to it: hypot(x, 0) is |x| exactly; the square root only
+      // off a corner.)
+      const double d = u <= 0 ? (v <= 0 ? std::min(-u, -v) : v) : v <= 0 ? u : std::hypot(u, v);
       sum += w * d;
       weight += w;
     }
