@@ -101,4 +101,4 @@ else:
     if a.blur: section, wavelength = f"{section}-b{a.blur}", f"{wavelength} --blur {a.blur}"
     write_section(a.doc, section,
                   f"bench/sweep.sh --sets {a.sets} --pixels {a.pixels} --wobbles {a.wobbles}{wavelength} --methods {a.methods}",
-                  "ms: each building's regularization on one core.", text)
+                  "ms: each building's regularization, one thread, the median a building (of the run whose median is the middle one of `--time-runs`, three by default).", text)
