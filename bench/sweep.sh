@@ -60,7 +60,7 @@ while [ $# -gt 0 ]; do
     --methods) methods="$2"; shift 2 ;;
     --time-runs) time_runs="$2"; shift 2 ;;
     --no-docs) docs=0; shift ;;
-    -h|--help) sed -n '2,30p' "$0"; exit 0 ;;
+    -h|--help) sed -n '2,34p' "$0"; exit 0 ;;
     *) echo "bench/sweep.sh: unknown argument '$1' (see --help)" >&2; exit 2 ;;
   esac
 done
