@@ -28,10 +28,11 @@
 # metres and cut where a straight wall's blurred edge is (`blur_m`; corners cut and filled along a
 # few S, no exact arc), the wobble and speckles on top, no disc rounding (files ROW[...].bS,
 # section ...-bS). The default (lodforge) runs on one thread, as the issue's time target counts
-# (one core; two threads on this 2-core machine measured 4-10 % more a building), the other
+# (one core; two threads on this 2-core machine measured 5-10 % more a building), the other
 # methods on every core. --time-runs N: the default is run N times on each row, the same outlines
-# each time, and the row keeps the run whose median time a building is the median of the N (the
-# table's "ms ours"): the machine's load moves a single run's by 10-20 %.
+# each time, and the row keeps the run whose median time a building is the middle one of the N
+# (the lower of the two middle ones for an even N; the table's "ms ours"): the machine's load
+# moves a single run's by 10-20 %. (Its log is the last run's.)
 set -euo pipefail
 root="$(cd "$(dirname "$0")/.." && pwd)"
 lodforge="${LODFORGE:-$root/build/lodforge}"
@@ -60,7 +61,7 @@ while [ $# -gt 0 ]; do
     --methods) methods="$2"; shift 2 ;;
     --time-runs) time_runs="$2"; shift 2 ;;
     --no-docs) docs=0; shift ;;
-    -h|--help) sed -n '2,34p' "$0"; exit 0 ;;
+    -h|--help) sed -n '2,35p' "$0"; exit 0 ;;
     *) echo "bench/sweep.sh: unknown argument '$1' (see --help)" >&2; exit 2 ;;
   esac
 done
@@ -98,9 +99,7 @@ fi
 IFS=, read -ra set_list <<< "$sets"
 IFS=, read -ra pixel_list <<< "$pixels"
 IFS=, read -ra wobble_list <<< "$wobbles"
-case "$time_runs" in
-  ''|*[!0-9]*|0) echo "bench/sweep.sh: --time-runs must be a whole number of runs, at least 1 (got '$time_runs')" >&2; exit 2 ;;
-esac
+[[ "$time_runs" =~ ^[1-9][0-9]*$ ]] || { echo "bench/sweep.sh: --time-runs must be a whole number of runs, at least 1 (got '$time_runs')" >&2; exit 2; }
 IFS=, read -ra method_list <<< "$methods"
 for s in "${set_list[@]}"; do
   case "$s" in
@@ -154,6 +153,7 @@ for s in "${set_list[@]}"; do
       for m in "${method_list[@]}"; do
         out="$work/$row.$m"
         echo "bench/sweep.sh: $row / $m" >&2
+        rm -f "$out.stats.json" "$out.metrics.json"  # (no stale results beside a run that fails)
         runs=1 threads="$(nproc)"
         [ "$m" = lodforge ] && runs="$time_runs" threads=1
         for k in $(seq "$runs"); do
