@@ -121,8 +121,11 @@ struct Scratch {
   std::vector<int> wrapped;            // graph nodes whose settled predecessor closes their ring
   std::vector<char> anchored;          // per label: one of its groups keeps it
   std::vector<int> open;               // groups to try again
-  std::vector<std::vector<int>> members;  // per label: its groups
-  bool members_stale = true;           // set where the labeling changes: members are built again
+  std::vector<std::vector<int>> members;  // per label: its groups in the labeling expanded (set_members)
+  void set_members(const std::vector<int>& labels, int label_count) {
+    members.assign(std::size_t(label_count), {});
+    for (int p = 0; p < int(labels.size()); ++p) members[std::size_t(labels[std::size_t(p)])].push_back(p);
+  }
 };
 
 // The groups whose move every minimizer of the expansion shares, found before the cut (a
@@ -157,9 +160,17 @@ void fix_groups(const Terms& t, const std::vector<int>& labels, int alpha, bool 
       // E(switch) - E(keep) of each term, for the neighbour keeping (0) and switching (1).
       const double next0 = w * (to_alpha[b] - t.dist(a, b)), next1 = -w * to_alpha[a];
       const double prev0 = v * (to_alpha[c] - t.dist(c, a)), prev1 = -v * to_alpha[a];
-      const signed char sq = s.state[std::size_t(q)], so = s.state[std::size_t(o)];
-      low = (sq == 2 ? std::min(next0, next1) : sq == 0 ? next0 : next1) + (so == 2 ? std::min(prev0, prev1) : so == 0 ? prev0 : prev1);
-      high = (sq == 2 ? std::max(next0, next1) : sq == 0 ? next0 : next1) + (so == 2 ? std::max(prev0, prev1) : so == 0 ? prev0 : prev1);
+      // A settled neighbour's term is known, an open one's lies between the two.
+      const auto least = [&](double kept, double switched, int k) {
+        const signed char st = s.state[std::size_t(k)];
+        return st == 2 ? std::min(kept, switched) : st == 0 ? kept : switched;
+      };
+      const auto most = [&](double kept, double switched, int k) {
+        const signed char st = s.state[std::size_t(k)];
+        return st == 2 ? std::max(kept, switched) : st == 0 ? kept : switched;
+      };
+      low = least(next0, next1, q) + least(prev0, prev1, o);
+      high = most(next0, next1, q) + most(prev0, prev1, o);
       scale += 2.0 * (w + v);
     }
     const double keep = t.d(p, a), move = t.d(p, alpha), rise = move - keep;
@@ -200,12 +211,6 @@ void fix_groups(const Terms& t, const std::vector<int>& labels, int alpha, bool 
 // (result is not labels: the terms are read from labels while result is written.)
 bool expand(const Terms& t, const std::vector<int>& labels, int alpha, Graph& g, Scratch& s, std::vector<int>& result) {
   const int n = t.offset.back();
-  if (s.members_stale) {
-    s.members.resize(std::size_t(t.labels));
-    for (std::vector<int>& m : s.members) m.clear();
-    for (int p = 0; p < n; ++p) s.members[std::size_t(labels[std::size_t(p)])].push_back(p);
-    s.members_stale = false;
-  }
   const bool alpha_unused = s.members[std::size_t(alpha)].empty();
   fix_groups(t, labels, alpha, alpha_unused, s);
   result = labels;
@@ -286,15 +291,11 @@ bool expand(const Terms& t, const std::vector<int>& labels, int alpha, Graph& g,
 double flat_energy(const Terms& t, const std::vector<int>& labels) {
   double e = 0;
   std::vector<char> used(std::size_t(t.labels), 0);
-  for (std::size_t r = 0; r + 1 < t.offset.size(); ++r) {
-    const std::size_t m = std::size_t(t.groups(r));
-    for (std::size_t i = 0; i < m; ++i) {
-      const int p = t.offset[r] + int(i);
-      const int l = labels[std::size_t(p)];
-      e += t.d(p, l);
-      used[std::size_t(l)] = 1;
-      if (m >= 2) e += t.smooth[std::size_t(p)] * t.dist(l, labels[std::size_t(t.offset[r]) + next_index(i, m)]);
-    }
+  for (int p = 0; p < t.offset.back(); ++p) {
+    const int l = labels[std::size_t(p)], q = t.next[std::size_t(p)];
+    e += t.d(p, l);
+    used[std::size_t(l)] = 1;
+    if (q >= 0) e += t.smooth[std::size_t(p)] * t.dist(l, labels[std::size_t(q)]);
   }
   for (std::size_t l = 0; l < used.size(); ++l) if (used[l]) e += t.label_cost[l];
   return e;
@@ -332,6 +333,7 @@ EdgeLabels label_edges(const LabelingInput& in, const MrfOptions& o) {
   // one per group to its label's node, one per group from alpha's: no reallocation.)
   Graph graph(groups + terms.labels + 1, 3 * groups);
   Scratch scratch;
+  scratch.set_members(labels, terms.labels);
   std::vector<int> candidate;
   for (int cycle = 0; cycle < o.max_cycles; ++cycle) {
     bool improved = false;
@@ -343,7 +345,7 @@ EdgeLabels label_edges(const LabelingInput& in, const MrfOptions& o) {
       if (e < e0 - 1e-9 * std::max(1.0, std::abs(e0))) {
         e0 = e;
         labels.swap(candidate);
-        scratch.members_stale = true;
+        scratch.set_members(labels, terms.labels);
         improved = true;
         // (Expanding alpha again at once is refused: every labeling that move reaches, this one's
         // move reached too, and this is the least of them.)
