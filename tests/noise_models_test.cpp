@@ -13,6 +13,7 @@
 #include <random>
 #include <sstream>
 #include <string>
+#include <string>
 
 #include "directions/lattice.hpp"
 #include "eval/metrics.hpp"
@@ -435,41 +436,43 @@ TEST(NoisyMasks, AnLUnderAMetreOfWobbleKeepsItsCornersSquare) {
   EXPECT_GE(double(square), 0.75 * double(corners)) << square << " of " << corners;
 }
 
-// The distances of a contour's edge midpoints to a polygon's boundary, whether the polygon has a
-// few edges (each looked at) or hundreds (bucketed in a grid, as a traced contour is): the same as
-// looking at every edge in order, starting from the previous midpoint's nearest (the nearest edge
-// of equals: that one, else the first), bit for bit. Points inside and outside, beyond the
-// polygon's box, on a pixel grid where ties at shared vertices are common, with a hole.
-TEST(Models, BoundaryDistancesAreTheNearestEdgesAtAnySize) {
-  const auto reference = [](const Ring& ring, const PolygonWithHoles& polygon, std::vector<std::size_t>& nearest) {
-    std::vector<std::pair<Vec2, Vec2>> segments;
-    for (const Ring* r : rings_of(polygon))
-      for (std::size_t k = 0; k < r->size(); ++k) segments.push_back({(*r)[k], (*r)[(k + 1) % r->size()]});
-    std::vector<double> distances;
-    std::size_t previous = 0;
-    for (std::size_t i = 0; i < ring.size(); ++i) {
-      const Vec2 mid = ring[i] + 0.5 * (ring[(i + 1) % ring.size()] - ring[i]);
-      double best = distance_to_segment(mid, segments[previous].first, segments[previous].second);
-      std::size_t at = previous;
-      for (std::size_t k = 0; k < segments.size(); ++k) {
-        const double d = distance_to_segment(mid, segments[k].first, segments[k].second);
-        if (d < best) best = d, at = k;
-      }
-      distances.push_back(best);
-      nearest.push_back(previous = at);
+namespace {
+
+// The distances of a ring's edge midpoints to a polygon's edges, each edge looked at in order,
+// starting from the previous midpoint's nearest (the nearest edge of equals: that one, else the
+// first): what boundary_distances gives, bit for bit.
+std::vector<double> reference_distances(const Ring& ring, const PolygonWithHoles& polygon, std::vector<std::size_t>& nearest) {
+  std::vector<std::pair<Vec2, Vec2>> segments;
+  for (const Ring* r : rings_of(polygon))
+    for (std::size_t k = 0; k < r->size(); ++k) segments.push_back({(*r)[k], (*r)[(k + 1) % r->size()]});
+  std::vector<double> distances;
+  std::size_t previous = 0;
+  for (std::size_t i = 0; i < ring.size(); ++i) {
+    const Vec2 mid = ring[i] + 0.5 * (ring[(i + 1) % ring.size()] - ring[i]);
+    double best = distance_to_segment(mid, segments[previous].first, segments[previous].second);
+    std::size_t at = previous;
+    for (std::size_t k = 0; k < segments.size(); ++k) {
+      const double d = distance_to_segment(mid, segments[k].first, segments[k].second);
+      if (d < best) best = d, at = k;
     }
-    return distances;
-  };
+    distances.push_back(best);
+    nearest.push_back(previous = at);
+  }
+  return distances;
+}
+
+// Wavy stars of 5, 40 and 300 edges, and a pixel staircase of a disc on a 0.1 m grid (hundreds of
+// edges) with a square hole.
+std::vector<PolygonWithHoles> measured_shapes() {
   std::vector<PolygonWithHoles> polygons;
   for (const int sides : {5, 40, 300}) {
-    Ring star;  // a wavy star, of `sides` edges
+    Ring star;
     for (int k = 0; k < sides; ++k) {
       const double t = 2 * M_PI * k / sides, radius = 20 + 3 * std::sin(7 * t) + ((k * 37) % 11) * 0.1;
       star.push_back(Vec2(radius * std::cos(t), radius * std::sin(t)));
     }
     polygons.push_back({star, {}});
   }
-  // A pixel staircase of a disc on a 0.1 m grid (hundreds of edges), with a square hole.
   Ring staircase;
   for (int k = 0; k < 100; ++k) {
     const double t = 2 * M_PI * k / 100;
@@ -481,23 +484,75 @@ TEST(Models, BoundaryDistancesAreTheNearestEdgesAtAnySize) {
     }
   }
   polygons.push_back({staircase, {{{-3, -3}, {-3, 3}, {3, 3}, {3, -3}}}});
-  for (const PolygonWithHoles& shape : polygons) {
-    Ring contour;  // a wobbling ring around it on the same grid, crossing its boundary, and a far point
-    for (int k = 0; k < 500; ++k) {
-      const double t = 2 * M_PI * k / 500, radius = 18 + 6 * std::sin(3 * t + 0.4);
-      contour.push_back(Vec2(std::round(10 * radius * std::cos(t)) * 0.1 + 0.7, std::round(10 * radius * std::sin(t)) * 0.1 - 0.3));
-    }
-    contour[250] = Vec2(400, -150);
-    std::vector<std::size_t> nearest, expected_nearest;
-    const auto distances = boundary_distances(contour, shape, &nearest);
-    const std::vector<double> expected = reference(contour, shape, expected_nearest);
-    ASSERT_EQ(distances.size(), contour.size());
-    ASSERT_EQ(nearest.size(), contour.size());
-    for (std::size_t i = 0; i < contour.size(); ++i) {
-      EXPECT_EQ(distances[i].first, expected[i]) << shape.outer.size() << " edges, midpoint " << i;
-      EXPECT_EQ(nearest[i], expected_nearest[i]) << shape.outer.size() << " edges, midpoint " << i;
-    }
+  return polygons;
+}
+
+// A wobbling ring on a 0.1 m grid that crosses the shapes' boundaries, with a far point and one
+// inside the staircase's hole.
+Ring measuring_contour() {
+  Ring contour;
+  for (int k = 0; k < 500; ++k) {
+    const double t = 2 * M_PI * k / 500, radius = 18 + 6 * std::sin(3 * t + 0.4);
+    contour.push_back(Vec2(std::round(10 * radius * std::cos(t)) * 0.1 + 0.7, std::round(10 * radius * std::sin(t)) * 0.1 - 0.3));
   }
+  contour[250] = Vec2(400, -150);
+  contour[100] = Vec2(0.4, 0.1);
+  return contour;
+}
+
+void expect_reference_distances(const Ring& contour, const PolygonWithHoles& shape, const std::string& what) {
+  std::vector<std::size_t> nearest, expected_nearest;
+  const auto distances = boundary_distances(contour, shape, &nearest);
+  const std::vector<double> expected = reference_distances(contour, shape, expected_nearest);
+  ASSERT_EQ(distances.size(), contour.size()) << what;
+  ASSERT_EQ(nearest.size(), contour.size()) << what;
+  for (std::size_t i = 0; i < contour.size(); ++i) {
+    EXPECT_EQ(distances[i].first, expected[i]) << what << ", midpoint " << i;
+    EXPECT_EQ(distances[i].second, (contour[(i + 1) % contour.size()] - contour[i]).norm()) << what << ", midpoint " << i;
+    EXPECT_EQ(nearest[i], expected_nearest[i]) << what << ", midpoint " << i;
+  }
+  // Without the nearest edges asked for: the same distances.
+  EXPECT_EQ(boundary_distances(contour, shape), distances) << what;
+}
+
+}  // namespace
+
+// The distances of a contour's edge midpoints to a polygon's boundary, whether the polygon has a
+// few edges (each looked at) or hundreds (bucketed in a grid, as a traced contour is): the same as
+// looking at every edge in order, starting from the previous midpoint's nearest (the nearest edge
+// of equals: that one, else the first), bit for bit. Points inside and outside, beyond the
+// polygon's box, on a pixel grid where ties at shared vertices are common, with a hole.
+TEST(Models, BoundaryDistancesAreTheNearestEdgesAtAnySize) {
+  const Ring contour = measuring_contour();
+  for (const PolygonWithHoles& shape : measured_shapes())
+    expect_reference_distances(contour, shape, std::to_string(shape.outer.size()) + " edges");
+}
+
+// The last measures are remembered (the model choice measures an outline against its contour
+// from several steps): measured again, in another order, after others have pushed them out, or
+// against a contour or an outline that differs from a remembered one by a coordinate's last bit,
+// a hole, or a ring's first vertex, every measure is still the reference's.
+TEST(Models, BoundaryDistancesMeasuredAgainAreTheSame) {
+  const Ring contour = measuring_contour();
+  std::vector<Ring> contours = {contour, contour, contour, contour};
+  contours[1][17].x() = std::nextafter(contours[1][17].x(), 1e9);  // (one bit off)
+  std::rotate(contours[2].begin(), contours[2].begin() + 1, contours[2].end());  // (the same ring from its next vertex)
+  contours[3].pop_back();
+  std::vector<PolygonWithHoles> shapes = measured_shapes();
+  const PolygonWithHoles with_hole = shapes.back();
+  shapes.push_back({with_hole.outer, {}});  // (the same outer ring without its hole)
+  PolygonWithHoles moved = with_hole;
+  moved.holes[0][2].y() = std::nextafter(moved.holes[0][2].y(), -1e9);
+  shapes.push_back(moved);
+  // Every pair (more than the memory holds), forwards, then backwards, then each pair twice running.
+  std::vector<std::pair<std::size_t, std::size_t>> order;
+  for (std::size_t c = 0; c < contours.size(); ++c)
+    for (std::size_t s = 0; s < shapes.size(); ++s) order.push_back({c, s});
+  std::vector<std::pair<std::size_t, std::size_t>> all = order;
+  all.insert(all.end(), order.rbegin(), order.rend());
+  for (const auto& pair : order) all.insert(all.end(), {pair, pair});
+  for (const auto& [c, s] : all)
+    expect_reference_distances(contours[c], shapes[s], "contour " + std::to_string(c) + ", shape " + std::to_string(s));
 }
 
 // The moment rectangle of a rectangle is that rectangle.

@@ -1,7 +1,11 @@
 #include "normals/smoothing.hpp"
 
 #include <algorithm>
+#include <array>
+#include <cstdint>
+#include <cstring>
 #include <cmath>
+#include <limits>
 #include <memory>
 #include <vector>
 
@@ -95,8 +99,15 @@ std::vector<Vec2> smooth_along(std::vector<Vec2> normals, const std::vector<doub
   std::vector<double> ahead;              // per edge, the weights to its successors in the neighbourhood
   std::vector<std::size_t> first(n + 1);  // edge i's weights: ahead[first[i] .. first[i + 1])
   std::vector<Vec2> next(n);
-  // The neighbourhoods and their distance weights are the same in every pass: walked once.
+  // The neighbourhoods and their distance weights are the same in every pass: walked once. (A
+  // traced contour's edges are a pixel or a diagonal long, so the same arc lengths come back
+  // again and again: each one's weight is remembered, by its bits, in a small table.)
   std::vector<double> distance_weight;
+  constexpr std::size_t kRemembered = 256;
+  std::array<std::uint64_t, kRemembered> arc_bits;
+  std::array<double, kRemembered> arc_weight;
+  arc_bits.fill(~std::uint64_t(0));  // (a NaN's bits, whose weight is a NaN)
+  arc_weight.fill(std::numeric_limits<double>::quiet_NaN());
   for (std::size_t i = 0; i < n; ++i) {
     first[i] = distance_weight.size();
     // Walk forward until the neighbourhood ends (or half the ring is walked).
@@ -104,7 +115,11 @@ std::vector<Vec2> smooth_along(std::vector<Vec2> normals, const std::vector<doub
     for (std::size_t k = (i + 1) % n; k != i && steps < n / 2; k = (k + 1) % n, ++steps) {
       const double d = arc(i, k);
       if (d >= threshold) break;
-      distance_weight.push_back(std::exp(-d / sigma_d2));
+      std::uint64_t bits;
+      std::memcpy(&bits, &d, sizeof bits);
+      const std::size_t slot = std::size_t((bits * 0x9E3779B97F4A7C15ull) >> 56);
+      if (arc_bits[slot] != bits) arc_bits[slot] = bits, arc_weight[slot] = std::exp(-d / sigma_d2);
+      distance_weight.push_back(arc_weight[slot]);
     }
   }
   first[n] = distance_weight.size();
