@@ -56,6 +56,8 @@ class SegmentGrid {
   }
 
   const std::vector<Segment>& segments() const { return segments_; }
+  // The side of a cell (infinity without a grid: every segment is looked at).
+  double cell() const { return bucketed_ ? cell_ : std::numeric_limits<double>::infinity(); }
 
   // consider(k) for every segment k that may lie within `best` of p (a distance the calls may
   // lower as they go): the cells about p's, ring by ring, until a ring lies farther than best; a

@@ -149,7 +149,6 @@ DistanceMemo::Measure measure_distances(const Ring& ring, const PolygonWithHoles
   std::vector<std::pair<double, double>>& distances = measure.distances;
   distances.reserve(ring.size());
   measure.nearest.reserve(ring.size());
-  distances.reserve(ring.size());
   // More than 24 segments (a contour of pixel edges, against which an outline is measured, or an
   // outline of a few dozen walls) are bucketed in a uniform grid (SegmentGrid): each midpoint
   // looks at the cells around its own, ring by ring, until a ring lies farther than the nearest
@@ -160,26 +159,51 @@ DistanceMemo::Measure measure_distances(const Ring& ring, const PolygonWithHoles
   const std::vector<SegmentGrid::Segment>& segments = grid.segments();
   std::vector<std::size_t> seen(segments.size(), std::size_t(-1));  // the midpoint that last measured each segment
   std::size_t nearest = 0;  // the previous midpoint's nearest segment: a first bound for the next
+  // Where the grid was last looked at: the midpoint, and how near to it any segment but its
+  // nearest may lie (at least). A midpoint nearer to that segment than `clearance` less the way
+  // it moved since (and a margin for rounding, a micrometre) has it for its only nearest segment,
+  // as looking again would find: the midpoints along a wall keep its segment, dozens in a row.
+  Vec2 looked_at = Vec2::Zero();
+  double clearance = -std::numeric_limits<double>::infinity();
   for (std::size_t i = 0; i < ring.size(); ++i) {
     const Vec2 e = edge_vector(ring, i), mid = ring[i] + 0.5 * e;
     // The nearest segment; of equals, the previous midpoint's, else the first.
     const std::size_t previous = nearest;
     double best = distance_to_segment(mid, segments[previous].a, segments[previous].b);
+    const double moved = (mid - looked_at).norm();
+    if (best + moved + 1e-6 + 1e-9 * clearance < clearance) {
+      distances.push_back({best, e.norm()});
+      measure.nearest.push_back(nearest);
+      continue;
+    }
     seen[previous] = i;
-    grid.visit(mid, best, [&](std::size_t k) {
+    // The grid looked at out to `reach`: the nearest segment's distance and a cell more, or the
+    // second nearest's where less; every segment it does not see lies farther than reach.
+    double second = std::numeric_limits<double>::infinity();
+    const double cap = best + grid.cell();
+    double reach = cap;
+    grid.visit(mid, reach, [&](std::size_t k) {
       if (seen[k] == i) return;
       seen[k] = i;
-      // A segment whose box lies farther than the best so far cannot be nearer. (The slack keeps
-      // every segment at the best distance: the square of a rounded distance may fall just short
-      // of the squared gap to a vertex it ties at, and the tie rule must see them all.)
+      // A segment whose box lies farther than the reach cannot be nearer, nor second. (The slack
+      // keeps every segment at the best distance: the square of a rounded distance may fall just
+      // short of the squared gap to a vertex it ties at, and the tie rule must see them all.)
       const Vec2 gap = (segments[k].low - mid).cwiseMax(mid - segments[k].high).cwiseMax(0.0);
-      const double bound = best * best * (1 + 1e-9);
+      const double bound = reach * reach * (1 + 1e-9);
       if (gap.squaredNorm() > bound) return;
       const double squared = squared_distance_to_segment(mid, segments[k].a, segments[k].b);
-      if (squared > bound) return;  // (farther: its root cannot reach the best)
+      if (squared > bound) return;  // (farther: its root cannot reach the reach)
       const double d = std::sqrt(squared);
-      if (d < best || (d == best && nearest != previous && k < nearest)) best = d, nearest = k;
+      if (d < best || (d == best && nearest != previous && k < nearest)) {
+        second = std::min(second, best);
+        best = d, nearest = k;
+      } else {
+        second = std::min(second, d);
+      }
+      reach = std::min(cap, second);
     });
+    looked_at = mid;
+    clearance = reach;
     distances.push_back({best, e.norm()});
     measure.nearest.push_back(nearest);
   }
