@@ -13,7 +13,6 @@
 #include <random>
 #include <sstream>
 #include <string>
-#include <string>
 
 #include "directions/lattice.hpp"
 #include "eval/metrics.hpp"
@@ -523,9 +522,21 @@ void expect_reference_distances(const Ring& contour, const PolygonWithHoles& sha
 // of equals: that one, else the first), bit for bit. Points inside and outside, beyond the
 // polygon's box, on a pixel grid where ties at shared vertices are common, with a hole.
 TEST(Models, BoundaryDistancesAreTheNearestEdgesAtAnySize) {
-  const Ring contour = measuring_contour();
-  for (const PolygonWithHoles& shape : measured_shapes())
-    expect_reference_distances(contour, shape, std::to_string(shape.outer.size()) + " edges");
+  // At the origin, and at map coordinates (RD New's, about 85 km and 447 km), where a distance
+  // rounds to about a nanometre.
+  for (const Vec2& offset : {Vec2(0, 0), Vec2(85013.37, 447021.71)}) {
+    Ring contour = measuring_contour();
+    for (Vec2& p : contour) p += offset;
+    for (PolygonWithHoles shape : measured_shapes()) {
+      for (Vec2& p : shape.outer) p += offset;
+      for (Ring& hole : shape.holes) for (Vec2& p : hole) p += offset;
+      expect_reference_distances(contour, shape, std::to_string(shape.outer.size()) + " edges, offset " + std::to_string(offset.x()));
+    }
+  }
+  // A segment so long that its squares overflow: its distance is not a number from one midpoint
+  // and a number from the next (a second reader's case).
+  const PolygonWithHoles huge{{{2e153, 2e153}}, {{{0, 0}, {1e155, 0}}, {{2e153, -3e153}}}};
+  expect_reference_distances({{2e153, 0}, {2e153, 0}, {1e153, 0}}, huge, "overflowing segment");
 }
 
 // The last measures are remembered (the model choice measures an outline against its contour
@@ -535,15 +546,24 @@ TEST(Models, BoundaryDistancesAreTheNearestEdgesAtAnySize) {
 TEST(Models, BoundaryDistancesMeasuredAgainAreTheSame) {
   const Ring contour = measuring_contour();
   std::vector<Ring> contours = {contour, contour, contour, contour};
-  contours[1][17].x() = std::nextafter(contours[1][17].x(), 1e9);  // (one bit off)
+  contours[1][17].x() += 1e-7;  // (a tenth of a micrometre off)
   std::rotate(contours[2].begin(), contours[2].begin() + 1, contours[2].end());  // (the same ring from its next vertex)
   contours[3].pop_back();
   std::vector<PolygonWithHoles> shapes = measured_shapes();
   const PolygonWithHoles with_hole = shapes.back();
   shapes.push_back({with_hole.outer, {}});  // (the same outer ring without its hole)
   PolygonWithHoles moved = with_hole;
-  moved.holes[0][2].y() = std::nextafter(moved.holes[0][2].y(), -1e9);
+  moved.holes[0][2].y() -= 1e-7;
   shapes.push_back(moved);
+  // (Each of those measures differently from the one it resembles, so a measure remembered for
+  // the wrong one shows.)
+  const auto reference = [](const Ring& c, const PolygonWithHoles& s) {
+    std::vector<std::size_t> nearest;
+    return reference_distances(c, s, nearest);
+  };
+  EXPECT_NE(reference(contours[1], with_hole), reference(contour, with_hole));
+  EXPECT_NE(reference(contour, shapes[shapes.size() - 2]), reference(contour, with_hole));
+  EXPECT_NE(reference(contour, moved), reference(contour, with_hole));
   // Every pair (more than the memory holds), forwards, then backwards, then each pair twice running.
   std::vector<std::pair<std::size_t, std::size_t>> order;
   for (std::size_t c = 0; c < contours.size(); ++c)

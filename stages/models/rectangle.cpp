@@ -7,9 +7,9 @@
 #include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <array>
+#include <cmath>
 #include <cstdint>
 #include <cstring>
-#include <cmath>
 #include <limits>
 
 namespace lodforge {
@@ -116,6 +116,7 @@ class DistanceMemo {
   // (The least recently used entry makes room.)
   const Measure& keep(const Ring& ring, const PolygonWithHoles& polygon, Measure measure) {
     Entry& e = *std::min_element(entries_.begin(), entries_.end(), [](const Entry& a, const Entry& b) { return a.used < b.used; });
+    e.used = 0;  // (empty until whole: a copy that throws leaves no entry half written)
     e.ring = ring;
     e.outline.clear();
     for (const Ring* r : rings_of(polygon)) e.outline.push_back(*r);
@@ -161,8 +162,9 @@ DistanceMemo::Measure measure_distances(const Ring& ring, const PolygonWithHoles
   std::size_t nearest = 0;  // the previous midpoint's nearest segment: a first bound for the next
   // Where the grid was last looked at: the midpoint, and how near to it any segment but its
   // nearest may lie (at least). A midpoint nearer to that segment than `clearance` less the way
-  // it moved since (and a margin for rounding, a micrometre) has it for its only nearest segment,
-  // as looking again would find: the midpoints along a wall keep its segment, dozens in a row.
+  // it moved since (and a margin for rounding: a micrometre, and a millionth of a micrometre per
+  // metre of its coordinates) has it for its only nearest segment, as looking again would find:
+  // the midpoints along a wall keep its segment, dozens in a row.
   Vec2 looked_at = Vec2::Zero();
   double clearance = -std::numeric_limits<double>::infinity();
   for (std::size_t i = 0; i < ring.size(); ++i) {
@@ -171,15 +173,18 @@ DistanceMemo::Measure measure_distances(const Ring& ring, const PolygonWithHoles
     const std::size_t previous = nearest;
     double best = distance_to_segment(mid, segments[previous].a, segments[previous].b);
     const double moved = (mid - looked_at).norm();
-    if (best + moved + 1e-6 + 1e-9 * clearance < clearance) {
+    if (best + moved + 1e-6 + 1e-12 * mid.cwiseAbs().sum() + 1e-9 * clearance < clearance) {
       distances.push_back({best, e.norm()});
       measure.nearest.push_back(nearest);
       continue;
     }
     seen[previous] = i;
-    // The grid looked at out to `reach`: the nearest segment's distance and a cell more, or the
-    // second nearest's where less; every segment it does not see lies farther than reach.
+    // The grid looked at out to `reach`: the previous nearest's distance and a cell more, or the
+    // second nearest's where less; every segment it does not see lies farther than reach. (A
+    // segment whose distance is not a number here, one so long that its squares overflow, may
+    // have one at the next midpoint: nothing is kept without looking there.)
     double second = std::numeric_limits<double>::infinity();
+    bool unsure = false;
     const double cap = best + grid.cell();
     double reach = cap;
     grid.visit(mid, reach, [&](std::size_t k) {
@@ -192,18 +197,19 @@ DistanceMemo::Measure measure_distances(const Ring& ring, const PolygonWithHoles
       const double bound = reach * reach * (1 + 1e-9);
       if (gap.squaredNorm() > bound) return;
       const double squared = squared_distance_to_segment(mid, segments[k].a, segments[k].b);
-      if (squared > bound) return;  // (farther: its root cannot reach the reach)
+      if (squared > bound) return;  // (farther than the reach)
       const double d = std::sqrt(squared);
       if (d < best || (d == best && nearest != previous && k < nearest)) {
         second = std::min(second, best);
         best = d, nearest = k;
       } else {
-        second = std::min(second, d);
+        unsure |= std::isnan(d);
+        if (!std::isnan(d)) second = std::min(second, d);
       }
       reach = std::min(cap, second);
     });
     looked_at = mid;
-    clearance = reach;
+    clearance = unsure ? -std::numeric_limits<double>::infinity() : reach;
     distances.push_back({best, e.norm()});
     measure.nearest.push_back(nearest);
   }

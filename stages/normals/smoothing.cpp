@@ -2,9 +2,9 @@
 
 #include <algorithm>
 #include <array>
+#include <cmath>
 #include <cstdint>
 #include <cstring>
-#include <cmath>
 #include <limits>
 #include <memory>
 #include <vector>
@@ -106,7 +106,8 @@ std::vector<Vec2> smooth_along(std::vector<Vec2> normals, const std::vector<doub
   constexpr std::size_t kRemembered = 256;
   std::array<std::uint64_t, kRemembered> arc_bits;
   std::array<double, kRemembered> arc_weight;
-  arc_bits.fill(~std::uint64_t(0));  // (a NaN's bits, whose weight is a NaN)
+  // (Empty slots hold a negative NaN's bits, which no arc length has: an arc is an absolute value.)
+  arc_bits.fill(~std::uint64_t(0));
   arc_weight.fill(std::numeric_limits<double>::quiet_NaN());
   for (std::size_t i = 0; i < n; ++i) {
     first[i] = distance_weight.size();
