@@ -172,8 +172,8 @@ DistanceMemo::Measure measure_distances(const Ring& ring, const PolygonWithHoles
     // The nearest segment; of equals, the previous midpoint's, else the first.
     const std::size_t previous = nearest;
     double best = distance_to_segment(mid, segments[previous].a, segments[previous].b);
-    const double moved = (mid - looked_at).norm();
-    if (best + moved + 1e-6 + 1e-12 * mid.cwiseAbs().sum() + 1e-9 * clearance < clearance) {
+    const double moved = (mid - looked_at).norm(), margin = 1e-6 + 1e-12 * mid.cwiseAbs().sum() + 1e-9 * clearance;
+    if (best + moved + margin < clearance) {
       distances.push_back({best, e.norm()});
       measure.nearest.push_back(nearest);
       continue;
@@ -202,9 +202,10 @@ DistanceMemo::Measure measure_distances(const Ring& ring, const PolygonWithHoles
       if (d < best || (d == best && nearest != previous && k < nearest)) {
         second = std::min(second, best);
         best = d, nearest = k;
+      } else if (std::isnan(d)) {
+        unsure = true;
       } else {
-        unsure |= std::isnan(d);
-        if (!std::isnan(d)) second = std::min(second, d);
+        second = std::min(second, d);
       }
       reach = std::min(cap, second);
     });
