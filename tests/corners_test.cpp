@@ -290,6 +290,24 @@ TEST(Corners, AWobblingWallIsNotSplit) {
   EXPECT_EQ(extract_corners(ring, labels, axis_normals, 1.0, o, &problem).size(), 4u) << problem;
 }
 
+// A wall of a 24 x 4 m box whose first 4 m dip 2 m as a V of two 45-degree flanks, each a run of
+// its own, square to each other (as the teeth of a staggered row are, which do not join), the
+// wall's straight 20 m a third run. The second flank joins the straight wall first (a window of
+// those two fits the lattice line within the bounds), and the first flank then joins that wall:
+// its neighbour is now on the lattice, and the three runs' edges lie within the bounds about it.
+// (The window of the same edges was judged before, as three runs of which two were the teeth: a
+// verdict taken again from there is wrong. The first flank and the left wall do not join: their
+// chord lies 18 degrees off the lattice, beyond 12.)
+TEST(Corners, AFlankJoinsItsWallOnceTheFlankSquareToItHasJoined) {
+  const Ring ring = {{0, 0}, {2, -2}, {4, 0}, {24, 0}, {24, 4}, {0, 4}};
+  std::vector<std::pair<int, int>> runs;
+  std::vector<Vec2> normals;
+  for (int k = 0; k < 6; ++k) runs.push_back({k, 1}), normals.push_back(outward_normal(edge_vector(ring, std::size_t(k))));
+  const auto merged = zigzags_merged(ring, runs, normals, Vec2(1, 0), 12.0, 0.5, 2.5, 10.0);
+  const std::vector<std::pair<int, int>> expected = {{0, 3}, {3, 1}, {4, 1}, {5, 1}};
+  EXPECT_EQ(merged, expected);
+}
+
 // A bow on a long straight wall, all of it one run (its ends 35 degrees off the wall, which no
 // direction of its own took): a wall of 60 m at 0.25 m a pixel, a bow of 16 m chord and 2.5 m
 // sagitta from 4 m to 20 m along it. A parabola over the whole run does not explain it (the wall is

@@ -2,9 +2,11 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <limits>
 #include <set>
 #include <tuple>
+#include <unordered_map>
 
 #include <Eigen/Dense>
 
@@ -309,12 +311,18 @@ void merge_zigzags(const Ring& ring, std::vector<std::pair<int, int>>& runs, std
   const double min_cos = std::cos(max_deg * M_PI / 180.0), square_cos = std::sin(square_deg * M_PI / 180.0);
   const int size = int(ring.size());
   constexpr int kMaxWindow = 64;  // runs in one window at most (bounds the work on long rings)
+  // Each window's verdict, by its first edge, its edges and its runs: runs only merge, and a merged
+  // run spans more than each run it took in, so a window of the same edges and as many runs holds
+  // the same runs and their lines, and fits as it did (the search starts over after every merge
+  // and tries the windows that failed before it again).
+  struct Verdict {
+    bool fits;
+    Vec2 normal;
+  };
+  std::unordered_map<std::uint64_t, Verdict> verdicts;
   // The lattice normal of the window [a, a + count) of runs, when its chord is near the lattice and
   // its contour lies within the bounds about that line.
-  const auto fits = [&](std::size_t a, int count, Vec2* normal) {
-    const int first = runs[a].first;
-    int edges = 0;
-    for (int k = 0; k < count; ++k) edges += runs[(a + k) % runs.size()].second;
+  const auto judge = [&](std::size_t a, int count, int first, int edges, Vec2* normal) {
     // Two consecutive walls off the lattice and square to each other are a second lattice (the
     // teeth of a staggered row of houses), not a wobble, whose flanks are not square.
     for (int k = 0; k + 1 < count; ++k) {
@@ -340,6 +348,23 @@ void merge_zigzags(const Ring& ring, std::vector<std::pair<int, int>>& runs, std
     if (total <= 0 || std::sqrt(sum / total) > max_rms) return false;
     *normal = target;
     return true;
+  };
+  const auto fits = [&](std::size_t a, int count, Vec2* normal) {
+    const int first = runs[a].first;
+    int edges = 0;
+    for (int k = 0; k < count; ++k) edges += runs[(a + k) % runs.size()].second;
+    // (The key: first, edges and count in 32, 25 and 7 bits; a ring of more edges is not remembered.)
+    if (edges >= 1 << 25) return judge(a, count, first, edges, normal);
+    const std::uint64_t key = std::uint64_t(std::uint32_t(first)) << 32 | std::uint64_t(edges) << 7 | std::uint64_t(count);
+    if (const auto known = verdicts.find(key); known != verdicts.end()) {
+      if (known->second.fits) *normal = known->second.normal;
+      return known->second.fits;
+    }
+    Vec2 found(0, 0);
+    const bool ok = judge(a, count, first, edges, &found);
+    verdicts.emplace(key, Verdict{ok, found});
+    if (ok) *normal = found;
+    return ok;
   };
   for (std::size_t r = 0; r < runs.size() && runs.size() > 4;) {
     if (on_lattice(lines[r], lattice)) { ++r; continue; }
@@ -468,6 +493,14 @@ void absorb_short_runs(const Ring& ring, std::vector<int>& labels, double min_le
     if (!with_prev) track(p);
     if (!with_next) track(q);
   }
+}
+
+std::vector<std::pair<int, int>> zigzags_merged(const Ring& ring, std::vector<std::pair<int, int>> runs, const std::vector<Vec2>& normals,
+                                                const Vec2& lattice, double max_deg, double max_rms, double max_dev, double square_deg) {
+  std::vector<Line> lines;
+  for (std::size_t r = 0; r < runs.size(); ++r) lines.push_back(fit_line(ring, runs[r].first, runs[r].second, normals[r]));
+  merge_zigzags(ring, runs, lines, lattice, max_deg, max_rms, max_dev, square_deg);
+  return runs;
 }
 
 Ring extract_corners(const Ring& ring, const std::vector<int>& labels, const std::vector<Vec2>& directions,

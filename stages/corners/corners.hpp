@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <string>
 #include <vector>
+#include <utility>
 
 #include "common/option.hpp"
 #include "geometry/types.hpp"
@@ -106,6 +107,13 @@ struct CornerContext {
   // The noise its snaps, curves and squarings are judged by: the regularity noise, at least the noise.
   double regularity() const { return std::max(noise, regularity_noise); }
 };
+
+// The runs (first edge, edge count) of ring left where consecutive runs that zigzag about a line
+// of the lattice are merged, as extract_corners merges them (corners.zigzag_*; the bounds in
+// metres, square_deg its parallel_angle_deg), each run's line fitted along its given normal.
+// (That step of extract_corners alone, for tests.)
+std::vector<std::pair<int, int>> zigzags_merged(const Ring& ring, std::vector<std::pair<int, int>> runs, const std::vector<Vec2>& normals,
+                                                const Vec2& lattice, double max_deg, double max_rms, double max_dev, double square_deg);
 
 // The corner ring of one contour ring (in metres; pixel_size converts the _px options). A curved
 // run (see curve_px) keeps its contour, simplified, between the lines of its neighbours; straight

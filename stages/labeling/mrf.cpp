@@ -150,7 +150,9 @@ void fix_groups(const Terms& t, const std::vector<int>& labels, int alpha, bool 
   const auto reopen = [&](int k) {
     if (k <= visited && s.state[std::size_t(k)] == 2) s.open.push_back(k);
   };
-  const auto try_fix = [&](int p) {
+  // (Inlined into both loops below, GCC and Clang: called once a group an expansion, a call each
+  // cost about a twelfth of the labeling.)
+  const auto try_fix = [&](int p) __attribute__((always_inline)) {
     const int a = labels[std::size_t(p)], q = t.next[std::size_t(p)], o = t.prev[std::size_t(p)];
     double low = 0, high = 0, scale = 1;
     if (q >= 0) {
