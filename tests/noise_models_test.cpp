@@ -686,6 +686,40 @@ TEST(Models, AStretchTheOutlineExplainsIsLeftOutOnlyBeyondTheNoise) {
   EXPECT_TRUE(leaves_a_stretch(even, to_notched, 0.1, 1.0, 0.01));  // (a mean excess of 0.01 m is not nothing)
 }
 
+// The stretch that decides: over random contours (edges of 0.1-0.5 m, distances to the simpler
+// and the finer outline of 0-1 m), the largest ratio of a stretch's excess to noise * sqrt(correlation
+// * length) over the stretches the definition names (from each edge, the shortest at least as long as
+// each window: the correlation, doubled while within half the ring), computed here stretch by
+// stretch; leaves_a_stretch finds a stretch at a k a millionth below it and none a millionth above.
+TEST(Models, LeavesAStretchDecidesOnTheLargestExcessOfAnyStretch) {
+  std::mt19937 rng(52);
+  std::uniform_real_distribution<double> edge(0.1, 0.5), distance(0.0, 1.0);
+  for (int trial = 0; trial < 40; ++trial) {
+    const std::size_t n = 50 + std::size_t(trial) * 10;
+    std::vector<std::pair<double, double>> simple(n), fine(n);
+    double perimeter = 0;
+    for (std::size_t i = 0; i < n; ++i) {
+      const double length = edge(rng);
+      simple[i] = {distance(rng), length}, fine[i] = {distance(rng), length};
+      perimeter += length;
+    }
+    const double noise = 0.3, correlation = 1.0 + 0.05 * trial;
+    double largest = -std::numeric_limits<double>::infinity();
+    for (double window = correlation; window <= 0.5 * perimeter; window *= 2)
+      for (std::size_t first = 0; first < n; ++first) {
+        double length = 0, excess = 0;
+        for (std::size_t k = 0; k < n && length < window; ++k) {
+          const auto& [d, w] = simple[(first + k) % n];
+          length += w, excess += w * (d - fine[(first + k) % n].first);
+        }
+        largest = std::max(largest, excess / (noise * std::sqrt(correlation * length)));
+      }
+    ASSERT_GT(largest, 0) << trial;
+    EXPECT_TRUE(leaves_a_stretch(simple, fine, noise, correlation, largest * (1 - 1e-6))) << trial;
+    EXPECT_FALSE(leaves_a_stretch(simple, fine, noise, correlation, largest * (1 + 1e-6))) << trial;
+  }
+}
+
 // A row of houses 60 x 14 m whose two ends are set back 2 m over their middle 8 m (the TU Delft
 // campus has such blocks), at 0.5 m pixels under half a metre of wobble: the set-backs are a few
 // percent of the contour, which the 95th percentile of the distances passes over (without the
@@ -1514,15 +1548,20 @@ TEST(MergeSteps, TheCheapestStepMergesFirst) {
 }
 
 // The path's running fit is the contour's mean distance to its outline measured afresh, and its
-// outlines are merge_cheapest_step's, at every merge down to no step left.
+// outlines are merge_cheapest_step's, at every merge down to no step left: for the outline's own
+// contour, and for one with a notch 5 m deep (4 m wide) in its bottom wall, whose midpoints lie
+// metres from every wall, farther than a cell of the path's grid (the merges move the walls they
+// measure to).
 TEST(MergeSteps, ThePathKeepsItsFitAsMeasuredAfresh) {
   const PolygonWithHoles stepped{{{0, 0}, {6, 0}, {6, 0.5}, {11, 0.5}, {11, 0}, {20, 0}, {20, 4}, {21, 4}, {21, 9}, {20, 9},
                                   {20, 12}, {9, 12}, {9, 11.6}, {0, 11.6}},
                                  {{{3, 3}, {3, 8}, {7, 8}, {7, 6}, {8, 6}, {8, 3}}}};
-  const test::RasterizedShape r = test::rasterize_shape_m(stepped, 0.1, 0.25, 3.0, 0.5, 1);
+  const PolygonWithHoles notched{{{0, 0}, {13, 0}, {13, 5}, {17, 5}, {17, 0}, {21, 0}, {21, 12}, {0, 12}}, {}};
+  for (const PolygonWithHoles* shape : {&stepped, &notched}) {
+  const test::RasterizedShape r = test::rasterize_shape_m(*shape, 0.1, 0.25, 3.0, 0.5, 1);
   ASSERT_EQ(r.buildings.size(), 1u);
   const std::vector<Ring>& contour = r.buildings[0].rings;
-  ASSERT_EQ(contour.size(), 2u);
+  ASSERT_EQ(contour.size(), shape->holes.size() + 1);
   const auto fresh = [&](const PolygonWithHoles& p) {
     double sum = 0, total = 0;
     for (const Ring& ring : contour) {
@@ -1547,6 +1586,7 @@ TEST(MergeSteps, ThePathKeepsItsFitAsMeasuredAfresh) {
   EXPECT_FALSE(merge_cheapest_step(expected, 2.0));
   EXPECT_GE(merges, 5);
   EXPECT_EQ(path.outline().outer.size(), 4u);
+  }
 }
 
 // A wobble of 1 m at a 3 m wavelength at 0.1 m pixels leaves notches a metre wide that neither

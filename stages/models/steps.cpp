@@ -719,6 +719,48 @@ StepPath::StepPath(const std::vector<Ring>& contour, PolygonWithHoles outline, d
     }
   }
   ring_starts_.push_back(midpoints_.size());
+  index_midpoints();
+}
+
+void StepPath::index_midpoints() {
+  const std::size_t n = midpoints_.size();
+  if (n == 0) return;
+  Vec2 low = midpoints_[0], high = low;
+  for (const Vec2& m : midpoints_) low = low.cwiseMin(m), high = high.cwiseMax(m);
+  if (!low.allFinite() || !high.allFinite()) return;  // (no grid: every midpoint each merge)
+  // About eight midpoints a cell along the contour (a contour of n midpoints crosses about
+  // sqrt(n) cells of a square grid of n / 8 cells over its box), at most 256 a side.
+  const Vec2 extent = (high - low).cwiseMax(1e-9);
+  cell_ = std::max({std::sqrt(extent.x() * extent.y() * 8.0 / double(n)), extent.x() / 256, extent.y() / 256});
+  nx_ = std::max(1L, long(std::ceil(extent.x() / cell_))), ny_ = std::max(1L, long(std::ceil(extent.y() / cell_)));
+  low_ = low;
+  const std::size_t cells = std::size_t(nx_ * ny_);
+  cell_start_.assign(cells + 1, 0);
+  cell_of_.resize(n);
+  for (std::size_t p = 0; p < n; ++p) {
+    const long x = std::clamp(long(std::floor((midpoints_[p].x() - low_.x()) / cell_)), 0L, nx_ - 1);
+    const long y = std::clamp(long(std::floor((midpoints_[p].y() - low_.y()) / cell_)), 0L, ny_ - 1);
+    cell_of_[p] = std::size_t(y * nx_ + x);
+    ++cell_start_[cell_of_[p] + 1];
+  }
+  for (std::size_t c = 0; c < cells; ++c) cell_start_[c + 1] += cell_start_[c];
+  cell_items_.resize(n);
+  std::vector<std::size_t> fill(cell_start_.begin(), cell_start_.end() - 1);
+  for (std::size_t p = 0; p < n; ++p) cell_items_[fill[cell_of_[p]]++] = p;
+  cell_low_.assign(cells, Vec2::Constant(std::numeric_limits<double>::infinity()));
+  cell_high_.assign(cells, Vec2::Constant(-std::numeric_limits<double>::infinity()));
+  cell_bound_.assign(cells, 0.0);
+  for (std::size_t p = 0; p < n; ++p) {
+    const std::size_t c = cell_of_[p];
+    cell_low_[c] = cell_low_[c].cwiseMin(midpoints_[p]), cell_high_[c] = cell_high_[c].cwiseMax(midpoints_[p]);
+    const double d = distances_[p];
+    if (!(d <= cell_bound_[c])) cell_bound_[c] = std::isnan(d) ? std::numeric_limits<double>::infinity() : d;
+  }
+  bound_ = *std::max_element(cell_bound_.begin(), cell_bound_.end());
+  members_.assign(walls_.size(), {});
+  for (std::size_t p = 0; p < n; ++p)
+    if (nearest_[p] >= 0) members_[std::size_t(nearest_[p])].push_back(p);
+  seen_.assign(n, 0);
 }
 
 namespace {
@@ -769,23 +811,74 @@ bool StepPath::merge_next() {
   // the three new walls, or stays where it was. Unless its own wall changed: then the nearest new
   // wall, when no farther than it was, else every wall is measured again.
   const int changed[3] = {before, added, after};
-  for (std::size_t p = 0; p < midpoints_.size(); ++p) {
-    const int k = nearest_[p];
-    const bool moved = k == before || k == after || k == gone[0] || k == gone[1] || k == gone[2];
-    // The nearest of the three new walls, those farther than `bound` passed over.
-    const double bound = moved ? std::numeric_limits<double>::infinity() : distances_[p];
-    double best = bound;
-    int which = -1;
-    for (const int c : changed) {
-      const std::pair<Vec2, Vec2>& wall = walls_[std::size_t(c)];
-      if (!moved && box_gap2(midpoints_[p], wall) >= best * best) continue;
-      const double d = distance_to_segment(midpoints_[p], wall.first, wall.second);
-      if (d < best) best = d, which = c;
+  if (cell_start_.empty()) {
+    for (std::size_t p = 0; p < midpoints_.size(); ++p) {
+      const int k = nearest_[p];
+      update(p, k == before || k == after || k == gone[0] || k == gone[1] || k == gone[2], changed);
     }
-    if (which >= 0 && (!moved || best <= distances_[p])) distances_[p] = best, nearest_[p] = which;
-    else if (moved) measure(p, changed);
+    return true;
+  }
+  // Each midpoint is updated as above, in any order (its update reads no other's): those nearest
+  // a wall that changed or went first, from those walls' members, then, of the others, those in
+  // a cell that may lie nearer a new wall than its bound (every other one passes over all three
+  // walls by their boxes, as update does).
+  ++merges_;
+  members_.resize(walls_.size());
+  for (const int id : {before, after, gone[0], gone[1], gone[2]}) {
+    std::vector<std::size_t> members;
+    members.swap(members_[std::size_t(id)]);
+    for (const std::size_t p : members)
+      if (nearest_[p] == id && seen_[p] != merges_) seen_[p] = merges_, update(p, true, changed);
+  }
+  for (const int c : changed) {
+    const std::pair<Vec2, Vec2>& wall = walls_[std::size_t(c)];
+    const Vec2 wall_low = wall.first.cwiseMin(wall.second), wall_high = wall.first.cwiseMax(wall.second);
+    // The cells within bound_ of the wall's box (a cell more, each way, for the rounding).
+    const auto range = [&](double from, double to, double origin, long count, long* first, long* last) {
+      const double a = std::floor((from - bound_ - origin) / cell_) - 1, b = std::floor((to + bound_ - origin) / cell_) + 1;
+      *first = a > 0 ? (a < double(count) ? long(a) : count) : 0;  // (inf and NaN: every cell)
+      *last = b < double(count - 1) ? (b >= 0 ? long(b) : -1) : count - 1;
+      if (!(a == a) || !(b == b)) *first = 0, *last = count - 1;
+    };
+    long x0, x1, y0, y1;
+    range(wall_low.x(), wall_high.x(), low_.x(), nx_, &x0, &x1);
+    range(wall_low.y(), wall_high.y(), low_.y(), ny_, &y0, &y1);
+    for (long y = y0; y <= y1; ++y)
+      for (long x = x0; x <= x1; ++x) {
+        const std::size_t cell = std::size_t(y * nx_ + x);
+        if (cell_start_[cell] == cell_start_[cell + 1]) continue;
+        // (No midpoint of the cell lies nearer the wall's box than the cell's box does.)
+        const Vec2 gap = (wall_low - cell_high_[cell]).cwiseMax(cell_low_[cell] - wall_high).cwiseMax(0.0);
+        if (gap.squaredNorm() >= cell_bound_[cell] * cell_bound_[cell]) continue;
+        for (std::size_t i = cell_start_[cell]; i < cell_start_[cell + 1]; ++i) {
+          const std::size_t p = cell_items_[i];
+          if (seen_[p] != merges_) seen_[p] = merges_, update(p, false, changed);
+        }
+      }
   }
   return true;
+}
+
+void StepPath::update(std::size_t p, bool moved, const int (&changed)[3]) {
+  const int was = nearest_[p];
+  // The nearest of the three new walls, those farther than `bound` passed over.
+  const double bound = moved ? std::numeric_limits<double>::infinity() : distances_[p];
+  double best = bound;
+  int which = -1;
+  for (const int c : changed) {
+    const std::pair<Vec2, Vec2>& wall = walls_[std::size_t(c)];
+    if (!moved && box_gap2(midpoints_[p], wall) >= best * best) continue;
+    const double d = distance_to_segment(midpoints_[p], wall.first, wall.second);
+    if (d < best) best = d, which = c;
+  }
+  if (which >= 0 && (!moved || best <= distances_[p])) distances_[p] = best, nearest_[p] = which;
+  else if (moved) measure(p, changed);
+  if (cell_start_.empty()) return;
+  const double d = distances_[p];
+  double& cell_bound = cell_bound_[cell_of_[p]];
+  if (!(d <= cell_bound)) cell_bound = std::isnan(d) ? std::numeric_limits<double>::infinity() : d, bound_ = std::max(bound_, cell_bound);
+  // (A moved midpoint's wall had its members taken: it joins its nearest wall's again either way.)
+  if ((moved || nearest_[p] != was) && nearest_[p] >= 0) members_[std::size_t(nearest_[p])].push_back(p);
 }
 
 double StepPath::fit() const {

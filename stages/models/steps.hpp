@@ -3,6 +3,7 @@
 #include <cstddef>
 #include <optional>
 #include <utility>
+#include <cstdint>
 #include <vector>
 
 #include "geometry/types.hpp"
@@ -95,7 +96,8 @@ std::optional<PolygonWithHoles> sharpen_rounded_corners(const PolygonWithHoles& 
 // The same merges one after another, with the contour's mean distance to the outline (each
 // contour edge's midpoint to the nearest wall, weighted by the edge's length: contour_fit) kept
 // up to date: a merge changes five walls, so only the midpoints nearest them are measured again,
-// the others against the three new walls alone.
+// the others against the three new walls alone, and of those only the ones in a cell of a grid
+// over the midpoints that may lie nearer a new wall than the farthest of the cell's distances.
 class StepPath {
  public:
   StepPath(const std::vector<Ring>& contour, PolygonWithHoles outline, double parallel_deg);
@@ -106,6 +108,25 @@ class StepPath {
 
  private:
   void measure(std::size_t point, const int (&first)[3]);  // against every wall, these first
+  // Midpoint p's distance again after a merge: against the three new walls, or (moved: its
+  // nearest wall changed) every wall where those are farther than it was.
+  void update(std::size_t p, bool moved, const int (&changed)[3]);
+  void index_midpoints();
+
+  // The grid: cells of cell_ metres from low_, nx_ a row; per cell its midpoints
+  // (cell_items_[cell_start_[c] .. cell_start_[c + 1])), their box, and a bound on their distances
+  // (at least the largest; infinite for one not a number). Empty (no grid) where a midpoint is
+  // not finite.
+  double cell_ = 0;
+  Vec2 low_ = Vec2::Zero();
+  long nx_ = 0, ny_ = 0;
+  std::vector<std::size_t> cell_start_, cell_items_, cell_of_;
+  std::vector<Vec2> cell_low_, cell_high_;
+  std::vector<double> cell_bound_;
+  double bound_ = 0;                           // at least every cell's bound
+  std::vector<std::vector<std::size_t>> members_;  // by wall id: midpoints that had it nearest (those still do among them)
+  std::vector<std::uint32_t> seen_;            // per midpoint: the merge that updated it last
+  std::uint32_t merges_ = 0;
 
   double cos_parallel_;
   PolygonWithHoles outline_;
