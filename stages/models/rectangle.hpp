@@ -91,6 +91,14 @@ struct ModelOptions {
 // notch's. Empty for a degenerate ring.
 Ring moment_rectangle(const Ring& ring, const Vec2& normal);
 
+class SegmentGrid;
+
+// The grid over the rings' edges (SegmentGrid(edges, min_bucketed)), from the last two asked for on
+// this thread where the rings are the same, bit for bit: for polygons of many edges (a building's
+// contour, kRememberedGridEdges or more) measured against again and again. Valid until the next call.
+const SegmentGrid& remembered_grid(const std::vector<const Ring*>& rings, std::size_t min_bucketed);
+inline constexpr std::size_t kRememberedGridEdges = 256;
+
 // The distance of each of the ring's edge midpoints to the polygon's boundary, with the edge's
 // length: (distance, length), per edge; and, when asked, the nearest of the polygon's edges to
 // each (numbered along its outer ring, then along each hole; none for a polygon without edges; of

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <optional>
 
 #include "geometry/polygon.hpp"
 #include "geometry/segment_grid.hpp"
@@ -592,10 +593,17 @@ double corner_rounding_gap(const PolygonWithHoles& outline, const std::vector<Ri
   }
   if (count) *count = corners.size();
   if (corners.size() < 3) return 0.0;
-  // Each corner's squared distance to the contour (SegmentGrid).
-  std::vector<SegmentGrid::Segment> segments;
-  for (const Ring& ring : contour) SegmentGrid::add_ring(ring, segments);
-  const SegmentGrid grid(std::move(segments));
+  // Each corner's squared distance to the contour (SegmentGrid; a contour of many edges's from the
+  // grids remembered, which the model choice measures outlines against).
+  std::vector<const Ring*> rings;
+  std::size_t edges = 0;
+  for (const Ring& ring : contour) rings.push_back(&ring), edges += ring.size();
+  std::optional<SegmentGrid> own;
+  const SegmentGrid& grid = edges >= kRememberedGridEdges ? remembered_grid(rings, 24) : own.emplace([&] {
+    std::vector<SegmentGrid::Segment> segments;
+    for (const Ring& ring : contour) SegmentGrid::add_ring(ring, segments);
+    return segments;
+  }());
   std::vector<double> gaps;
   gaps.reserve(corners.size());
   for (const Vec2& corner : corners) gaps.push_back(grid.nearest_squared(corner));
