@@ -311,6 +311,7 @@ void merge_zigzags(const Ring& ring, std::vector<std::pair<int, int>>& runs, std
   const double min_cos = std::cos(max_deg * M_PI / 180.0), square_cos = std::sin(square_deg * M_PI / 180.0);
   const int size = int(ring.size());
   constexpr int kMaxWindow = 64;  // runs in one window at most (bounds the work on long rings)
+  static_assert(kMaxWindow < 128, "a window's run count is 7 bits of its verdict's key");
   // Each window's verdict, by its first edge, its edges and its runs: runs only merge, and a merged
   // run spans more than each run it took in, so a window of the same edges and as many runs holds
   // the same runs and their lines, and fits as it did (the search starts over after every merge

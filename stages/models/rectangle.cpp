@@ -309,17 +309,17 @@ bool leaves_a_stretch(const std::vector<std::pair<double, double>>& simple, cons
   const double perimeter = length[n];
   if (!std::isfinite(perimeter)) return false;
   for (double window = correlation; window <= 0.5 * perimeter; window *= 2) {
-    // Each stretch is at least `window` long (grown to it; the ring is twice that at least), so its
-    // excess exceeds the bound, k * noise * sqrt(correlation * l) before the division by l, only
-    // where it exceeds that at l = window: below it (less a margin far above the rounding of either
-    // side) the stretch is passed over without the division and the root.
+    // A stretch at least `window` long (each is, grown to it, the ring being twice that at least,
+    // lengths not negative) has an excess beyond the bound, k * noise * sqrt(correlation * l)
+    // before the division by l, only where it exceeds that at l = window: below it (less a margin
+    // far above the rounding of either side) it is passed over without the division and the root.
     const double least = k > 0 ? (1 - 1e-9) * k * noise * std::sqrt(correlation * window) : -std::numeric_limits<double>::infinity();
     std::size_t end = 0;
     for (std::size_t first = 0; first < n; ++first) {
       end = std::max(end, first + 1);
       while (end < first + n && length[end] - length[first] < window) ++end;
       const double l = length[end] - length[first];
-      if (l <= 0 || excess[end] - excess[first] <= least) continue;
+      if (l <= 0 || (l >= window && excess[end] - excess[first] <= least)) continue;
       if ((excess[end] - excess[first]) / l > k * noise * std::sqrt(correlation / l)) return true;
     }
   }

@@ -95,7 +95,8 @@ class SegmentGrid;
 
 // The grid over the rings' edges (SegmentGrid(edges, min_bucketed)), from the last two asked for on
 // this thread where the rings are the same, bit for bit: for polygons of many edges (a building's
-// contour, kRememberedGridEdges or more) measured against again and again. Valid until the next call.
+// contour, kRememberedGridEdges or more) measured against again and again. Valid until the next
+// call: not to be held across another (boundary_distances and corner_rounding_gap call it).
 const SegmentGrid& remembered_grid(const std::vector<const Ring*>& rings, std::size_t min_bucketed);
 inline constexpr std::size_t kRememberedGridEdges = 256;
 

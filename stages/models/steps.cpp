@@ -832,12 +832,14 @@ bool StepPath::merge_next() {
   // walls by their boxes, as update does).
   ++merges_;
   members_.resize(walls_.size());
-  for (const int id : {before, after, gone[0], gone[1], gone[2]}) {
-    std::vector<std::size_t> members;
-    members.swap(members_[std::size_t(id)]);
-    for (const std::size_t p : members)
-      if (nearest_[p] == id && seen_[p] != merges_) seen_[p] = merges_, update(p, true, changed);
-  }
+  // (All five walls' members taken before any is updated: a midpoint that moves from one of them
+  // to another joins that wall's members anew, which must not be taken after it.)
+  const int moved_from[5] = {before, after, gone[0], gone[1], gone[2]};
+  std::vector<std::size_t> members[5];
+  for (int w = 0; w < 5; ++w) members[w].swap(members_[std::size_t(moved_from[w])]);
+  for (int w = 0; w < 5; ++w)
+    for (const std::size_t p : members[w])
+      if (nearest_[p] == moved_from[w] && seen_[p] != merges_) seen_[p] = merges_, update(p, true, changed);
   for (const int c : changed) {
     const std::pair<Vec2, Vec2>& wall = walls_[std::size_t(c)];
     const Vec2 wall_low = wall.first.cwiseMin(wall.second), wall_high = wall.first.cwiseMax(wall.second);
