@@ -1547,6 +1547,32 @@ TEST(MergeSteps, TheCheapestStepMergesFirst) {
   EXPECT_EQ(in_hole->holes.at(0).size(), 6u);
 }
 
+// Merges the path down to no step left, checking after each merge that its outline is
+// merge_cheapest_step's and its running fit the contour's mean distance to that outline measured
+// afresh (each ring's, weighted by its perimeter, as contour_fit sums them). *merges: how many.
+void walk_checked(StepPath& path, PolygonWithHoles expected, const std::vector<Ring>& contour, const std::string& what, int* merges) {
+  const auto fresh = [&](const PolygonWithHoles& p) {
+    double sum = 0, total = 0;
+    for (const Ring& ring : contour) {
+      sum += perimeter(ring) * mean_distance_to_boundary(ring, p);
+      total += perimeter(ring);
+    }
+    return sum / total;
+  };
+  *merges = 0;
+  ASSERT_NEAR(path.fit(), fresh(expected), 1e-9) << what;
+  while (path.merge_next()) {
+    const std::optional<PolygonWithHoles> next = merge_cheapest_step(expected, 2.0);
+    ASSERT_TRUE(next) << what;
+    expected = *next;
+    ASSERT_EQ(path.outline().outer, expected.outer) << what;
+    ASSERT_EQ(path.outline().holes, expected.holes) << what;
+    ASSERT_NEAR(path.fit(), fresh(expected), 1e-9) << what << ", after merge " << *merges + 1;
+    ++*merges;
+  }
+  EXPECT_FALSE(merge_cheapest_step(expected, 2.0)) << what;
+}
+
 // The path's running fit is the contour's mean distance to its outline measured afresh, and its
 // outlines are merge_cheapest_step's, at every merge down to no step left: for the outline's own
 // contour, and for one with a notch 5 m deep (4 m wide) in its bottom wall, whose midpoints lie
@@ -1558,39 +1584,20 @@ TEST(MergeSteps, ThePathKeepsItsFitAsMeasuredAfresh) {
                                  {{{3, 3}, {3, 8}, {7, 8}, {7, 6}, {8, 6}, {8, 3}}}};
   const PolygonWithHoles notched{{{0, 0}, {13, 0}, {13, 5}, {17, 5}, {17, 0}, {21, 0}, {21, 12}, {0, 12}}, {}};
   for (const PolygonWithHoles* shape : {&stepped, &notched}) {
-  const test::RasterizedShape r = test::rasterize_shape_m(*shape, 0.1, 0.25, 3.0, 0.5, 1);
-  ASSERT_EQ(r.buildings.size(), 1u);
-  const std::vector<Ring>& contour = r.buildings[0].rings;
-  ASSERT_EQ(contour.size(), shape->holes.size() + 1);
-  const auto fresh = [&](const PolygonWithHoles& p) {
-    double sum = 0, total = 0;
-    for (const Ring& ring : contour) {
-      sum += perimeter(ring) * mean_distance_to_boundary(ring, p);
-      total += perimeter(ring);
-    }
-    return sum / total;
-  };
-  StepPath path(contour, stepped, 2.0);
-  EXPECT_NEAR(path.fit(), fresh(stepped), 1e-9);
-  PolygonWithHoles expected = stepped;
-  int merges = 0;
-  while (path.merge_next()) {
-    const std::optional<PolygonWithHoles> next = merge_cheapest_step(expected, 2.0);
-    ASSERT_TRUE(next);
-    expected = *next;
-    ASSERT_EQ(path.outline().outer, expected.outer);
-    ASSERT_EQ(path.outline().holes, expected.holes);
-    EXPECT_NEAR(path.fit(), fresh(expected), 1e-9) << "after merge " << merges + 1;
-    ++merges;
-  }
-  EXPECT_FALSE(merge_cheapest_step(expected, 2.0));
-  EXPECT_GE(merges, 5);
-  EXPECT_EQ(path.outline().outer.size(), 4u);
+    const test::RasterizedShape r = test::rasterize_shape_m(*shape, 0.1, 0.25, 3.0, 0.5, 1);
+    ASSERT_EQ(r.buildings.size(), 1u);
+    const std::vector<Ring>& contour = r.buildings[0].rings;
+    ASSERT_EQ(contour.size(), shape->holes.size() + 1);
+    StepPath path(contour, stepped, 2.0);
+    int merges = 0;
+    walk_checked(path, stepped, contour, shape == &stepped ? "its own contour" : "the notched contour", &merges);
+    EXPECT_GE(merges, 5);
+    EXPECT_EQ(path.outline().outer.size(), 4u);
   }
 }
 
-// The same on random steps and contours: a 20 x 8 m box whose bottom wall steps by 0.1-0.5 m every
-// 1-3 m, against contours whose bottom wanders up to 1.5 m about it (so that a merge hands many
+// The same on random steps and contours: a 20 x 8 m box whose bottom wall steps by 0.1-1 m every
+// 0.3-3 m, against contours whose bottom wanders up to 2 m about it (so that a merge hands many
 // midpoints from one of the walls it changes to another), after every merge of each.
 TEST(MergeSteps, ThePathKeepsItsFitOnRandomStepsAndContours) {
   std::mt19937 rng(52);
@@ -1618,18 +1625,9 @@ TEST(MergeSteps, ThePathKeepsItsFitOnRandomStepsAndContours) {
     for (double back = 20; back > 0; back -= 0.5) ring.push_back({back, 8});
     for (double down = 8; down > 1.5; down -= 0.5) ring.push_back({0, down});
     const std::vector<Ring> contour = {ring};
-    const auto fresh = [&](const PolygonWithHoles& p) { return mean_distance_to_boundary(ring, p); };
     StepPath path(contour, stepped, 2.0);
-    PolygonWithHoles expected = stepped;
     int merges = 0;
-    while (path.merge_next()) {
-      const std::optional<PolygonWithHoles> next = merge_cheapest_step(expected, 2.0);
-      ASSERT_TRUE(next) << trial;
-      expected = *next;
-      ASSERT_EQ(path.outline().outer, expected.outer) << trial;
-      ASSERT_NEAR(path.fit(), fresh(expected), 1e-9) << "trial " << trial << ", after merge " << merges + 1;
-      ++merges;
-    }
+    walk_checked(path, stepped, contour, "trial " + std::to_string(trial), &merges);
     EXPECT_GE(merges, 3) << trial;
   }
 }
@@ -1641,20 +1639,10 @@ TEST(MergeSteps, ThePathKeepsItsFitOnRandomStepsAndContours) {
 // measured again (a second reader's case: the midpoint was left out of the wall's members).
 TEST(MergeSteps, AMidpointHandedOnByAMergeIsMeasuredAgainByTheNext) {
   const PolygonWithHoles stepped{{{0, 0}, {5, 0}, {5, 0.1}, {4, 0.1}, {4, 0.2}, {8, 0.2}, {8, 0.3}, {12, 0.3}, {12, 5}, {-1, 5}}, {}};
-  const Ring ring = {{-1, -0.1}, {5.1, -0.05}, {5.3, -0.05}, {12, -0.1}, {12.5, 5}, {-1.5, 5}};
-  const std::vector<Ring> contour = {ring};
+  const std::vector<Ring> contour = {{{-1, -0.1}, {5.1, -0.05}, {5.3, -0.05}, {12, -0.1}, {12.5, 5}, {-1.5, 5}}};
   StepPath path(contour, stepped, 2.0);
-  PolygonWithHoles expected = stepped;
   int merges = 0;
-  while (path.merge_next()) {
-    const std::optional<PolygonWithHoles> next = merge_cheapest_step(expected, 2.0);
-    ASSERT_TRUE(next);
-    expected = *next;
-    ASSERT_EQ(path.outline().outer, expected.outer);
-    EXPECT_NEAR(path.fit(), mean_distance_to_boundary(ring, expected), 1e-9) << "after merge " << merges + 1;
-
-    ++merges;
-  }
+  walk_checked(path, stepped, contour, "the step turning back", &merges);
   EXPECT_GE(merges, 2);
 }
 

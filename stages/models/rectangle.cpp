@@ -95,108 +95,76 @@ bool same_points(const std::vector<Vec2>& a, const std::vector<Vec2>& b) {
   return a.size() == b.size() && (a.empty() || std::memcmp(a.data(), b.data(), a.size() * sizeof(Vec2)) == 0);
 }
 
-// The last few measures of a contour ring against an outline, per thread: the model choice
-// measures the same outline against the same contour from several of its steps (an outline's
-// contour fit, then its rectangle test and its step path; the best rectangle's fit, then its
-// rectangle test), about two in five of its measures on the campus at 0.25 m under a metre of
-// wobble, all within the last eight. Kept by value and compared bit for bit: a measure found here
-// is the one boundary_distances would make.
-class DistanceMemo {
+// Whether rings kept by value are the given ones, bit for bit.
+bool same_rings(const std::vector<Ring>& kept, const std::vector<const Ring*>& rings) {
+  if (kept.size() != rings.size()) return false;
+  for (std::size_t r = 0; r < rings.size(); ++r)
+    if (!same_points(kept[r], *rings[r])) return false;
+  return true;
+}
+
+// The last N entries of a per-thread memo (Entry has a `used` stamp, 0 while empty), the least
+// recently used making room.
+template <class Entry, std::size_t N>
+class Recent {
  public:
-  struct Measure {
-    std::vector<std::pair<double, double>> distances;
-    std::vector<std::size_t> nearest;
-  };
-  const Measure* find(const Ring& ring, const PolygonWithHoles& polygon) {
+  template <class Same>
+  Entry* find(const Same& same) {
     for (Entry& e : entries_)
-      if (e.used > 0 && same_outline(e, polygon) && same_points(e.ring, ring)) {
+      if (e.used > 0 && same(e)) {
         e.used = ++clock_;
-        return &e.measure;
+        return &e;
       }
     return nullptr;
   }
-  // (The least recently used entry makes room.)
-  const Measure& keep(const Ring& ring, const PolygonWithHoles& polygon, Measure measure) {
+  // The entry to fill, empty until kept() once whole (a copy that throws leaves none half written).
+  Entry& room() {
     Entry& e = *std::min_element(entries_.begin(), entries_.end(), [](const Entry& a, const Entry& b) { return a.used < b.used; });
-    e.used = 0;  // (empty until whole: a copy that throws leaves no entry half written)
-    e.ring = ring;
-    e.outline.clear();
-    for (const Ring* r : rings_of(polygon)) e.outline.push_back(*r);
-    e.measure = std::move(measure);
+    e.used = 0;
+    return e;
+  }
+  Entry& kept(Entry& e) {
     e.used = ++clock_;
-    return e.measure;
+    return e;
   }
 
  private:
-  struct Entry {
-    Ring ring;
-    std::vector<Ring> outline;  // outer ring, then holes
-    Measure measure;
-    std::uint64_t used = 0;     // 0: empty
-  };
-  static bool same_outline(const Entry& e, const PolygonWithHoles& polygon) {
-    if (e.outline.size() != 1 + polygon.holes.size() || !same_points(e.outline[0], polygon.outer)) return false;
-    for (std::size_t h = 0; h < polygon.holes.size(); ++h)
-      if (!same_points(e.outline[h + 1], polygon.holes[h])) return false;
-    return true;
-  }
-  std::array<Entry, 8> entries_;
+  std::array<Entry, N> entries_;
   std::uint64_t clock_ = 0;
 };
 
-// The grids over the last few polygons of many edges, per thread (a building's contour: the model
-// choice measures how far each outline it weighs reaches from it, and the corners' rounding
-// against it). Kept with the polygon's rings by value and compared bit for bit: a grid found here
-// is the one built again would be.
-class GridMemo {
- public:
-  const SegmentGrid& grid(const std::vector<const Ring*>& rings, std::size_t min_bucketed) {
-    for (Entry& e : entries_)
-      if (e.used > 0 && e.min_bucketed == min_bucketed && same_rings(e, rings)) {
-        e.used = ++clock_;
-        return *e.grid;
-      }
-    Entry& e = *std::min_element(entries_.begin(), entries_.end(), [](const Entry& a, const Entry& b) { return a.used < b.used; });
-    e.used = 0;  // (empty until whole)
-    e.rings.clear();
-    std::vector<SegmentGrid::Segment> edges;
-    for (const Ring* r : rings) e.rings.push_back(*r), SegmentGrid::add_ring(*r, edges);
-    e.grid = std::make_unique<SegmentGrid>(std::move(edges), min_bucketed);
-    e.min_bucketed = min_bucketed;
-    e.used = ++clock_;
-    return *e.grid;
-  }
-
- private:
-  struct Entry {
-    std::vector<Ring> rings;
-    std::size_t min_bucketed = 0;
-    std::unique_ptr<SegmentGrid> grid;
-    std::uint64_t used = 0;  // 0: empty
-  };
-  static bool same_rings(const Entry& e, const std::vector<const Ring*>& rings) {
-    if (e.rings.size() != rings.size()) return false;
-    for (std::size_t r = 0; r < rings.size(); ++r)
-      if (!same_points(e.rings[r], *rings[r])) return false;
-    return true;
-  }
-  std::array<Entry, 2> entries_;
-  std::uint64_t clock_ = 0;
+// A measure of a contour ring against an outline: the model choice measures the same outline
+// against the same contour from several of its steps (an outline's contour fit, then its
+// rectangle test and its step path; the best rectangle's fit, then its rectangle test), about two
+// in five of its measures on the campus at 0.25 m under a metre of wobble, all within the last
+// eight. Kept by value and compared bit for bit: a measure found among them is the one
+// boundary_distances would make.
+struct Measure {
+  std::vector<std::pair<double, double>> distances;
+  std::vector<std::size_t> nearest;
+};
+struct KeptMeasure {
+  Ring ring;
+  std::vector<Ring> outline;  // outer ring, then holes
+  Measure measure;
+  std::uint64_t used = 0;
 };
 
-DistanceMemo::Measure measure_distances(const Ring& ring, const PolygonWithHoles& polygon) {
-  DistanceMemo::Measure measure;
-  const std::vector<const Ring*> rings = rings_of(polygon);
-  std::size_t edge_count = 0;
-  for (const Ring* r : rings) edge_count += r->size();
-  if (edge_count == 0) return measure;
-  // (A polygon of many edges, a contour, from the memo; an outline's few built here.)
+// A grid over a polygon of many edges (a building's contour: the model choice measures how far
+// each outline it weighs reaches from it, and the corners' rounding against it), the last two
+// kept, compared bit for bit: a grid found among them is the one built again would be.
+struct KeptGrid {
+  std::vector<Ring> rings;
+  std::unique_ptr<SegmentGrid> grid;
+  std::uint64_t used = 0;
+};
+constexpr std::size_t kKeptGridEdges = 256;  // (an outline's few dozen edges are built each time)
+
+Measure measure_distances(const Ring& ring, const PolygonWithHoles& polygon) {
+  Measure measure;
   std::optional<SegmentGrid> own;
-  const SegmentGrid& grid = edge_count >= kRememberedGridEdges ? remembered_grid(rings, 24) : own.emplace([&] {
-    std::vector<SegmentGrid::Segment> edges;
-    for (const Ring* r : rings) SegmentGrid::add_ring(*r, edges);
-    return edges;
-  }(), 24);
+  const SegmentGrid& grid = grid_over(rings_of(polygon), own);
+  if (grid.segments().empty()) return measure;
   std::vector<std::pair<double, double>>& distances = measure.distances;
   distances.reserve(ring.size());
   measure.nearest.reserve(ring.size());
@@ -268,18 +236,40 @@ DistanceMemo::Measure measure_distances(const Ring& ring, const PolygonWithHoles
 
 }  // namespace
 
-const SegmentGrid& remembered_grid(const std::vector<const Ring*>& rings, std::size_t min_bucketed) {
-  thread_local GridMemo memo;
-  return memo.grid(rings, min_bucketed);
+const SegmentGrid& grid_over(const std::vector<const Ring*>& rings, std::optional<SegmentGrid>& own) {
+  std::size_t edge_count = 0;
+  for (const Ring* r : rings) edge_count += r->size();
+  const auto built = [&] {
+    std::vector<SegmentGrid::Segment> edges;
+    for (const Ring* r : rings) SegmentGrid::add_ring(*r, edges);
+    return SegmentGrid(std::move(edges), 24);
+  };
+  if (edge_count < kKeptGridEdges) return own.emplace(built());
+  thread_local Recent<KeptGrid, 2> memo;
+  if (KeptGrid* found = memo.find([&](const KeptGrid& e) { return same_rings(e.rings, rings); })) return *found->grid;
+  KeptGrid& e = memo.room();
+  e.rings.clear();
+  for (const Ring* r : rings) e.rings.push_back(*r);
+  e.grid = std::make_unique<SegmentGrid>(built());
+  return *memo.kept(e).grid;
 }
 
 std::vector<std::pair<double, double>> boundary_distances(const Ring& ring, const PolygonWithHoles& polygon,
                                                           std::vector<std::size_t>* nearest_segments) {
-  thread_local DistanceMemo memo;
-  const DistanceMemo::Measure* found = memo.find(ring, polygon);
-  const DistanceMemo::Measure& measure = found ? *found : memo.keep(ring, polygon, measure_distances(ring, polygon));
-  if (nearest_segments) *nearest_segments = measure.nearest;
-  return measure.distances;
+  thread_local Recent<KeptMeasure, 8> memo;
+  const std::vector<const Ring*> outline = rings_of(polygon);
+  const KeptMeasure* found = memo.find([&](const KeptMeasure& e) { return same_rings(e.outline, outline) && same_points(e.ring, ring); });
+  if (!found) {
+    Measure measure = measure_distances(ring, polygon);
+    KeptMeasure& e = memo.room();
+    e.ring = ring;
+    e.outline.clear();
+    for (const Ring* r : outline) e.outline.push_back(*r);
+    e.measure = std::move(measure);
+    found = &memo.kept(e);
+  }
+  if (nearest_segments) *nearest_segments = found->measure.nearest;
+  return found->measure.distances;
 }
 
 double mean_distance(const std::vector<std::pair<double, double>>& distances) {

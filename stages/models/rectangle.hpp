@@ -4,9 +4,11 @@
 // its boundary, so the fit needs no corner and no run: it holds on buildings of a dozen pixels),
 // each side then moved onto the median of the contour nearest to it.
 #pragma once
+#include <optional>
 #include <vector>
 
 #include "common/option.hpp"
+#include "geometry/segment_grid.hpp"
 #include "geometry/types.hpp"
 
 namespace lodforge {
@@ -91,14 +93,11 @@ struct ModelOptions {
 // notch's. Empty for a degenerate ring.
 Ring moment_rectangle(const Ring& ring, const Vec2& normal);
 
-class SegmentGrid;
-
-// The grid over the rings' edges (SegmentGrid(edges, min_bucketed)), from the last two asked for on
-// this thread where the rings are the same, bit for bit: for polygons of many edges (a building's
-// contour, kRememberedGridEdges or more) measured against again and again. Valid until the next
-// call: not to be held across another (boundary_distances and corner_rounding_gap call it).
-const SegmentGrid& remembered_grid(const std::vector<const Ring*>& rings, std::size_t min_bucketed);
-inline constexpr std::size_t kRememberedGridEdges = 256;
+// The grid over the rings' edges (SegmentGrid(edges, 24)): built into `own` for a polygon of few
+// edges (an outline), else one of the last two of many edges (a building's contour, measured
+// against again and again) kept on this thread where the rings are the same, bit for bit. Valid
+// while `own` lives and until the next call (boundary_distances and corner_rounding_gap call it).
+const SegmentGrid& grid_over(const std::vector<const Ring*>& rings, std::optional<SegmentGrid>& own);
 
 // The distance of each of the ring's edge midpoints to the polygon's boundary, with the edge's
 // length: (distance, length), per edge; and, when asked, the nearest of the polygon's edges to

@@ -593,17 +593,12 @@ double corner_rounding_gap(const PolygonWithHoles& outline, const std::vector<Ri
   }
   if (count) *count = corners.size();
   if (corners.size() < 3) return 0.0;
-  // Each corner's squared distance to the contour (SegmentGrid; a contour of many edges's from the
-  // grids remembered, which the model choice measures outlines against).
+  // Each corner's squared distance to the contour (the grid the model choice measures outlines
+  // against too).
   std::vector<const Ring*> rings;
-  std::size_t edges = 0;
-  for (const Ring& ring : contour) rings.push_back(&ring), edges += ring.size();
+  for (const Ring& ring : contour) rings.push_back(&ring);
   std::optional<SegmentGrid> own;
-  const SegmentGrid& grid = edges >= kRememberedGridEdges ? remembered_grid(rings, 24) : own.emplace([&] {
-    std::vector<SegmentGrid::Segment> segments;
-    for (const Ring& ring : contour) SegmentGrid::add_ring(ring, segments);
-    return segments;
-  }());
+  const SegmentGrid& grid = grid_over(rings, own);
   std::vector<double> gaps;
   gaps.reserve(corners.size());
   for (const Vec2& corner : corners) gaps.push_back(grid.nearest_squared(corner));
@@ -844,11 +839,11 @@ bool StepPath::merge_next() {
     const std::pair<Vec2, Vec2>& wall = walls_[std::size_t(c)];
     const Vec2 wall_low = wall.first.cwiseMin(wall.second), wall_high = wall.first.cwiseMax(wall.second);
     // The cells within bound_ of the wall's box (a cell more, each way, for the rounding).
+    // (Clamped to the grid: an infinite bound reaches every cell, as does one not a number.)
     const auto range = [&](double from, double to, double origin, long count, long* first, long* last) {
       const double a = std::floor((from - bound_ - origin) / cell_) - 1, b = std::floor((to + bound_ - origin) / cell_) + 1;
-      *first = a > 0 ? (a < double(count) ? long(a) : count) : 0;  // (inf and NaN: every cell)
-      *last = b < double(count - 1) ? (b >= 0 ? long(b) : -1) : count - 1;
-      if (!(a == a) || !(b == b)) *first = 0, *last = count - 1;
+      *first = a == a ? long(std::clamp(a, 0.0, double(count))) : 0;
+      *last = b == b ? long(std::clamp(b, -1.0, double(count - 1))) : count - 1;
     };
     long x0, x1, y0, y1;
     range(wall_low.x(), wall_high.x(), low_.x(), nx_, &x0, &x1);
