@@ -430,7 +430,7 @@ TEST_F(Cli, SynthFromFootprintsRegularizeWithEachMethodAndEvaluate) {
     }
     GDALClose(out);
     if (name == "deformation") {
-      const std::set<std::string> known = {"regular", "lines", "lattice", "rectangle", "coarse_lattice", "staircase_lines", "merged_steps"};
+      const std::set<std::string> known = {"regular", "lines", "lattice", "rectangle", "coarse_lattice", "staircase_lines", "merged_steps", "ellipse"};
       for (const auto& [model, n] : models) EXPECT_TRUE(known.count(model)) << model;
       EXPECT_EQ((stats.at("models").get<std::map<std::string, int>>()), models) << stats.dump();
     } else {

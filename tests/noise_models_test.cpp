@@ -642,7 +642,76 @@ TEST(Models, TheMomentEllipseExplainsRoundShapesAndNotRectangles) {
   }
   rounded = densified(rounded);
   EXPECT_LT(rectangle_fit(rounded), 0.5 * moment_ellipse_fit(rounded));
+  // The distances to first order (models.ellipse_turn_deg's measure) are the drawn ellipse's
+  // within a tenth, also a metre off it (and within the 90 chords' own 4 mm on the disc and oval).
+  for (const Ring* r : std::initializer_list<const Ring*>{&disc, &oval, &hexagon, &house, &rounded})
+    EXPECT_NEAR(mean_distance(moment_ellipse_distances(*r)), moment_ellipse_fit(*r), 0.1 * moment_ellipse_fit(*r) + 5e-3) << r->size();
   EXPECT_EQ(moment_ellipse_fit(Ring{c, c + Vec2(1, 0)}), std::numeric_limits<double>::infinity());
+}
+
+// The moment ellipse as a polygon: each vertex turning by about the same angle (80 of 4.5 degrees), its
+// area the ring's, its vertices on the ellipse within the chords' share of that area.
+TEST(Models, TheMomentEllipseIsDrawnWithEqualTurns) {
+  Ring oval;
+  const Vec2 c(5e5, 5e6);
+  const double angle = 0.4;
+  const Vec2 u(std::cos(angle), std::sin(angle)), v(-std::sin(angle), std::cos(angle));
+  for (int k = 0; k < 720; ++k) oval.push_back(c + 15 * std::cos(2 * M_PI * k / 720) * u + 8 * std::sin(2 * M_PI * k / 720) * v);
+  const Ring drawn = moment_ellipse(oval, 4.5);
+  ASSERT_EQ(drawn.size(), 80u);
+  EXPECT_NEAR(signed_area(drawn), signed_area(oval), 1e-6 * signed_area(oval));
+  for (std::size_t i = 0; i < drawn.size(); ++i) {
+    EXPECT_NEAR(turn_deg(edge_vector(drawn, (i + drawn.size() - 1) % drawn.size()), edge_vector(drawn, i)), 4.5, 0.05) << i;
+    const Vec2 d = drawn[i] - c;
+    const double x = d.dot(u) / 15, y = d.dot(v) / 8;
+    EXPECT_NEAR(std::hypot(x, y), 1.0, 2e-3) << i;  // (the chords' sagitta, 2.25 degrees of turn: under 0.1 % of a radius)
+  }
+  // To first order, the distances of the oval's own edge midpoints: its chords' sagitta, under 2 mm.
+  const auto distances = moment_ellipse_distances(oval);
+  ASSERT_EQ(distances.size(), oval.size());
+  for (const auto& [d, length] : distances) EXPECT_LT(d, 2e-3);
+  EXPECT_EQ(moment_ellipse(oval, 50.0).size(), 8u);  // (at least 8)
+  EXPECT_TRUE(moment_ellipse_distances(Ring{c, c + Vec2(1, 0)}).empty());
+  EXPECT_TRUE(moment_ellipse(Ring{c, c + Vec2(1, 0)}, 4.5).empty());
+  EXPECT_TRUE(moment_ellipse(oval, 0.0).empty());
+}
+
+// A round building of 8.4 m radius (the campus's) and a 15 x 9 m oval, clean and under 0.25 m of
+// wobble at 0.1 to 0.5 m pixels, become their ellipse (at 0.25 m and coarser they were polygons of
+// 7-11 chords before models.ellipse_turn_deg; at 0.1 m under the wobble, read as on a lattice, a
+// polygon of its walls); an octagon and a pentagon of about that size do not, at 0.1 m to 1 m.
+// (At 1 m the disc is 17 pixels across and its best square lies under three times as far as its
+// ellipse: a polygon. The clean octagon at 0.1 m is left out: on a lattice, its lattice outline, a
+// square, explains it within the noise measured about the lattice's lines, which its four oblique
+// walls inflate; the ellipse, which explains it better, takes it from that square.)
+TEST(Models, ARoundBuildingIsItsEllipseAndAnOctagonStaysAPolygon) {
+  const auto ngon = [](int n, double a, double b, double phase) {
+    PolygonWithHoles p;
+    for (int k = 0; k < n; ++k) p.outer.push_back(Vec2(30 + a * std::cos(2 * M_PI * k / n + phase), 30 + b * std::sin(2 * M_PI * k / n + phase)));
+    return p;
+  };
+  const PolygonWithHoles disc = ngon(360, 8.4, 8.4, 0), oval = test::rotated(ngon(360, 7.5, 4.5, 0), 25.0);
+  const PolygonWithHoles octagon = ngon(8, 10, 10, 0.2), pentagon = ngon(5, 11, 11, 0.3);
+  for (const double pixel : {0.1, 0.25, 0.5, 1.0}) {
+    for (const double wobble : {0.0, 0.25}) {
+      const std::string at = "pixel " + std::to_string(pixel) + ", wobble " + std::to_string(wobble);
+      for (const PolygonWithHoles* round : {&disc, &oval}) {
+        if (pixel > 0.5) continue;
+        const BuildingResult r = regularize(test::rasterize_shape_m(*round, pixel, wobble, 8.0, 0.0, 1), pixel);
+        ASSERT_TRUE(r.ok) << at << ": " << r.reason;
+        EXPECT_EQ(r.model, "ellipse") << at;
+        EXPECT_EQ(r.footprint.outer.size(), 80u) << at;
+        EXPECT_GE(test::iou(r.footprint, *round), wobble > 0 ? 0.96 : 0.98) << at;
+      }
+      for (const PolygonWithHoles* polygon : {&octagon, &pentagon}) {
+        if (polygon == &octagon && pixel == 0.1 && wobble == 0) continue;
+        const BuildingResult r = regularize(test::rasterize_shape_m(*polygon, pixel, wobble, 8.0, 0.0, 1), pixel);
+        ASSERT_TRUE(r.ok) << at << ": " << r.reason;
+        EXPECT_NE(r.model, "ellipse") << at << ", " << polygon->outer.size() << " corners";
+        EXPECT_LE(r.footprint.outer.size(), 10u) << at;
+      }
+    }
+  }
 }
 
 // A 20 x 10 m house with an annex of 4 x 1 m on its long wall: the moments alone would widen
@@ -1102,29 +1171,37 @@ TEST(NoisyMasks, ABatchLendsABlobItsStreetsLattice) {
 // contour lies metres off lattice lines, which the noise measured about them took for noise:
 // a rectangle then explained it "within the noise" (IoU 0.83, all four masks). The noise for the
 // model choice is at most models.arc_noise_ratio times the spread about parabolas along the same
-// runs: mean IoU 0.92.
+// runs: mean IoU 0.92 (both without the ellipse, models.ellipse_turn_deg). With the ellipse, each
+// of the four masks is its ellipse: mean IoU 0.989.
 TEST(NoisyMasks, ARoundBuildingIsNoRectangleAtFinePixels) {
   Ring circle;
   for (int k = 0; k < 72; ++k) circle.push_back(Vec2(11 * std::cos(k * M_PI / 36), 11 * std::sin(k * M_PI / 36)));
   const PolygonWithHoles truth{circle, {}};
-  CoreOptions unbounded;
+  CoreOptions bounded, unbounded;
+  bounded.models.ellipse_turn_deg = unbounded.models.ellipse_turn_deg = 0;
   unbounded.models.arc_noise_ratio = 0;
-  double iou = 0, iou_unbounded = 0;
-  int round = 0;
+  double iou = 0, iou_unbounded = 0, iou_ellipse = 0;
+  int round = 0, ellipses = 0;
   for (std::uint64_t seed = 1; seed <= 4; ++seed) {
     const test::RasterizedShape shape = test::rasterize_shape_m(truth, 0.1, 0.25, 8.0, 0.5, seed);
     ASSERT_EQ(shape.buildings.size(), 1u);
-    const BuildingResult r = regularize_building(shape.buildings[0].rings, 0.1, CoreOptions{});
+    const BuildingResult r = regularize_building(shape.buildings[0].rings, 0.1, bounded);
     ASSERT_TRUE(r.ok) << "seed " << seed << ": " << r.reason;
     round += r.footprint.outer.size() > 6;
     iou += test::iou(r.footprint, truth) / 4;
     const BuildingResult r_unbounded = regularize_building(shape.buildings[0].rings, 0.1, unbounded);
     ASSERT_TRUE(r_unbounded.ok) << "seed " << seed << ": " << r_unbounded.reason;
     iou_unbounded += test::iou(r_unbounded.footprint, truth) / 4;
+    const BuildingResult r_default = regularize_building(shape.buildings[0].rings, 0.1, CoreOptions{});
+    ASSERT_TRUE(r_default.ok) << "seed " << seed << ": " << r_default.reason;
+    ellipses += r_default.model == "ellipse";
+    iou_ellipse += test::iou(r_default.footprint, truth) / 4;
   }
   EXPECT_GE(round, 3);  // (one of the four masks still becomes a rectangle)
   EXPECT_GE(iou, 0.90);
   EXPECT_GE(iou, iou_unbounded + 0.05) << "without the bound: " << iou_unbounded;
+  EXPECT_EQ(ellipses, 4);
+  EXPECT_GE(iou_ellipse, 0.98);
 }
 
 // A 30 x 14 m house under a metre of wobble at 10 cm pixels: the plain outline, whose thresholds

@@ -359,7 +359,7 @@ TEST_F(SynthRun, AnotherBuildOfLodforgeResumesNothing) {
 TEST_F(SynthRun, TheFilesAndTheReportTellEachBuildingsModel) {
   const fs::path j = job("j", seg, 100);
   ASSERT_EQ(lodforge("run " + j.string()).code, 0);
-  const std::set<std::string> known{"regular", "lines", "lattice", "rectangle", "coarse_lattice", "staircase_lines", "merged_steps"};
+  const std::set<std::string> known{"regular", "lines", "lattice", "rectangle", "coarse_lattice", "staircase_lines", "merged_steps", "ellipse"};
   std::map<std::string, long long> in_files;
   std::size_t ok = 0, fallback = 0;
   GDALAllRegister();

@@ -5,6 +5,7 @@
 // Directions within snap_deg of parallel or perpendicular are fitted jointly and made exactly so
 // (an addition to the paper: it measures better, see docs/paper-reading.md); others stay free.
 #pragma once
+#include <algorithm>
 #include <vector>
 
 #include "common/option.hpp"
@@ -79,6 +80,13 @@ bool drop_insignificant_directions(const std::vector<Ring>& rings, const EdgeLab
 // boundary noise, building_noise, in map units) gets a direction of its own, appended to
 // `directions`. Shared directions keep short walls regular; a long wall is placed where its
 // pixels are (a 100 m wall 1° off its shared direction is 0.9 m off at its ends).
+// Whether an outline this long (m) is too short to show a round shape from a rectangle: under
+// min_round_px pixels or min_round_m, or under min_round_noise times its mask's boundary noise
+// (noise_floor_m). Such a building is taken as on a lattice.
+inline bool too_short_to_show_round(double outline_m, double pixel_size, double noise_floor_m, const RefineOptions& o) {
+  return outline_m < o.min_round_noise * noise_floor_m || outline_m < std::max(o.min_round_px * pixel_size, o.min_round_m);
+}
+
 // Returns the number of runs released.
 int release_runs(const std::vector<Ring>& rings, EdgeLabels& labels, std::vector<Vec2>& directions, double pixel_size,
                  double building_noise, const RefineOptions& options);

@@ -316,21 +316,75 @@ bool leaves_a_stretch(const std::vector<std::pair<double, double>>& simple, cons
   return false;
 }
 
-double moment_ellipse_fit(const Ring& ring) {
-  if (ring.size() < 3) return std::numeric_limits<double>::infinity();
+namespace {
+
+// The ellipse of the ring's centroid and second moments per unit area: centre, semi-axes a >= b
+// along u and v (u turned left is v). None for a degenerate ring or a clockwise one.
+struct Ellipse {
+  Vec2 centre, u, v;
+  double a, b;
+};
+std::optional<Ellipse> ellipse_of(const Ring& ring) {
+  if (ring.size() < 3) return std::nullopt;
   const Moments m = moments_of(ring);
-  if (m.area <= 0) return std::numeric_limits<double>::infinity();
+  if (m.area <= 0) return std::nullopt;
   const Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> eig(m.central);
   // An ellipse of semi-axes a, b: area pi a b, second moments a^2 / 4 and b^2 / 4 of it along its axes.
   const double a = 2 * std::sqrt(std::max(0.0, eig.eigenvalues()[1]) / m.area), b = 2 * std::sqrt(std::max(0.0, eig.eigenvalues()[0]) / m.area);
-  if (!(a > 0) || !(b > 0)) return std::numeric_limits<double>::infinity();
-  const Vec2 u = eig.eigenvectors().col(1), v = eig.eigenvectors().col(0);
+  if (!(a > 0) || !(b > 0)) return std::nullopt;
+  const Vec2 u = eig.eigenvectors().col(1);
+  return Ellipse{m.centroid, u, Vec2(-u.y(), u.x()), a, b};
+}
+
+}  // namespace
+
+double moment_ellipse_fit(const Ring& ring) {
+  const std::optional<Ellipse> e = ellipse_of(ring);
+  if (!e) return std::numeric_limits<double>::infinity();
   Ring ellipse;
   for (int k = 0; k < 90; ++k) {
     const double t = 2 * M_PI * k / 90;
-    ellipse.push_back(m.centroid + a * std::cos(t) * u + b * std::sin(t) * v);
+    ellipse.push_back(e->centre + e->a * std::cos(t) * e->u + e->b * std::sin(t) * e->v);
   }
   return mean_distance_to_boundary(ring, {ellipse, {}});
+}
+
+std::vector<std::pair<double, double>> moment_ellipse_distances(const Ring& ring) {
+  const std::optional<Ellipse> e = ellipse_of(ring);
+  if (!e) return {};
+  // f = x^2 / a^2 + y^2 / b^2 - 1 in the ellipse's frame, its distance about |f| / |grad f|.
+  const double ia2 = 1 / (e->a * e->a), ib2 = 1 / (e->b * e->b);
+  std::vector<std::pair<double, double>> distances;
+  distances.reserve(ring.size());
+  for (std::size_t i = 0; i < ring.size(); ++i) {
+    const Vec2 edge = edge_vector(ring, i), d = ring[i] + 0.5 * edge - e->centre;
+    const double x = d.dot(e->u), y = d.dot(e->v);
+    const double gx = x * ia2, gy = y * ib2, f = x * gx + y * gy - 1, gradient = 2 * std::sqrt(gx * gx + gy * gy);
+    distances.emplace_back(gradient > 0 ? std::abs(f) / gradient : e->b, edge.norm());
+  }
+  return distances;
+}
+
+Ring moment_ellipse(const Ring& ring, double turn_deg) {
+  const std::optional<Ellipse> e = ellipse_of(ring);
+  if (!e || !(turn_deg > 0)) return {};
+  // The point whose outward normal is (cos t, sin t) in the ellipse's frame: (a^2 cos t, b^2 sin t) / s.
+  const int n = std::max(8, int(std::ceil(360.0 / turn_deg - 1e-9)));
+  const double a2 = e->a * e->a, b2 = e->b * e->b;
+  std::vector<Vec2> offsets;
+  for (int k = 0; k < n; ++k) {
+    const double t = 2 * M_PI * k / n, c = std::cos(t), s = std::sin(t);
+    const double norm = std::sqrt(a2 * c * c + b2 * s * s);
+    offsets.push_back((a2 * c / norm) * e->u + (b2 * s / norm) * e->v);
+  }
+  // Its chords cut the ellipse's area a little: scaled about the centre to the ring's own area.
+  Ring ellipse;
+  for (const Vec2& d : offsets) ellipse.push_back(e->centre + d);
+  const double drawn = signed_area(ellipse);
+  if (!(drawn > 0)) return {};
+  const double scale = std::sqrt(M_PI * e->a * e->b / drawn);
+  for (std::size_t k = 0; k < ellipse.size(); ++k) ellipse[k] = e->centre + scale * offsets[k];
+  return ellipse;
 }
 
 Ring best_rectangle(const Ring& ring, const std::vector<Vec2>& normals, double* fit) {

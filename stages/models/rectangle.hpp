@@ -5,6 +5,7 @@
 // each side then moved onto the median of the contour nearest to it.
 #pragma once
 #include <optional>
+#include <utility>
 #include <vector>
 
 #include "common/option.hpp"
@@ -28,6 +29,8 @@ struct ModelOptions {
   double rectangle_tolerance = 1.0;  // ... and a rectangle, by a high percentile of the distances ...
   double rectangle_quantile = 0.95;  // ... this one
   double rectangle_stretch_noise = 6.0;  // ... and leaving no stretch of contour farther than the outline by this many standard errors
+  double ellipse_turn_deg = 4.5;     // then a building becomes its moments' ellipse, a vertex every this many degrees of turn, where that explains its contour better
+  double ellipse_rectangle_ratio = 3.0;  // ... and lies this many times as near it as its best rectangle
   double coarse_scale = 2.0;         // the lattice outline drawn as if the noise were this many times (and its square) larger competes
   double coarse_correlation_noise = 2.0;  // ... by an information criterion counting one sample per this many noises of contour
   int staircase_corners = 4;         // then a staircase of this many square corners turning left and right in turn drawn as one oblique wall competes
@@ -64,6 +67,8 @@ struct ModelOptions {
     v("rectangle_quantile", rectangle_quantile, "... that percentile, as a share (0.95: the rectangle may leave 5 % of the contour, by length, farther than the outline does plus the tolerance)", Check::between(0.5, 1));
     v("rectangle_stretch_noise", rectangle_stretch_noise, "... and when it leaves no stretch of contour that the outline explains: along no stretch (from corners.snap_correlation_m long, at least a pixel, doubling, to half the ring) may the contour lie farther from the rectangle than from the outline, on average, by more than this many standard errors of such a mean (the boundary noise times the square root of that correlation length over the stretch's length): a wing, a notch or the bow of an arc, metres long, that a percentile passes over (0 = off)", Check::at_least(0));
     v("arc_noise_ratio", arc_noise_ratio, "the boundary noise the model choice allows for (every tolerance in noises above) is at most this many times the contour's spread about parabolas fitted along the same runs of the lattice: a round building's contour lies metres off lattice lines, which is no noise, and a rectangle or a pentagon would explain it 'within the noise'; the floor min_noise_px still applies, and the outlines themselves (runs, steps, curves) are drawn with the noise as measured (0 = no bound)", Check::at_least(0));
+    v("ellipse_turn_deg", ellipse_turn_deg, "after the outlines below, a building without holes becomes the ellipse of its contour's centroid, area and second moments, drawn with a vertex wherever its tangent has turned by this many degrees (4.5: 80 vertices, each turning by less than the 5 degrees eval counts as a corner), where that explains the contour better (mean distance, the ellipse's to first order) by the information criterion coarse_scale's outlines compete by (five parameters against two a vertex) and leaves out no stretch of it that the outline explains (rectangle_stretch_noise), unless the outline leaves one the ellipse explains. A building without a lattice (refinement.min_lattice_share) or, on one, long enough to show its shape (refinement.min_round_*: a wobble's flanks turn a round building's normals back and forth, and it reads as on a lattice). A round or oval building, whose runs the labeling cuts into chords of a few metres, each bowing less than the curve test sees at coarse pixels (corners.curve_px), is its curve, not a polygon of 7-11 chords; an octagon's or a pentagon's corners lie farther from their ellipse than the polygon's fewer parameters pay for (0 = off)", Check::between(0, 45));
+    v("ellipse_rectangle_ratio", ellipse_rectangle_ratio, "... and where the contour lies at least this many times as near its ellipse as its best rectangle (mean distances; best_rectangle, the same five parameters): a disc's contour lies 0.07 of its radius from its best square, a small house whose corners a segmentation rounded or blurred about as near its rectangle as its ellipse (within twice on the campus's, blurred by 1 m or rounded by 2 m at 0.5 m), and stays a polygon", Check::at_least(1));
     v("coarse_scale", coarse_scale, "the chosen outline competes with the lattice outline drawn as if the boundary noise were this many times, and its square, as large (when the building has a lattice outline, the chosen one more than 4 vertices and no arc, three vertices in a row turning by 0.5-20 degrees, and within the time budget); one with fewer vertices and a lower Bayesian information criterion replaces it: n ln(d^2) + 2 ln(n) per vertex, d the contour's mean distance to the outline (at least a tenth of a pixel), n the contour's length over coarse_correlation_noise noises (at least a pixel; n at least 2). A wobble whose wavelength is a few times its amplitude cuts the contour into a run at each flank, measures too little noise and leaves its crests as notches; the criterion weighs the fit against the vertices rather than against that noise (docs/quality.md, a shorter wobble; 1 or less = off)", Check::at_least(0));
     v("coarse_correlation_noise", coarse_correlation_noise, "... the length of contour, in boundary noises, that counts as one independent sample for that criterion, which staircase_corners and merge_patience use too (about a wobble's correlation length)", Check::above(0));
     v("staircase_corners", staircase_corners, "after coarse_scale, under the same conditions and criterion: the chosen outline with every staircase (at least this many vertices in a row turning square, left and right in turn: a wall at an angle to the lattice drawn as steps) drawn as the line through the middles of its steps' walls, from the wall before it to the wall after, competes (0 = off; fewer than 3 count as 3)", Check::between(0, 1000));
@@ -123,6 +128,17 @@ bool leaves_a_stretch(const std::vector<std::pair<double, double>>& simple, cons
 // clockwise one. A round building's contour lies near it; a rectangle's corners reach beyond it,
 // its sides' middles lie inside it.
 double moment_ellipse_fit(const Ring& ring);
+
+// The distance of each of the ring's edge midpoints to that ellipse to first order, with the
+// edge's length, as boundary_distances gives them: |f| / |grad f|, f = 0 on the ellipse (its
+// error about d^2 / 2r at a distance d where the ellipse bends with radius r). Empty for a
+// degenerate or clockwise ring.
+std::vector<std::pair<double, double>> moment_ellipse_distances(const Ring& ring);
+
+// That ellipse (the ring's centroid, area and second moments) as a counter-clockwise polygon with a
+// vertex wherever its tangent has turned by turn_deg (at least 8 vertices), its area the ellipse's:
+// an arc's chords, each turning alike, not corners. Empty for a degenerate or clockwise ring.
+Ring moment_ellipse(const Ring& ring, double turn_deg);
 
 // The best moment rectangle of the ring over the candidate normals, its principal axes and
 // every 3 degrees: the one whose boundary lies closest to the ring, its sides then moved onto

@@ -173,7 +173,7 @@ bool holds_to_lattice(const std::vector<Ring>& rings, const LabelingInput& input
                       double noise_floor_m, double noise_m, const RefineOptions& o, bool* undetermined) {
   const double outline_m = perimeter(rings[0]);
   *undetermined = outline_m < o.min_round_noise * noise_floor_m;
-  if (*undetermined || outline_m < std::max(o.min_round_px * pixel_size, o.min_round_m) ||
+  if (too_short_to_show_round(outline_m, pixel_size, noise_floor_m, o) ||
       lattice_share(input.normals, input.lengths, lattice, o.lattice_deg) >= o.min_lattice_share ||
       total_turning(rings[0], input.normals[0], std::max(1.0, 2 * pixel_size)) >= o.min_turning)
     return true;

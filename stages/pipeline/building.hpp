@@ -31,7 +31,8 @@ struct BuildingResult {
                                 // walls are redrawn per stretch), "lines" (pixel thresholds), "lattice", "rectangle",
                                 // "coarse_lattice" (the lattice outline drawn for a larger noise, models.coarse_scale),
                                 // "staircase_lines" (its staircases drawn as oblique walls, models.staircase_corners),
-                                // "merged_steps" (the chosen outline with steps merged, models.merge_patience);
+                                // "merged_steps" (the chosen outline with steps merged, models.merge_patience),
+                                // "ellipse" (its moments' ellipse, models.ellipse_turn_deg);
                                 // empty for the fallback
   bool lattice_lent = false;    // its walls held to its neighbours' lattice (BuildingStart::neighbour_lattice)
   double rounding_m = 0;        // the radius the segmentation rounded its corners by, where its outline's square corners

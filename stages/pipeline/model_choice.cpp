@@ -133,6 +133,46 @@ void choose_rectangle(const std::vector<Ring>& rings, double pixel_size, const C
   result.model = "rectangle";
 }
 
+double information_criterion(double fit, std::size_t vertices, double samples, double pixel_size);
+
+// A building becomes the ellipse of its contour's moments (models.ellipse_turn_deg) where that
+// explains the contour better by the information criterion the simpler outlines compete by (five
+// parameters against two a vertex; one sample of contour per models.coarse_correlation_noise
+// noises), lies ellipse_rectangle_ratio times as near it as its best rectangle, and leaves out no
+// stretch of it that the outline explains, unless the outline leaves one the ellipse explains:
+// a round or oval building's runs are chords of a few metres, which the curve test does not see
+// bow at coarse pixels, and its outline a polygon of a few of them; an octagon's or a pentagon's
+// corners lie farther from their ellipse than their polygon's fewer parameters pay for, a small
+// house whose corners the segmentation rounded lies about as near its rectangle.
+void choose_ellipse(const std::vector<Ring>& rings, double pixel_size, const CoreOptions& co, BuildingResult& result) {
+  const ModelOptions& o = co.models;
+  if (o.ellipse_turn_deg <= 0 || rings.size() != 1 || !result.footprint.holes.empty()) return;
+  // (The ellipse measured to first order, not drawn: a polygon of 80 vertices, measured as the
+  // outlines are, cost a small building a tenth of its time.)
+  const auto ellipse_distances = moment_ellipse_distances(rings[0]);
+  if (ellipse_distances.empty()) return;
+  const auto outline_distances = boundary_distances(rings[0], result.footprint);
+  const double noise = model_noise(result, pixel_size, o);
+  const double samples = std::max(2.0, total_perimeter(rings) / std::max(pixel_size, o.coarse_correlation_noise * noise));
+  const double outline_criterion = information_criterion(mean_distance(outline_distances), vertex_count(result.footprint), samples, pixel_size);
+  const double ellipse_fit = mean_distance(ellipse_distances);
+  if (!(samples * std::log(std::pow(std::max(0.1 * pixel_size, ellipse_fit), 2)) + 5 * std::log(samples) < outline_criterion)) return;
+  // (Round, not a rectangle whose corners the segmentation rounded: its best rectangle, the same
+  // five parameters, leaves it ellipse_rectangle_ratio times as far.)
+  double rectangle_fit = 0;
+  best_rectangle(rings[0], result.directions, &rectangle_fit);
+  if (!(rectangle_fit >= o.ellipse_rectangle_ratio * ellipse_fit)) return;
+  const double correlation = noise_correlation_m(co.corners, pixel_size);
+  if (o.rectangle_stretch_noise > 0 &&
+      leaves_a_stretch(ellipse_distances, outline_distances, noise, correlation, o.rectangle_stretch_noise) &&
+      !leaves_a_stretch(outline_distances, ellipse_distances, noise, correlation, o.rectangle_stretch_noise))
+    return;
+  PolygonWithHoles candidate{moment_ellipse(rings[0], o.ellipse_turn_deg), {}};
+  if (candidate.outer.empty() || !polygon_problem(candidate).empty()) return;
+  result.footprint = std::move(candidate);
+  result.model = "ellipse";
+}
+
 // A stretch of contour: edges [first, first + count) of a ring, cyclically.
 struct Stretch {
   std::size_t ring;
@@ -695,16 +735,21 @@ void choose_outline(const LabeledBuilding& b, const CoreOptions& o, const std::f
   choice.take_lattice_outline_within_noise();
   choice.redraw_stretches();
   choice.simplify_by_criterion();
+  // (Also on a lattice: a wobble's flanks turn a round building's normals back and forth, and
+  // it reads as on a lattice; not one too short to show its shape.)
+  if (!b.on_lattice || !too_short_to_show_round(perimeter(b.rings[0]), b.pixel_size, b.context.mask_noise, o.refinement))
+    choose_ellipse(b.rings, b.pixel_size, o, result);
+  const bool on_lattice = b.on_lattice && result.model != "ellipse";
   // (Its mask's rounding not known yet: the outline kept for take_mask_rounding, where it measures
   // none of its own and could take one.)
   std::optional<PolygonWithHoles> chosen;
-  if (b.context.mask_rounding < 0 && b.on_lattice) chosen = result.footprint;
-  square_and_clean(b.rings, b.pixel_size, b.on_lattice, b.context, o, result);
+  if (b.context.mask_rounding < 0 && on_lattice) chosen = result.footprint;
+  square_and_clean(b.rings, b.pixel_size, on_lattice, b.context, o, result);
   if (chosen && result.rounding_corners >= 0 && result.rounding_m == 0)
     result.unsquared = BuildingResult::Unsquared{std::move(*chosen), b.context};
   // Where it measures a rounding of its own, the lattice outlines against the chosen one under
   // its mask's rounding: now where that is known, else kept for take_mask_rounding.
-  if (b.on_lattice && o.models.rounded_criterion > 0 && result.rounding_m > 0 && !result.rounding_pooled && b.context.mask_rounding != 0 &&
+  if (on_lattice && o.models.rounded_criterion > 0 && result.rounding_m > 0 && !result.rounding_pooled && b.context.mask_rounding != 0 &&
       !over_budget()) {
     std::vector<std::pair<PolygonWithHoles, std::string>> candidates = choice.rounding_candidates();
     if (b.context.mask_rounding > 0) {
