@@ -650,7 +650,8 @@ TEST(Models, TheMomentEllipseExplainsRoundShapesAndNotRectangles) {
 }
 
 // The moment ellipse as a polygon: each vertex turning by about the same angle (80 of 4.5 degrees), its
-// area the ring's, its vertices on the ellipse within the chords' share of that area.
+// area the ellipse's (the ring's, which is one), its vertices on the ellipse within the chords'
+// share of that area; 8 to 360 vertices.
 TEST(Models, TheMomentEllipseIsDrawnWithEqualTurns) {
   Ring oval;
   const Vec2 c(5e5, 5e6);
@@ -671,6 +672,7 @@ TEST(Models, TheMomentEllipseIsDrawnWithEqualTurns) {
   ASSERT_EQ(distances.size(), oval.size());
   for (const auto& [d, length] : distances) EXPECT_LT(d, 2e-3);
   EXPECT_EQ(moment_ellipse(oval, 50.0).size(), 8u);  // (at least 8)
+  EXPECT_EQ(moment_ellipse(oval, 0.1).size(), 360u);  // (at most 360)
   EXPECT_TRUE(moment_ellipse_distances(Ring{c, c + Vec2(1, 0)}).empty());
   EXPECT_TRUE(moment_ellipse(Ring{c, c + Vec2(1, 0)}, 4.5).empty());
   EXPECT_TRUE(moment_ellipse(oval, 0.0).empty());

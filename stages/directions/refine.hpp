@@ -74,12 +74,6 @@ bool add_missing_axis(std::vector<Vec2>& directions, const Vec2& main, const Ref
 bool drop_insignificant_directions(const std::vector<Ring>& rings, const EdgeLabels& labels, std::vector<Vec2>& directions,
                                    const Vec2& main, double noise, const RefineOptions& options);
 
-// Releases long runs from their shared direction: a run whose own least-squares direction
-// differs from its label's enough to move the run's ends by more than release_px pixels (and
-// more than twice the run's own residual noise, and than release_noise times the building's
-// boundary noise, building_noise, in map units) gets a direction of its own, appended to
-// `directions`. Shared directions keep short walls regular; a long wall is placed where its
-// pixels are (a 100 m wall 1° off its shared direction is 0.9 m off at its ends).
 // Whether an outline this long (m) is too short to show a round shape from a rectangle: under
 // min_round_px pixels or min_round_m, or under min_round_noise times its mask's boundary noise
 // (noise_floor_m). Such a building is taken as on a lattice.
@@ -87,6 +81,12 @@ inline bool too_short_to_show_round(double outline_m, double pixel_size, double 
   return outline_m < o.min_round_noise * noise_floor_m || outline_m < std::max(o.min_round_px * pixel_size, o.min_round_m);
 }
 
+// Releases long runs from their shared direction: a run whose own least-squares direction
+// differs from its label's enough to move the run's ends by more than release_px pixels (and
+// more than twice the run's own residual noise, and than release_noise times the building's
+// boundary noise, building_noise, in map units) gets a direction of its own, appended to
+// `directions`. Shared directions keep short walls regular; a long wall is placed where its
+// pixels are (a 100 m wall 1° off its shared direction is 0.9 m off at its ends).
 // Returns the number of runs released.
 int release_runs(const std::vector<Ring>& rings, EdgeLabels& labels, std::vector<Vec2>& directions, double pixel_size,
                  double building_noise, const RefineOptions& options);

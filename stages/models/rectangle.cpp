@@ -369,7 +369,8 @@ Ring moment_ellipse(const Ring& ring, double turn_deg) {
   const std::optional<Ellipse> e = ellipse_of(ring);
   if (!e || !(turn_deg > 0)) return {};
   // The point whose outward normal is (cos t, sin t) in the ellipse's frame: (a^2 cos t, b^2 sin t) / s.
-  const int n = std::max(8, int(std::ceil(360.0 / turn_deg - 1e-9)));
+  // (At most 360: every vertex turning by a degree at least, which has_arc reads as an arc.)
+  const int n = std::clamp(int(std::ceil(360.0 / turn_deg - 1e-9)), 8, 360);
   const double a2 = e->a * e->a, b2 = e->b * e->b;
   std::vector<Vec2> offsets;
   for (int k = 0; k < n; ++k) {
@@ -377,7 +378,8 @@ Ring moment_ellipse(const Ring& ring, double turn_deg) {
     const double norm = std::sqrt(a2 * c * c + b2 * s * s);
     offsets.push_back((a2 * c / norm) * e->u + (b2 * s / norm) * e->v);
   }
-  // Its chords cut the ellipse's area a little: scaled about the centre to the ring's own area.
+  // Its chords cut the ellipse's area a little: scaled about the centre to the ellipse's, pi a b
+  // (the ring's own where the ring is an ellipse; a wobbling disc's a few thousandths more).
   Ring ellipse;
   for (const Vec2& d : offsets) ellipse.push_back(e->centre + d);
   const double drawn = signed_area(ellipse);

@@ -136,9 +136,10 @@ void choose_rectangle(const std::vector<Ring>& rings, double pixel_size, const C
 double information_criterion(double fit, std::size_t vertices, double samples, double pixel_size);
 
 // A building becomes the ellipse of its contour's moments (models.ellipse_turn_deg) where that
-// explains the contour better by the information criterion the simpler outlines compete by (five
-// parameters against two a vertex; one sample of contour per models.coarse_correlation_noise
-// noises), lies ellipse_rectangle_ratio times as near it as its best rectangle, and leaves out no
+// explains the contour better by an information criterion of the form the simpler outlines compete
+// by (five parameters against two a vertex; one sample of contour per models.coarse_correlation_noise
+// of the model choice's noise, which arc_noise_ratio bounds on a round building), lies
+// ellipse_rectangle_ratio times as near it as its best rectangle, and leaves out no
 // stretch of it that the outline explains, unless the outline leaves one the ellipse explains:
 // a round or oval building's runs are chords of a few metres, which the curve test does not see
 // bow at coarse pixels, and its outline a polygon of a few of them; an octagon's or a pentagon's
@@ -171,6 +172,7 @@ void choose_ellipse(const std::vector<Ring>& rings, double pixel_size, const Cor
   if (candidate.outer.empty() || !polygon_problem(candidate).empty()) return;
   result.footprint = std::move(candidate);
   result.model = "ellipse";
+  result.lattice_lent = false;  // (no wall of it held to a lattice)
 }
 
 // A stretch of contour: edges [first, first + count) of a ring, cyclically.
@@ -737,7 +739,9 @@ void choose_outline(const LabeledBuilding& b, const CoreOptions& o, const std::f
   choice.simplify_by_criterion();
   // (Also on a lattice: a wobble's flanks turn a round building's normals back and forth, and
   // it reads as on a lattice; not one too short to show its shape.)
-  if (!b.on_lattice || !too_short_to_show_round(perimeter(b.rings[0]), b.pixel_size, b.context.mask_noise, o.refinement))
+  // (Past the time budget, not tried.)
+  if ((!b.on_lattice || !too_short_to_show_round(perimeter(b.rings[0]), b.pixel_size, b.context.mask_noise, o.refinement)) &&
+      !over_budget())
     choose_ellipse(b.rings, b.pixel_size, o, result);
   const bool on_lattice = b.on_lattice && result.model != "ellipse";
   // (Its mask's rounding not known yet: the outline kept for take_mask_rounding, where it measures
