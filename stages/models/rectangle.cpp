@@ -372,20 +372,18 @@ Ring moment_ellipse(const Ring& ring, double turn_deg) {
   // (At most 360: every vertex turning by a degree at least, which has_arc reads as an arc.)
   const int n = std::clamp(int(std::ceil(360.0 / turn_deg - 1e-9)), 8, 360);
   const double a2 = e->a * e->a, b2 = e->b * e->b;
-  std::vector<Vec2> offsets;
+  Ring ellipse;  // (about its centre, until scaled)
   for (int k = 0; k < n; ++k) {
     const double t = 2 * M_PI * k / n, c = std::cos(t), s = std::sin(t);
     const double norm = std::sqrt(a2 * c * c + b2 * s * s);
-    offsets.push_back((a2 * c / norm) * e->u + (b2 * s / norm) * e->v);
+    ellipse.push_back((a2 * c / norm) * e->u + (b2 * s / norm) * e->v);
   }
   // Its chords cut the ellipse's area a little: scaled about the centre to the ellipse's, pi a b
   // (the ring's own where the ring is an ellipse; a wobbling disc's a few thousandths more).
-  Ring ellipse;
-  for (const Vec2& d : offsets) ellipse.push_back(e->centre + d);
   const double drawn = signed_area(ellipse);
   if (!(drawn > 0)) return {};
   const double scale = std::sqrt(M_PI * e->a * e->b / drawn);
-  for (std::size_t k = 0; k < ellipse.size(); ++k) ellipse[k] = e->centre + scale * offsets[k];
+  for (Vec2& p : ellipse) p = e->centre + scale * p;
   return ellipse;
 }
 

@@ -133,7 +133,13 @@ void choose_rectangle(const std::vector<Ring>& rings, double pixel_size, const C
   result.model = "rectangle";
 }
 
-double information_criterion(double fit, std::size_t vertices, double samples, double pixel_size);
+// n ln(d^2) + k ln(n), n samples of contour: d the mean distance (at least a tenth of a pixel) for
+// the standard deviation, two parameters a vertex (an ellipse's five, kEllipseVertices).
+double information_criterion(double fit, double vertices, double samples, double pixel_size) {
+  fit = std::max(0.1 * pixel_size, fit);
+  return samples * std::log(fit * fit) + 2.0 * std::log(samples) * vertices;
+}
+constexpr double kEllipseVertices = 2.5;
 
 // A building becomes the ellipse of its contour's moments (models.ellipse_turn_deg) where that
 // explains the contour better by an information criterion of the form the simpler outlines compete
@@ -155,9 +161,9 @@ void choose_ellipse(const std::vector<Ring>& rings, double pixel_size, const Cor
   const auto outline_distances = boundary_distances(rings[0], result.footprint);
   const double noise = model_noise(result, pixel_size, o);
   const double samples = std::max(2.0, total_perimeter(rings) / std::max(pixel_size, o.coarse_correlation_noise * noise));
-  const double outline_criterion = information_criterion(mean_distance(outline_distances), vertex_count(result.footprint), samples, pixel_size);
+  const double outline_criterion = information_criterion(mean_distance(outline_distances), double(vertex_count(result.footprint)), samples, pixel_size);
   const double ellipse_fit = mean_distance(ellipse_distances);
-  if (!(samples * std::log(std::pow(std::max(0.1 * pixel_size, ellipse_fit), 2)) + 5 * std::log(samples) < outline_criterion)) return;
+  if (!(information_criterion(ellipse_fit, kEllipseVertices, samples, pixel_size) < outline_criterion)) return;
   // (Round, not a rectangle whose corners the segmentation rounded: its best rectangle, the same
   // five parameters, leaves it ellipse_rectangle_ratio times as far.)
   double rectangle_fit = 0;
@@ -273,13 +279,6 @@ bool has_arc(const PolygonWithHoles& polygon) {
   return false;
 }
 
-// n ln(d^2) + k ln(n), n samples of contour: d the mean distance (at least a tenth of a pixel) for
-// the standard deviation, two parameters a vertex.
-double information_criterion(double fit, std::size_t vertices, double samples, double pixel_size) {
-  fit = std::max(0.1 * pixel_size, fit);
-  return samples * std::log(fit * fit) + 2.0 * std::log(samples) * double(vertices);
-}
-
 // The Bayesian information criterion simpler outlines compete by, against the chosen one, and
 // the outlines it takes in turn, each the least so far.
 class Criterion {
@@ -287,7 +286,7 @@ class Criterion {
   // samples: the contour's length over the length of one independent sample of it.
   Criterion(const std::vector<Ring>& rings, double pixel_size, double samples, bool guarded, BuildingResult& result)
       : rings_(rings), pixel_size_(pixel_size), samples_(samples), guarded_(guarded), result_(result) {}
-  double of(double fit, std::size_t vertices) const { return information_criterion(fit, vertices, samples_, pixel_size_); }
+  double of(double fit, std::size_t vertices) const { return information_criterion(fit, double(vertices), samples_, pixel_size_); }
   double of(const PolygonWithHoles& p) const { return of(contour_fit(rings_, p), vertex_count(p)); }
   void start(double chosen) { best_ = chosen; }
   // Whether criterion c is below the least so far; then the outline is taken, with its model's name.
@@ -690,7 +689,7 @@ void simplify_under_rounding(const std::vector<Ring>& rings, double pixel_size, 
     return d;
   };
   const auto criterion = [&](const Distances& d, std::size_t vertices) {
-    return information_criterion(contour_fit(rings, d), vertices, samples, pixel_size);
+    return information_criterion(contour_fit(rings, d), double(vertices), samples, pixel_size);
   };
   const Distances chosen = distances(result.footprint);
   double best = criterion(chosen, vertex_count(result.footprint));
