@@ -303,11 +303,14 @@ TEST(EvalCommand, TheMasksNoiseDrawsDelftsStepsAndBays) {
 // row): where a building's wobble is larger than its mask's median, its walls' directions are as
 // much less sure. Its regularity (snaps, squarings, the lattice outline's and the rectangle's
 // tolerance) judged by its own noise up to twice the mask's (noise.regularity_ceiling 2) keeps
-// more right angles than judged by the mask's noise, for about the same IoU.
+// more right angles than judged by the mask's noise, for about the same IoU. (Its round
+// buildings, polygons of chords before they were taken as their ellipses within the mask's noise,
+// counted 64 corners, 26 of them right, judged by the mask's noise and 41, 23 right, by their own:
+// 0.859 against 0.901 with them, 0.908 against 0.925 now.)
 TEST(EvalCommand, TheBuildingsOwnNoiseKeepsItsRightAngles) {
   const auto dir = test::fresh_test_directory("lodforge_regularity_noise");
   const std::string truth = synthetic_row(dir, "0.25", 0.5, 4);
-  expect_more_right_angles(dir, truth, {"own", ""}, {"mask", "--set stages.noise.regularity_ceiling=1"}, 0.02, 0.003);
+  expect_more_right_angles(dir, truth, {"own", ""}, {"mask", "--set stages.noise.regularity_ceiling=1"}, 0.01, 0.003);
 }
 
 // The synthetic city at 2 m a pixel under a metre of wobble (bench/sweep.sh's row): a corner

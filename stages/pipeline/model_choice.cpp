@@ -151,7 +151,7 @@ constexpr double kEllipseVertices = 2.5;
 // bow at coarse pixels, and its outline a polygon of a few of them; an octagon's or a pentagon's
 // corners lie farther from their ellipse than their polygon's fewer parameters pay for, a small
 // house whose corners the segmentation rounded lies about as near its rectangle.
-void choose_ellipse(const std::vector<Ring>& rings, double pixel_size, const CoreOptions& co, BuildingResult& result) {
+void choose_ellipse(const std::vector<Ring>& rings, double pixel_size, const CoreOptions& co, double mask_noise, BuildingResult& result) {
   const ModelOptions& o = co.models;
   if (o.ellipse_turn_deg <= 0 || rings.size() != 1 || !result.footprint.holes.empty()) return;
   // (The ellipse measured to first order, not drawn: a polygon of 80 vertices, measured as the
@@ -163,12 +163,29 @@ void choose_ellipse(const std::vector<Ring>& rings, double pixel_size, const Cor
   const double samples = std::max(2.0, total_perimeter(rings) / std::max(pixel_size, o.coarse_correlation_noise * noise));
   const double outline_criterion = information_criterion(mean_distance(outline_distances), double(vertex_count(result.footprint)), samples, pixel_size);
   const double ellipse_fit = mean_distance(ellipse_distances);
-  if (!(information_criterion(ellipse_fit, kEllipseVertices, samples, pixel_size) < outline_criterion)) return;
+  // Where the noise is its mask's (pooled: mask_noise known) and the pixels resolve it
+  // (models.noise_fit_min_px), the ellipse is taken too where it explains the contour within the
+  // noise's own mean distance (models.noise_fit noises), or the outline's fit, plus fit_tolerance,
+  // as the lattice outline is (take_lattice_outline_within_noise): a wobble of a wavelength of a
+  // few metres around a round building of 60 m has as many lobes as an octagon has sides, which
+  // an outline of as many chords follows closer than the noise. (A building's own measure alone
+  // is no noise to judge by: an octagon's, its four diagonals off its lattice, is metres.)
+  const bool resolved = mask_noise > 0 && noise >= o.noise_fit_min_px * pixel_size;
+  const double noise_mean = o.noise_fit > 0 && resolved ? o.noise_fit * noise : 0.0;
+  const double tolerance = fit_tolerance(rings, pixel_size, result, co);
+  const bool within_noise =
+      noise_mean > 0 && ellipse_fit <= std::max(mean_distance(outline_distances), noise_mean) + tolerance;
+  if (!within_noise && !(information_criterion(ellipse_fit, kEllipseVertices, samples, pixel_size) < outline_criterion)) return;
   // (Round, not a rectangle whose corners the segmentation rounded: its best rectangle, the same
-  // five parameters, leaves it ellipse_rectangle_ratio times as far.)
+  // five parameters, leaves it ellipse_rectangle_ratio times as far; under a resolved noise each
+  // beyond the noise's own mean distance, in quadrature, the ellipse's at least fit_tolerance (at
+  // most its fit): under a noise that large a blob of a small house lies within the noise of its
+  // ellipse and of its rectangle alike.)
   double rectangle_fit = 0;
   best_rectangle(rings[0], result.directions, &rectangle_fit);
-  if (!(rectangle_fit >= o.ellipse_rectangle_ratio * ellipse_fit)) return;
+  const auto beyond_noise = [noise_mean](double fit) { return std::sqrt(std::max(0.0, fit * fit - noise_mean * noise_mean)); };
+  const double ellipse_excess = std::min(ellipse_fit, std::max(beyond_noise(ellipse_fit), tolerance));
+  if (!(beyond_noise(rectangle_fit) >= o.ellipse_rectangle_ratio * ellipse_excess)) return;
   const double correlation = noise_correlation_m(co.corners, pixel_size);
   if (o.rectangle_stretch_noise > 0 &&
       leaves_a_stretch(ellipse_distances, outline_distances, noise, correlation, o.rectangle_stretch_noise) &&
@@ -741,7 +758,7 @@ void choose_outline(const LabeledBuilding& b, const CoreOptions& o, const std::f
   // (Past the time budget, not tried.)
   if ((!b.on_lattice || !too_short_to_show_round(perimeter(b.rings[0]), b.pixel_size, b.context.mask_noise, o.refinement)) &&
       !over_budget())
-    choose_ellipse(b.rings, b.pixel_size, o, result);
+    choose_ellipse(b.rings, b.pixel_size, o, b.context.mask_noise, result);
   const bool on_lattice = b.on_lattice && result.model != "ellipse";
   // (Its mask's rounding not known yet: the outline kept for take_mask_rounding, where it measures
   // none of its own and could take one.)
