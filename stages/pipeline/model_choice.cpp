@@ -39,6 +39,22 @@ double fit_tolerance(const std::vector<Ring>& rings, double pixel_size, const Bu
   return o.models.lattice_tolerance * model_noise(result, pixel_size, o.models, true) * std::sqrt(correlation / std::max(perimeter_m, correlation));
 }
 
+// How closely an outline that follows the contour's noise lies to it (models.noise_fit): the
+// noise's own mean distance (noise_fit noises, a Gaussian's) and the standard errors a simpler
+// outline may add to it or to that outline's fit (fit_tolerance). None where noise_fit is off or
+// the pixels do not resolve the noise (models.noise_fit_min_px): under a pixel a contour's
+// deviations are its staircase and real jogs of a pixel or two, not the noise.
+struct NoiseFit {
+  double mean, tolerance;
+  // The most a simpler outline's mean distance may be beside one that follows the contour at chosen_fit.
+  double bound(double chosen_fit) const { return std::max(chosen_fit, mean) + tolerance; }
+};
+std::optional<NoiseFit> noise_fit(const std::vector<Ring>& rings, double pixel_size, const BuildingResult& result, const CoreOptions& o) {
+  const double noise_m = model_noise(result, pixel_size, o.models);
+  if (o.models.noise_fit <= 0 || noise_m < o.models.noise_fit_min_px * pixel_size) return std::nullopt;
+  return NoiseFit{o.models.noise_fit * noise_m, fit_tolerance(rings, pixel_size, result, o)};
+}
+
 // Whether an outline leaves a stretch of the contour that a reference outline explains:
 // leaves_a_stretch on each ring, the reference's distances computed once.
 class StretchGuard {
@@ -161,21 +177,18 @@ void choose_ellipse(const std::vector<Ring>& rings, double pixel_size, const Cor
   const auto outline_distances = boundary_distances(rings[0], result.footprint);
   const double noise = model_noise(result, pixel_size, o);
   const double samples = std::max(2.0, total_perimeter(rings) / std::max(pixel_size, o.coarse_correlation_noise * noise));
-  const double outline_criterion = information_criterion(mean_distance(outline_distances), double(vertex_count(result.footprint)), samples, pixel_size);
-  const double ellipse_fit = mean_distance(ellipse_distances);
-  // Where the noise is its mask's (pooled: mask_noise known) and the pixels resolve it
-  // (models.noise_fit_min_px), the ellipse is taken too where it explains the contour within the
-  // noise's own mean distance (models.noise_fit noises), or the outline's fit, plus fit_tolerance,
-  // as the lattice outline is (take_lattice_outline_within_noise): a wobble of a wavelength of a
-  // few metres around a round building of 60 m has as many lobes as an octagon has sides, which
-  // an outline of as many chords follows closer than the noise. (A building's own measure alone
-  // is no noise to judge by: an octagon's, its four diagonals off its lattice, is metres.)
-  const bool resolved = mask_noise > 0 && noise >= o.noise_fit_min_px * pixel_size;
-  const double noise_mean = o.noise_fit > 0 && resolved ? o.noise_fit * noise : 0.0;
-  const double tolerance = fit_tolerance(rings, pixel_size, result, co);
-  const bool within_noise =
-      noise_mean > 0 && ellipse_fit <= std::max(mean_distance(outline_distances), noise_mean) + tolerance;
-  if (!within_noise && !(information_criterion(ellipse_fit, kEllipseVertices, samples, pixel_size) < outline_criterion)) return;
+  const double outline_fit = mean_distance(outline_distances), ellipse_fit = mean_distance(ellipse_distances);
+  // Where the noise is its mask's (pooled: mask_noise known) and the pixels resolve it, the
+  // ellipse is taken too where it explains the contour as the lattice outline must to stand in for
+  // an outline that follows the noise (noise_fit, take_lattice_outline_within_noise): a wobble of a
+  // wavelength of a few metres around a round building of 60 m has as many lobes as an octagon has
+  // sides, which an outline of as many chords follows closer than the noise. (A building's own
+  // measure alone is no noise to judge by: an octagon's, its four diagonals off its lattice, is metres.)
+  const std::optional<NoiseFit> within = mask_noise > 0 ? noise_fit(rings, pixel_size, result, co) : std::nullopt;
+  if (!(within && ellipse_fit <= within->bound(outline_fit)) &&
+      !(information_criterion(ellipse_fit, kEllipseVertices, samples, pixel_size) <
+        information_criterion(outline_fit, double(vertex_count(result.footprint)), samples, pixel_size)))
+    return;
   // (Round, not a rectangle whose corners the segmentation rounded: its best rectangle, the same
   // five parameters, leaves it ellipse_rectangle_ratio times as far; under a resolved noise each
   // beyond the noise's own mean distance, in quadrature, the ellipse's at least fit_tolerance (at
@@ -183,8 +196,9 @@ void choose_ellipse(const std::vector<Ring>& rings, double pixel_size, const Cor
   // ellipse and of its rectangle alike.)
   double rectangle_fit = 0;
   best_rectangle(rings[0], result.directions, &rectangle_fit);
+  const double noise_mean = within ? within->mean : 0.0;
   const auto beyond_noise = [noise_mean](double fit) { return std::sqrt(std::max(0.0, fit * fit - noise_mean * noise_mean)); };
-  const double ellipse_excess = std::min(ellipse_fit, std::max(beyond_noise(ellipse_fit), tolerance));
+  const double ellipse_excess = within ? std::min(ellipse_fit, std::max(beyond_noise(ellipse_fit), within->tolerance)) : ellipse_fit;
   if (!(beyond_noise(rectangle_fit) >= o.ellipse_rectangle_ratio * ellipse_excess)) return;
   const double correlation = noise_correlation_m(co.corners, pixel_size);
   if (o.rectangle_stretch_noise > 0 &&
@@ -524,16 +538,17 @@ void ModelChoice::take_lattice_outline_if_as_good() {
 // tangent +1.0 degree summed.)
 void ModelChoice::take_lattice_outline_within_noise() {
   // (A lattice outline taken before is cleared: lattice_outline empty.)
-  if (o.models.noise_fit <= 0 || !lattice_ok || lattice_outline.outer.empty() || follow_chords || result.model == "rectangle" ||
+  if (!lattice_ok || lattice_outline.outer.empty() || follow_chords || result.model == "rectangle" ||
       vertex_count(lattice_outline) >= vertex_count(result.footprint) || over_budget())
     return;
+  const std::optional<NoiseFit> within = noise_fit(rings, pixel_size, result, o);
+  if (!within) return;
   const double noise_m = model_noise(result, pixel_size, o.models);
-  if (noise_m < o.models.noise_fit_min_px * pixel_size) return;
   // (The chosen outline is still the first one, regular or plain: its fit is known, as the
   // lattice outline's is from the test before.)
   if (chosen_fit < 0) chosen_fit = contour_fit(rings, result.footprint);
   if (lattice_fit < 0) lattice_fit = contour_fit(rings, lattice_outline);
-  if (lattice_fit > std::max(chosen_fit, o.models.noise_fit * noise_m) + fit_tolerance(rings, pixel_size, result, o)) return;
+  if (lattice_fit > within->bound(chosen_fit)) return;
   if (o.models.criterion_stretch_noise > 0 &&
       StretchGuard(rings, result.footprint, noise_m, noise_correlation_m(o.corners, pixel_size), o.models.criterion_stretch_noise)
           .leaves_stretch(lattice_outline))
