@@ -380,6 +380,23 @@ double pooled_rounding(const std::vector<double>& measured_m, const CoreOptions&
 
 void take_mask_rounding(const std::vector<Ring>& rings, double pixel_size, const CoreOptions& o, double mask_rounding_m,
                         BuildingResult& result) {
+  if (result.before_ellipse) {
+    BuildingResult::BeforeEllipse before = std::move(*result.before_ellipse);
+    result.before_ellipse.reset();
+    if (result.ok && mask_rounding_m > 0) {
+      const auto start = Clock::now();
+      // (A failure there leaves the ellipse.)
+      const BuildingResult drawn = result;
+      try {
+        chain::ellipse_under_rounding(rings, pixel_size, o, mask_rounding_m, std::move(before), result);
+      } catch (const std::exception&) {
+        result = drawn;
+      }
+      const double seconds = std::chrono::duration<double>(Clock::now() - start).count();
+      result.seconds += seconds;
+      result.chain_seconds.outline += seconds;
+    }
+  }
   if (result.rounding_candidates) {
     BuildingResult::RoundingCandidates kept = std::move(*result.rounding_candidates);
     result.rounding_candidates.reset();

@@ -57,6 +57,18 @@ struct BuildingResult {
     CornerContext context;
   };
   std::optional<RoundingCandidates> rounding_candidates;
+  // Where it was drawn as its ellipse and its mask's rounding was not known yet: the outline
+  // chosen before the ellipse (its model, whether its lattice was lent), what the chain squared
+  // with, and whether on a lattice, for take_mask_rounding to compare the ellipse with the
+  // rectangle rounded so (chain::ellipse_under_rounding); else none.
+  struct BeforeEllipse {
+    PolygonWithHoles outline;
+    std::string model;
+    bool lattice_lent = false;
+    CornerContext context;
+    bool on_lattice = false;
+  };
+  std::optional<BeforeEllipse> before_ellipse;
   std::string route;            // the chain's corner route taken: "original" or "deformed"; empty otherwise
   std::string note;             // when ok: why the route taken is not the one asked for (a budget), else empty
   double seconds = 0;
@@ -138,7 +150,8 @@ double pooled_rounding(const std::vector<double>& measured_m, const CoreOptions&
 // The building's outline squared again under its mask's rounding, pooled after the chain
 // (pooled_rounding; BuildingStart::mask_rounding_m was negative), where it measured none of its
 // own and kept its outline for it (result.unsquared, then cleared; rounding_pooled set where
-// mask_rounding_m is above 0). The same outline as the chain given that rounding draws; its time
+// mask_rounding_m is above 0), and a building drawn as its ellipse compared with its rectangle
+// rounded so (result.before_ellipse, then cleared). The same outline as the chain given that rounding draws; its time
 // added to the result's. Never throws: a failure leaves the outline the chain drew.
 void take_mask_rounding(const std::vector<Ring>& rings, double pixel_size, const CoreOptions& options, double mask_rounding_m,
                         BuildingResult& result);

@@ -39,6 +39,10 @@ double fit_tolerance(const std::vector<Ring>& rings, double pixel_size, const Bu
   return o.models.lattice_tolerance * model_noise(result, pixel_size, o.models, true) * std::sqrt(correlation / std::max(perimeter_m, correlation));
 }
 
+// The staircase's own noise: the RMS distance of a wall's pixel edges from it, a rounding to the
+// pixel (uniform over one: its width over the square root of 12).
+double staircase_noise(double pixel_size) { return pixel_size / std::sqrt(12.0); }
+
 // How closely an outline that follows the contour's noise lies to it (models.noise_fit): the
 // noise's own mean distance (noise_fit noises, a Gaussian's) and the standard errors a simpler
 // outline may add to it or to that outline's fit (fit_tolerance). None where noise_fit is off or
@@ -53,6 +57,18 @@ std::optional<NoiseFit> noise_fit(const std::vector<Ring>& rings, double pixel_s
   const double noise_m = model_noise(result, pixel_size, o.models);
   if (o.models.noise_fit <= 0 || noise_m < o.models.noise_fit_min_px * pixel_size) return std::nullopt;
   return NoiseFit{o.models.noise_fit * noise_m, fit_tolerance(rings, pixel_size, result, o)};
+}
+
+// The same at any noise: where the pixels do not resolve it (models.noise_fit_min_px), the noise's
+// mean distance that of its part beyond the pixels' staircase (staircase_noise, off in quadrature;
+// where they do, the staircase is at most a twelfth of its square, and left in).
+std::optional<NoiseFit> noise_fit_beyond_staircase(const std::vector<Ring>& rings, double pixel_size, const BuildingResult& result,
+                                                   const CoreOptions& o) {
+  if (std::optional<NoiseFit> resolved = noise_fit(rings, pixel_size, result, o)) return resolved;
+  if (o.models.noise_fit <= 0) return std::nullopt;
+  const double noise_m = model_noise(result, pixel_size, o.models), staircase_m = staircase_noise(pixel_size);
+  return NoiseFit{o.models.noise_fit * std::sqrt(std::max(0.0, noise_m * noise_m - staircase_m * staircase_m)),
+                  fit_tolerance(rings, pixel_size, result, o)};
 }
 
 // Whether an outline leaves a stretch of the contour that a reference outline explains:
@@ -157,6 +173,25 @@ double information_criterion(double fit, double vertices, double samples, double
 }
 constexpr double kEllipseVertices = 2.5;
 
+// Round, not a rectangle whose corners the segmentation rounded: the contour's best rectangle
+// (the same five parameters as its ellipse; rounded by `rounding` where that is above 0, the
+// mask's, as the mask draws it) leaves it ellipse_rectangle_ratio times as far as its ellipse
+// (ellipse_fit, mean distances); under a noise taken as the mask's (within) each beyond the
+// noise's own mean distance, in quadrature, the ellipse's at least fit_tolerance (at most its
+// fit): under a noise that large a blob of a small house lies within the noise of its ellipse
+// and of its rectangle alike, and under a rounding of 2 m a house of 5 m is a disc in its mask.
+bool round_beyond_rectangle(const std::vector<Ring>& rings, double pixel_size, const CoreOptions& co, const std::optional<NoiseFit>& within,
+                            double ellipse_fit, const std::vector<Vec2>& directions, double rounding) {
+  double rectangle_fit = 0;
+  Ring rectangle = best_rectangle(rings[0], directions, &rectangle_fit);
+  if (rounding > 0 && !rectangle.empty())
+    rectangle_fit = mean_distance(boundary_distances(rings[0], rounded_polygon(PolygonWithHoles{std::move(rectangle), {}}, rounding)));
+  const double noise_mean = within ? within->mean : 0.0;
+  const auto beyond_noise = [noise_mean](double fit) { return std::sqrt(std::max(0.0, fit * fit - noise_mean * noise_mean)); };
+  const double ellipse_excess = within ? std::min(ellipse_fit, std::max(beyond_noise(ellipse_fit), within->tolerance)) : ellipse_fit;
+  return beyond_noise(rectangle_fit) >= co.models.ellipse_rectangle_ratio * ellipse_excess;
+}
+
 // A building becomes the ellipse of its contour's moments (models.ellipse_turn_deg) where that
 // explains the contour better by an information criterion of the form the simpler outlines compete
 // by (five parameters against two a vertex; one sample of contour per models.coarse_correlation_noise
@@ -166,8 +201,10 @@ constexpr double kEllipseVertices = 2.5;
 // a round or oval building's runs are chords of a few metres, which the curve test does not see
 // bow at coarse pixels, and its outline a polygon of a few of them; an octagon's or a pentagon's
 // corners lie farther from their ellipse than their polygon's fewer parameters pay for, a small
-// house whose corners the segmentation rounded lies about as near its rectangle.
-void choose_ellipse(const std::vector<Ring>& rings, double pixel_size, const CoreOptions& co, double mask_noise, BuildingResult& result) {
+// house whose corners the segmentation rounded lies about as near its rectangle. mask_rounding:
+// its mask's corner rounding where known (round_beyond_rectangle), else 0.
+void choose_ellipse(const std::vector<Ring>& rings, double pixel_size, const CoreOptions& co, double mask_noise, double mask_rounding,
+                    BuildingResult& result) {
   const ModelOptions& o = co.models;
   if (o.ellipse_turn_deg <= 0 || rings.size() != 1 || !result.footprint.holes.empty()) return;
   // (The ellipse measured to first order, not drawn: a polygon of 80 vertices, measured as the
@@ -178,28 +215,23 @@ void choose_ellipse(const std::vector<Ring>& rings, double pixel_size, const Cor
   const double noise = model_noise(result, pixel_size, o);
   const double samples = std::max(2.0, total_perimeter(rings) / std::max(pixel_size, o.coarse_correlation_noise * noise));
   const double outline_fit = mean_distance(outline_distances), ellipse_fit = mean_distance(ellipse_distances);
-  // Where the noise is its mask's (pooled: mask_noise known) and the pixels resolve it, the
-  // ellipse is taken too where it explains the contour as the lattice outline must to stand in for
-  // an outline that follows the noise (noise_fit, take_lattice_outline_within_noise): a wobble of a
-  // wavelength of a few metres around a round building of 60 m has as many lobes as an octagon has
-  // sides, which an outline of as many chords follows closer than the noise. (A building's own
-  // measure alone is no noise to judge by: an octagon's, its four diagonals off its lattice, is metres.)
-  const std::optional<NoiseFit> within = mask_noise > 0 ? noise_fit(rings, pixel_size, result, co) : std::nullopt;
+  // Where the noise is its mask's (pooled: mask_noise known), the ellipse is taken too where it
+  // explains the contour as the lattice outline must to stand in for an outline that follows the
+  // noise (noise_fit, take_lattice_outline_within_noise): a wobble of a wavelength of a few metres
+  // around a round building of 60 m has as many lobes as an octagon has sides, which an outline of
+  // as many chords follows closer than the noise. (A building's own measure alone is no noise to
+  // judge by: an octagon's, its four diagonals off its lattice, is metres.) Also where the pixels
+  // do not resolve the noise, its mean distance then that of its part beyond the pixels' staircase
+  // (noise_fit_beyond_staircase): under a pixel of noise such a wobble still draws lobes tens of
+  // pixels long, which the chords follow, while a mask whose only noise is its staircase measures
+  // about that alone and leaves the ellipse to explain the contour as well as the outline (a
+  // D-shaped hall at 2 m, its straight wall a polygon's).
+  const std::optional<NoiseFit> within = mask_noise > 0 ? noise_fit_beyond_staircase(rings, pixel_size, result, co) : std::nullopt;
   if (!(within && ellipse_fit <= within->bound(outline_fit)) &&
       !(information_criterion(ellipse_fit, kEllipseVertices, samples, pixel_size) <
         information_criterion(outline_fit, double(vertex_count(result.footprint)), samples, pixel_size)))
     return;
-  // (Round, not a rectangle whose corners the segmentation rounded: its best rectangle, the same
-  // five parameters, leaves it ellipse_rectangle_ratio times as far; under a resolved noise each
-  // beyond the noise's own mean distance, in quadrature, the ellipse's at least fit_tolerance (at
-  // most its fit): under a noise that large a blob of a small house lies within the noise of its
-  // ellipse and of its rectangle alike.)
-  double rectangle_fit = 0;
-  best_rectangle(rings[0], result.directions, &rectangle_fit);
-  const double noise_mean = within ? within->mean : 0.0;
-  const auto beyond_noise = [noise_mean](double fit) { return std::sqrt(std::max(0.0, fit * fit - noise_mean * noise_mean)); };
-  const double ellipse_excess = within ? std::min(ellipse_fit, std::max(beyond_noise(ellipse_fit), within->tolerance)) : ellipse_fit;
-  if (!(beyond_noise(rectangle_fit) >= o.ellipse_rectangle_ratio * ellipse_excess)) return;
+  if (!round_beyond_rectangle(rings, pixel_size, co, within, ellipse_fit, result.directions, mask_rounding)) return;
   const double correlation = noise_correlation_m(co.corners, pixel_size);
   if (o.rectangle_stretch_noise > 0 &&
       leaves_a_stretch(ellipse_distances, outline_distances, noise, correlation, o.rectangle_stretch_noise) &&
@@ -759,6 +791,20 @@ void simplify_under_rounding(const std::vector<Ring>& rings, double pixel_size, 
   result.rounding_m = taken->rounding_m, result.rounding_corners = taken->rounding_corners, result.rounding_pooled = taken->rounding_pooled;
 }
 
+void ellipse_under_rounding(const std::vector<Ring>& rings, double pixel_size, const CoreOptions& o, double rounding,
+                            BuildingResult::BeforeEllipse before, BuildingResult& result) {
+  if (result.model != "ellipse" || !(rounding > 0) || rings.size() != 1) return;
+  const std::optional<NoiseFit> within =
+      before.context.mask_noise > 0 ? noise_fit_beyond_staircase(rings, pixel_size, result, o) : std::nullopt;
+  if (round_beyond_rectangle(rings, pixel_size, o, within, mean_distance(moment_ellipse_distances(rings[0])), result.directions, rounding))
+    return;
+  result.footprint = std::move(before.outline);
+  result.model = std::move(before.model);
+  result.lattice_lent = before.lattice_lent;
+  before.context.mask_rounding = rounding;
+  square_and_clean(rings, pixel_size, before.on_lattice, before.context, o, result);
+}
+
 void choose_outline(const LabeledBuilding& b, const CoreOptions& o, const std::function<bool()>& over_budget,
                     BuildingResult& result) {
   ModelChoice choice(b, o, over_budget, result);
@@ -772,8 +818,14 @@ void choose_outline(const LabeledBuilding& b, const CoreOptions& o, const std::f
   // it reads as on a lattice; not one too short to show its shape.)
   // (Past the time budget, not tried.)
   if ((!b.on_lattice || !too_short_to_show_round(perimeter(b.rings[0]), b.pixel_size, b.context.mask_noise, o.refinement)) &&
-      !over_budget())
-    choose_ellipse(b.rings, b.pixel_size, o, b.context.mask_noise, result);
+      !over_budget()) {
+    // (Its mask's rounding not known yet: the outline before the ellipse kept for
+    // take_mask_rounding, which compares the ellipse with the rectangle rounded so.)
+    std::optional<BuildingResult::BeforeEllipse> before;
+    if (b.context.mask_rounding < 0) before = {result.footprint, result.model, result.lattice_lent, b.context, b.on_lattice};
+    choose_ellipse(b.rings, b.pixel_size, o, b.context.mask_noise, std::max(0.0, b.context.mask_rounding), result);
+    if (before && result.model == "ellipse") result.before_ellipse = std::move(before);
+  }
   const bool on_lattice = b.on_lattice && result.model != "ellipse";
   // (Its mask's rounding not known yet: the outline kept for take_mask_rounding, where it measures
   // none of its own and could take one.)

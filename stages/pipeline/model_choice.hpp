@@ -63,4 +63,11 @@ void square_and_clean(const std::vector<Ring>& rings, double pixel_size, bool on
 void simplify_under_rounding(const std::vector<Ring>& rings, double pixel_size, const CornerContext& context, const CoreOptions& o,
                              double rounding, std::vector<std::pair<PolygonWithHoles, std::string>> candidates, BuildingResult& result);
 
+// A building drawn as its ellipse before its mask's corner rounding (m, above 0) was known: the
+// outline drawn before the ellipse (before), squared and cleaned under that rounding, where the
+// contour's rectangle rounded so lies within ellipse_rectangle_ratio of the ellipse's distance (as
+// choose_ellipse judges it given the rounding); else the ellipse stands.
+void ellipse_under_rounding(const std::vector<Ring>& rings, double pixel_size, const CoreOptions& o, double rounding,
+                            BuildingResult::BeforeEllipse before, BuildingResult& result);
+
 }  // namespace lodforge::chain
