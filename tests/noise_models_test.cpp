@@ -12,6 +12,7 @@
 #include <optional>
 #include <random>
 #include <sstream>
+#include <tuple>
 #include <string>
 
 #include "directions/lattice.hpp"
@@ -730,6 +731,61 @@ TEST(Models, ARoundBuildingIsItsEllipseAndAnOctagonStaysAPolygon) {
   EXPECT_GE(test::iou(pooled.footprint, octagon), 0.99);
 }
 
+namespace {
+
+// A polygon of n vertices on the ellipse of semi-axes a, b about (30, 30).
+PolygonWithHoles ngon(int n, double a, double b) {
+  PolygonWithHoles p;
+  for (int k = 0; k < n; ++k) p.outer.push_back(Vec2(30 + a * std::cos(2 * M_PI * k / n), 30 + b * std::sin(2 * M_PI * k / n)));
+  return p;
+}
+
+// A shape rasterized under a wobble of 8 m wavelength at each pixel size and seed, regularized alone
+// with its mask's noise (the wobble's RMS): how many runs drew it as its ellipse, and their mean
+// IoU with it.
+struct WobbledRuns {
+  int ellipses = 0, runs = 0;
+  double mean_iou = 0;
+};
+WobbledRuns regularize_wobbled(const PolygonWithHoles& truth, const std::vector<double>& pixels, std::uint64_t seeds, double wobble,
+                               const char* name) {
+  WobbledRuns out;
+  for (const double pixel : pixels)
+    for (std::uint64_t seed = 1; seed <= seeds; ++seed) {
+      const test::RasterizedShape shape = test::rasterize_shape_m(truth, pixel, wobble, 8.0, 0.0, seed);
+      EXPECT_EQ(shape.buildings.size(), 1u) << name;
+      if (shape.buildings.size() != 1) continue;
+      const BuildingResult r = regularize_building(shape.buildings[0].rings, pixel, CoreOptions{}, wobble / std::sqrt(2.0));
+      EXPECT_TRUE(r.ok) << name << ": " << r.reason;
+      out.ellipses += r.model == "ellipse";
+      out.mean_iou += test::iou(r.footprint, truth);
+      ++out.runs;
+    }
+  if (out.runs > 0) out.mean_iou /= out.runs;
+  return out;
+}
+
+// A clean mask at `pixel` of shapes whose corners the segmentation rounded by 2 m, each turned by
+// its angle and moved by its shift: their contours and their truths.
+struct RoundedMask {
+  explicit RoundedMask(double pixel_size) : pixel(pixel_size) {}
+  double pixel;
+  std::vector<BuildingContour> buildings;
+  std::vector<PolygonWithHoles> truths;
+  void add(const PolygonWithHoles& shape, double angle, const Vec2& shift) {
+    PolygonWithHoles truth = test::rotated(shape, angle);
+    const test::RasterizedShape mask = test::rasterize_shape_m(truth, pixel, 0.0, 8.0, 2.0, 1);
+    ASSERT_EQ(mask.buildings.size(), 1u);
+    BuildingContour b = mask.buildings[0];
+    for (Ring& r : b.rings) for (Vec2& p : r) p += shift;
+    for (Vec2& p : truth.outer) p += shift;
+    buildings.push_back(std::move(b));
+    truths.push_back(std::move(truth));
+  }
+};
+
+}  // namespace
+
 // Round buildings under half a metre of wobble (RMS 0.35 m, 8 m wavelength) at 0.1 and 0.25 m,
 // regularized with their mask's noise (as regularize and run pool it): a disc of 10 m radius has
 // about as many lobes as an octagon has sides, which an outline of as many chords followed closer
@@ -737,15 +793,9 @@ TEST(Models, ARoundBuildingIsItsEllipseAndAnOctagonStaysAPolygon) {
 // smaller disc or the oval, were ellipses before). Within the noise of its ellipse, and its best
 // rectangle far beyond it, each is its ellipse; a house and a shed under the same noise are not.
 TEST(Models, ARoundBuildingUnderAWobbleIsItsEllipseWithinItsMasksNoise) {
-  const auto ngon = [](int n, double a, double b) {
-    PolygonWithHoles p;
-    for (int k = 0; k < n; ++k) p.outer.push_back(Vec2(30 + a * std::cos(2 * M_PI * k / n), 30 + b * std::sin(2 * M_PI * k / n)));
-    return p;
-  };
   const PolygonWithHoles disc = ngon(360, 10, 10), small_disc = ngon(360, 8.4, 8.4), oval = test::rotated(ngon(360, 9, 6), 25.0);
   const PolygonWithHoles house = test::rotated(PolygonWithHoles{{{20, 20}, {40, 20}, {40, 32}, {20, 32}}, {}}, 10.0);
   const PolygonWithHoles shed = test::rotated(PolygonWithHoles{{{25, 25}, {31, 25}, {31, 33}, {25, 33}}, {}}, 10.0);
-  const double wobble = 0.5, mask_noise = wobble / std::sqrt(2.0);
   struct Case {
     const PolygonWithHoles* shape;
     const char* name;
@@ -754,21 +804,11 @@ TEST(Models, ARoundBuildingUnderAWobbleIsItsEllipseWithinItsMasksNoise) {
   };
   for (const Case& c : {Case{&disc, "disc", true, 0.96}, Case{&small_disc, "small disc", true, 0.95}, Case{&oval, "oval", true, 0.935},
                         Case{&house, "house", false, 0.95}, Case{&shed, "shed", false, 0.87}}) {
-    int ellipses = 0, runs = 0;
-    double iou_sum = 0;
-    for (const double pixel : {0.1, 0.25})
-      for (std::uint64_t seed = 1; seed <= 3; ++seed) {
-        const test::RasterizedShape shape = test::rasterize_shape_m(*c.shape, pixel, wobble, 8.0, 0.0, seed);
-        ASSERT_EQ(shape.buildings.size(), 1u) << c.name;
-        const BuildingResult r = regularize_building(shape.buildings[0].rings, pixel, CoreOptions{}, mask_noise);
-        ASSERT_TRUE(r.ok) << c.name << ": " << r.reason;
-        ellipses += r.model == "ellipse";
-        iou_sum += test::iou(r.footprint, *c.shape);
-        ++runs;
-      }
-    if (c.round) EXPECT_GE(ellipses, runs - 1) << c.name;
-    else EXPECT_EQ(ellipses, 0) << c.name;
-    EXPECT_GE(iou_sum / runs, c.min_mean_iou) << c.name;
+    const WobbledRuns runs = regularize_wobbled(*c.shape, {0.1, 0.25}, 3, 0.5, c.name);
+    ASSERT_EQ(runs.runs, 6) << c.name;
+    if (c.round) EXPECT_GE(runs.ellipses, runs.runs - 1) << c.name;
+    else EXPECT_EQ(runs.ellipses, 0) << c.name;
+    EXPECT_GE(runs.mean_iou, c.min_mean_iou) << c.name;
   }
 }
 
@@ -776,36 +816,17 @@ TEST(Models, ARoundBuildingUnderAWobbleIsItsEllipseWithinItsMasksNoise) {
 // pixels long, and a disc of 11 m radius, drawn before as a polygon of 8-10 chords along them, is
 // its ellipse within the noise beyond the pixels' staircase; the house and the shed never are.
 TEST(Models, ARoundBuildingUnderAWobbleUnderAPixelIsItsEllipse) {
-  const auto ngon = [](int n, double a, double b) {
-    PolygonWithHoles p;
-    for (int k = 0; k < n; ++k) p.outer.push_back(Vec2(30 + a * std::cos(2 * M_PI * k / n), 30 + b * std::sin(2 * M_PI * k / n)));
-    return p;
-  };
   const PolygonWithHoles disc = ngon(360, 11, 11);
   const PolygonWithHoles house = test::rotated(PolygonWithHoles{{{20, 20}, {40, 20}, {40, 32}, {20, 32}}, {}}, 10.0);
   const PolygonWithHoles shed = test::rotated(PolygonWithHoles{{{25, 25}, {31, 25}, {31, 33}, {25, 33}}, {}}, 10.0);
-  const double pixel = 0.5, wobble = 0.5, mask_noise = wobble / std::sqrt(2.0);
-  struct Case {
-    const PolygonWithHoles* shape;
-    const char* name;
-    bool round;
-    double min_mean_iou;
-  };
-  for (const Case& c : {Case{&disc, "disc", true, 0.97}, Case{&house, "house", false, 0.9}, Case{&shed, "shed", false, 0.75}}) {
-    int ellipses = 0, runs = 0;
-    double iou_sum = 0;
-    for (std::uint64_t seed = 1; seed <= 6; ++seed) {
-      const test::RasterizedShape shape = test::rasterize_shape_m(*c.shape, pixel, wobble, 8.0, 0.0, seed);
-      ASSERT_EQ(shape.buildings.size(), 1u) << c.name;
-      const BuildingResult r = regularize_building(shape.buildings[0].rings, pixel, CoreOptions{}, mask_noise);
-      ASSERT_TRUE(r.ok) << c.name << ": " << r.reason;
-      ellipses += r.model == "ellipse";
-      iou_sum += test::iou(r.footprint, *c.shape);
-      ++runs;
-    }
-    if (c.round) EXPECT_GE(ellipses, runs - 1) << c.name;
-    else EXPECT_EQ(ellipses, 0) << c.name;
-    EXPECT_GE(iou_sum / runs, c.min_mean_iou) << c.name;
+  const WobbledRuns round = regularize_wobbled(disc, {0.5}, 6, 0.5, "disc");
+  ASSERT_EQ(round.runs, 6);
+  EXPECT_GE(round.ellipses, round.runs - 1);
+  EXPECT_GE(round.mean_iou, 0.97);
+  for (const auto& [shape, name, min_mean_iou] : {std::tuple{&house, "house", 0.9}, std::tuple{&shed, "shed", 0.75}}) {
+    const WobbledRuns runs = regularize_wobbled(*shape, {0.5}, 6, 0.5, name);
+    EXPECT_EQ(runs.ellipses, 0) << name;
+    EXPECT_GE(runs.mean_iou, min_mean_iou) << name;
   }
 }
 
@@ -818,18 +839,10 @@ TEST(Models, ARoundBuildingUnderAWobbleUnderAPixelIsItsEllipse) {
 // rounding (pooled_rounding_share 0) the small house is its ellipse.
 TEST(CleanMasks, AHouseTheMasksRoundingMadeADiscIsNoEllipse) {
   const double pixel = 0.25;
-  std::vector<BuildingContour> buildings;
-  std::vector<PolygonWithHoles> truths;
-  const auto add = [&](const PolygonWithHoles& shape, double angle, const Vec2& shift) {
-    PolygonWithHoles truth = test::rotated(shape, angle);
-    const test::RasterizedShape mask = test::rasterize_shape_m(truth, pixel, 0.0, 8.0, 2.0, 1);
-    ASSERT_EQ(mask.buildings.size(), 1u);
-    BuildingContour b = mask.buildings[0];
-    for (Ring& r : b.rings) for (Vec2& p : r) p += shift;
-    for (Vec2& p : truth.outer) p += shift;
-    buildings.push_back(std::move(b));
-    truths.push_back(std::move(truth));
-  };
+  RoundedMask mask(pixel);
+  const auto add = [&](const PolygonWithHoles& shape, double angle, const Vec2& shift) { mask.add(shape, angle, shift); };
+  const std::vector<BuildingContour>& buildings = mask.buildings;
+  const std::vector<PolygonWithHoles>& truths = mask.truths;
   PolygonWithHoles disc;
   for (int k = 0; k < 360; ++k) disc.outer.push_back(Vec2(11 * std::cos(2 * M_PI * k / 360), 11 * std::sin(2 * M_PI * k / 360)));
   add(PolygonWithHoles{{{0, 0}, {5, 0}, {5, 5.5}, {0, 5.5}}, {}}, 10.0, Vec2(0, 0));
@@ -2414,18 +2427,10 @@ TEST(PooledRounding, IsTheMedianOfTheRoundedWhereEnoughAreRounded) {
 // against 0.982.
 TEST(CleanMasks, ABuildingThatMeasuresNoRoundingTakesItsMasks) {
   const double pixel = 0.1;
-  std::vector<BuildingContour> buildings;
-  std::vector<PolygonWithHoles> truths;
-  const auto add = [&](const PolygonWithHoles& shape, double angle, const Vec2& shift) {
-    PolygonWithHoles truth = test::rotated(shape, angle);
-    const test::RasterizedShape mask = test::rasterize_shape_m(truth, pixel, 0.0, 8.0, 2.0, 1);
-    ASSERT_EQ(mask.buildings.size(), 1u);
-    BuildingContour b = mask.buildings[0];
-    for (Ring& r : b.rings) for (Vec2& p : r) p += shift;
-    for (Vec2& p : truth.outer) p += shift;
-    buildings.push_back(std::move(b));
-    truths.push_back(std::move(truth));
-  };
+  RoundedMask mask(pixel);
+  const auto add = [&](const PolygonWithHoles& shape, double angle, const Vec2& shift) { mask.add(shape, angle, shift); };
+  const std::vector<BuildingContour>& buildings = mask.buildings;
+  const std::vector<PolygonWithHoles>& truths = mask.truths;
   add(PolygonWithHoles{{{0, 0}, {31.3, 0}, {31.3, 8.84}, {11.1, 8.84}, {11.1, 24.27}, {0, 24.27}}, {}}, 0.0, Vec2(0, 0));
   for (int k = 0; k < 4; ++k) add(PolygonWithHoles{{{0, 0}, {24, 0}, {24, 14}, {0, 14}}, {}}, 20.0 * k, Vec2(50.0 * (k + 1), 0));
   CoreOptions off;

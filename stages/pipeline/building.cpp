@@ -380,39 +380,33 @@ double pooled_rounding(const std::vector<double>& measured_m, const CoreOptions&
 
 void take_mask_rounding(const std::vector<Ring>& rings, double pixel_size, const CoreOptions& o, double mask_rounding_m,
                         BuildingResult& result) {
+  // A step under the mask's rounding, its time added to the building's outline time; a failure
+  // there leaves the building as its chain drew it.
+  const auto under_rounding = [&](const auto& step) {
+    const auto start = Clock::now();
+    const BuildingResult drawn = result;
+    try {
+      step();
+    } catch (const std::exception&) {
+      result = drawn;
+    }
+    const double seconds = std::chrono::duration<double>(Clock::now() - start).count();
+    result.seconds += seconds;
+    result.chain_seconds.outline += seconds;
+  };
   if (result.before_ellipse) {
     BuildingResult::BeforeEllipse before = std::move(*result.before_ellipse);
     result.before_ellipse.reset();
-    if (result.ok && mask_rounding_m > 0) {
-      const auto start = Clock::now();
-      // (A failure there leaves the ellipse.)
-      const BuildingResult drawn = result;
-      try {
-        chain::ellipse_under_rounding(rings, pixel_size, o, mask_rounding_m, std::move(before), result);
-      } catch (const std::exception&) {
-        result = drawn;
-      }
-      const double seconds = std::chrono::duration<double>(Clock::now() - start).count();
-      result.seconds += seconds;
-      result.chain_seconds.outline += seconds;
-    }
+    if (result.ok && mask_rounding_m > 0)
+      under_rounding([&] { chain::ellipse_under_rounding(rings, pixel_size, o, mask_rounding_m, std::move(before), result); });
   }
   if (result.rounding_candidates) {
     BuildingResult::RoundingCandidates kept = std::move(*result.rounding_candidates);
     result.rounding_candidates.reset();
-    if (result.ok && mask_rounding_m > 0) {
-      const auto start = Clock::now();
-      // (A failure there leaves the building as its chain drew it.)
-      const BuildingResult drawn = result;
-      try {
+    if (result.ok && mask_rounding_m > 0)
+      under_rounding([&] {
         chain::simplify_under_rounding(rings, pixel_size, kept.context, o, mask_rounding_m, std::move(kept.outlines), result);
-      } catch (const std::exception&) {
-        result = drawn;
-      }
-      const double seconds = std::chrono::duration<double>(Clock::now() - start).count();
-      result.seconds += seconds;
-      result.chain_seconds.outline += seconds;
-    }
+      });
   }
   if (!result.unsquared) return;
   BuildingResult::Unsquared kept = std::move(*result.unsquared);
