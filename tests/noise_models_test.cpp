@@ -838,27 +838,21 @@ TEST(Models, ARoundBuildingUnderAWobbleUnderAPixelIsItsEllipse) {
 // building's rounded square lies metres off it, and it is its ellipse. Without the mask's
 // rounding (pooled_rounding_share 0) the small house is its ellipse.
 TEST(CleanMasks, AHouseTheMasksRoundingMadeADiscIsNoEllipse) {
-  const double pixel = 0.25;
-  RoundedMask mask(pixel);
-  const auto add = [&](const PolygonWithHoles& shape, double angle, const Vec2& shift) { mask.add(shape, angle, shift); };
-  const std::vector<BuildingContour>& buildings = mask.buildings;
-  const std::vector<PolygonWithHoles>& truths = mask.truths;
-  PolygonWithHoles disc;
-  for (int k = 0; k < 360; ++k) disc.outer.push_back(Vec2(11 * std::cos(2 * M_PI * k / 360), 11 * std::sin(2 * M_PI * k / 360)));
-  add(PolygonWithHoles{{{0, 0}, {5, 0}, {5, 5.5}, {0, 5.5}}, {}}, 10.0, Vec2(0, 0));
-  add(disc, 0.0, Vec2(0, 60));
-  for (int k = 0; k < 4; ++k) add(PolygonWithHoles{{{0, 0}, {24, 0}, {24, 14}, {0, 14}}, {}}, 20.0 * k, Vec2(50.0 * (k + 1), 0));
+  RoundedMask mask(0.25);
+  mask.add(PolygonWithHoles{{{0, 0}, {5, 0}, {5, 5.5}, {0, 5.5}}, {}}, 10.0, Vec2(0, 0));
+  mask.add(ngon(360, 11, 11), 0.0, Vec2(-30, 30));  // (centred at (0, 60))
+  for (int k = 0; k < 4; ++k) mask.add(PolygonWithHoles{{{0, 0}, {24, 0}, {24, 14}, {0, 14}}, {}}, 20.0 * k, Vec2(50.0 * (k + 1), 0));
   CoreOptions off;
   off.models.pooled_rounding_share = 0;
-  const RegularizedBatch on = regularize_batch("deformation", buildings, pixel, CoreOptions{});
-  const RegularizedBatch without = regularize_batch("deformation", buildings, pixel, off);
+  const RegularizedBatch on = regularize_batch("deformation", mask.buildings, mask.pixel, CoreOptions{});
+  const RegularizedBatch without = regularize_batch("deformation", mask.buildings, mask.pixel, off);
   EXPECT_NEAR(on.rounding_m, 2.0, 0.4);
   for (const RegularizedBatch* b : {&on, &without}) ASSERT_TRUE(b->results[0].ok && b->results[1].ok);
   EXPECT_NE(on.results[0].model, "ellipse");
   EXPECT_LE(vertex_count(on.results[0].footprint), 8u);
   EXPECT_EQ(without.results[0].model, "ellipse");
   EXPECT_EQ(on.results[1].model, "ellipse");
-  EXPECT_GE(test::iou(on.results[1].footprint, truths[1]), 0.99);
+  EXPECT_GE(test::iou(on.results[1].footprint, mask.truths[1]), 0.99);
 }
 
 // A 20 x 10 m house with an annex of 4 x 1 m on its long wall: the moments alone would widen
@@ -2426,18 +2420,14 @@ TEST(PooledRounding, IsTheMedianOfTheRoundedWhereEnoughAreRounded) {
 // houses' rounding, and its rounded corners come back square: 6 vertices against 40, IoU 0.991
 // against 0.982.
 TEST(CleanMasks, ABuildingThatMeasuresNoRoundingTakesItsMasks) {
-  const double pixel = 0.1;
-  RoundedMask mask(pixel);
-  const auto add = [&](const PolygonWithHoles& shape, double angle, const Vec2& shift) { mask.add(shape, angle, shift); };
-  const std::vector<BuildingContour>& buildings = mask.buildings;
-  const std::vector<PolygonWithHoles>& truths = mask.truths;
-  add(PolygonWithHoles{{{0, 0}, {31.3, 0}, {31.3, 8.84}, {11.1, 8.84}, {11.1, 24.27}, {0, 24.27}}, {}}, 0.0, Vec2(0, 0));
-  for (int k = 0; k < 4; ++k) add(PolygonWithHoles{{{0, 0}, {24, 0}, {24, 14}, {0, 14}}, {}}, 20.0 * k, Vec2(50.0 * (k + 1), 0));
+  RoundedMask mask(0.1);
+  mask.add(PolygonWithHoles{{{0, 0}, {31.3, 0}, {31.3, 8.84}, {11.1, 8.84}, {11.1, 24.27}, {0, 24.27}}, {}}, 0.0, Vec2(0, 0));
+  for (int k = 0; k < 4; ++k) mask.add(PolygonWithHoles{{{0, 0}, {24, 0}, {24, 14}, {0, 14}}, {}}, 20.0 * k, Vec2(50.0 * (k + 1), 0));
   CoreOptions off;
   off.models.pooled_rounding_share = 0;
-  const RegularizedBatch on = regularize_batch("deformation", buildings, pixel, CoreOptions{});
-  const RegularizedBatch without = regularize_batch("deformation", buildings, pixel, off);
-  for (std::size_t i = 1; i < buildings.size(); ++i) {
+  const RegularizedBatch on = regularize_batch("deformation", mask.buildings, mask.pixel, CoreOptions{});
+  const RegularizedBatch without = regularize_batch("deformation", mask.buildings, mask.pixel, off);
+  for (std::size_t i = 1; i < mask.buildings.size(); ++i) {
     EXPECT_TRUE(measured_rounding(on.results[i])) << i;
     EXPECT_NEAR(on.results[i].rounding_m, 2.0, 0.4) << i;
     EXPECT_FALSE(on.results[i].rounding_pooled) << i;
@@ -2455,19 +2445,19 @@ TEST(CleanMasks, ABuildingThatMeasuresNoRoundingTakesItsMasks) {
   const auto [right, turning] = right_angle_corners(l.footprint);
   const auto [right_alone, turning_alone] = right_angle_corners(l_alone.footprint);
   std::cout << "the L: " << l.footprint.outer.size() << " vertices, right angles " << right << " of " << turning << ", IoU "
-            << test::iou(l.footprint, truths[0]) << "; alone " << l_alone.footprint.outer.size() << ", " << right_alone << " of "
-            << turning_alone << ", " << test::iou(l_alone.footprint, truths[0]) << "; its square corners " << l.rounding_corners << '\n';
+            << test::iou(l.footprint, mask.truths[0]) << "; alone " << l_alone.footprint.outer.size() << ", " << right_alone << " of "
+            << turning_alone << ", " << test::iou(l_alone.footprint, mask.truths[0]) << "; its square corners " << l.rounding_corners << '\n';
   EXPECT_EQ(l.footprint.outer.size(), 6u);
   EXPECT_EQ(right, 6u);
   EXPECT_GT(l_alone.footprint.outer.size(), 6u);
-  EXPECT_GE(test::iou(l.footprint, truths[0]), test::iou(l_alone.footprint, truths[0]));
+  EXPECT_GE(test::iou(l.footprint, mask.truths[0]), test::iou(l_alone.footprint, mask.truths[0]));
   // The houses are rectangles either way; under the mask's rounding one (turned by 40 degrees) is
   // drawn from its lattice outlines instead (models.rounded_criterion), closer to its walls (IoU
   // 0.9974 against 0.9955).
-  for (std::size_t i = 1; i < buildings.size(); ++i) {
+  for (std::size_t i = 1; i < mask.buildings.size(); ++i) {
     EXPECT_EQ(on.results[i].footprint.outer.size(), 4u) << i;
     EXPECT_EQ(right_angle_corners(on.results[i].footprint).first, 4u) << i;
-    EXPECT_GE(test::iou(on.results[i].footprint, truths[i]), test::iou(without.results[i].footprint, truths[i]) - 1e-9) << i;
+    EXPECT_GE(test::iou(on.results[i].footprint, mask.truths[i]), test::iou(without.results[i].footprint, mask.truths[i]) - 1e-9) << i;
   }
 }
 

@@ -202,9 +202,10 @@ bool round_beyond_rectangle(const std::vector<Ring>& rings, double pixel_size, c
 // bow at coarse pixels, and its outline a polygon of a few of them; an octagon's or a pentagon's
 // corners lie farther from their ellipse than their polygon's fewer parameters pay for, a small
 // house whose corners the segmentation rounded lies about as near its rectangle. mask_rounding:
-// its mask's corner rounding where known (round_beyond_rectangle), else 0.
+// its mask's corner rounding where known (round_beyond_rectangle), else 0. Where it takes the
+// ellipse, `replaced` (when given) receives the outline it replaced, its model and lattice_lent.
 void choose_ellipse(const std::vector<Ring>& rings, double pixel_size, const CoreOptions& co, double mask_noise, double mask_rounding,
-                    BuildingResult& result) {
+                    BuildingResult& result, BuildingResult::BeforeEllipse* replaced = nullptr) {
   const ModelOptions& o = co.models;
   if (o.ellipse_turn_deg <= 0 || rings.size() != 1 || !result.footprint.holes.empty()) return;
   // (The ellipse measured to first order, not drawn: a polygon of 80 vertices, measured as the
@@ -239,6 +240,11 @@ void choose_ellipse(const std::vector<Ring>& rings, double pixel_size, const Cor
     return;
   PolygonWithHoles candidate{moment_ellipse(rings[0], o.ellipse_turn_deg), {}};
   if (candidate.outer.empty() || !polygon_problem(candidate).empty()) return;
+  if (replaced) {
+    replaced->outline = std::move(result.footprint);
+    replaced->model = std::move(result.model);
+    replaced->lattice_lent = result.lattice_lent;
+  }
   result.footprint = std::move(candidate);
   result.model = "ellipse";
   result.lattice_lent = false;  // (no wall of it held to a lattice)
@@ -819,12 +825,15 @@ void choose_outline(const LabeledBuilding& b, const CoreOptions& o, const std::f
   // (Past the time budget, not tried.)
   if ((!b.on_lattice || !too_short_to_show_round(perimeter(b.rings[0]), b.pixel_size, b.context.mask_noise, o.refinement)) &&
       !over_budget()) {
-    // (Its mask's rounding not known yet: the outline before the ellipse kept for
+    // (Its mask's rounding not known yet: the outline the ellipse replaces kept for
     // take_mask_rounding, which compares the ellipse with the rectangle rounded so.)
-    std::optional<BuildingResult::BeforeEllipse> before;
-    if (b.context.mask_rounding < 0) before = {result.footprint, result.model, result.lattice_lent, b.context, b.on_lattice};
-    choose_ellipse(b.rings, b.pixel_size, o, b.context.mask_noise, std::max(0.0, b.context.mask_rounding), result);
-    if (before && result.model == "ellipse") result.before_ellipse = std::move(before);
+    BuildingResult::BeforeEllipse replaced;
+    choose_ellipse(b.rings, b.pixel_size, o, b.context.mask_noise, std::max(0.0, b.context.mask_rounding), result, &replaced);
+    if (b.context.mask_rounding < 0 && result.model == "ellipse") {
+      replaced.context = b.context;
+      replaced.on_lattice = b.on_lattice;
+      result.before_ellipse = std::move(replaced);
+    }
   }
   const bool on_lattice = b.on_lattice && result.model != "ellipse";
   // (Its mask's rounding not known yet: the outline kept for take_mask_rounding, where it measures
