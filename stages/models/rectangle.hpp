@@ -145,4 +145,24 @@ Ring moment_ellipse(const Ring& ring, double turn_deg);
 // the walls as moment_rectangle's are. *fit: its mean distance (mean_distance_to_boundary).
 Ring best_rectangle(const Ring& ring, const std::vector<Vec2>& normals, double* fit);
 
+// A ring as a segmentation that rounds corners by `radius` draws it (an opening and a closing by
+// a disc): each corner an arc of that radius (eight chords) tangent to its two walls, the radius
+// less where the tangent points would pass the middle of either wall; a polygon's rings so.
+Ring rounded_ring(const Ring& ring, double radius);
+PolygonWithHoles rounded_polygon(const PolygonWithHoles& polygon, double radius);
+
+// A rectangle (4 vertices) grown, or shrunk, by the same offset on every side so that it has
+// `area` once rounded by `radius` (rounded_ring): the rectangle a segmentation that rounds corners
+// so drew a contour of that area from. A best rectangle's sides, each at the median of the contour
+// nearest to it, lie inside the rounding's arcs: a house of 6 x 6 m under a rounding of 2 m, its
+// walls' straight parts 2 m, comes out 5.5 m wide. Unchanged for any other ring, or a radius or
+// area not above 0.
+Ring grown_for_rounding(const Ring& rectangle, double radius, double area);
+
+// Of the rectangle and the same grown for the rounding (grown_for_rounding, to the ring's area),
+// the one whose rounding by `radius` lies nearer the ring (mean distance, *fit when asked): the
+// sides at the median of the contour nearest to them, or outside the rounding's arcs. (Where the
+// rounding measured is larger than the mask's, the grown one overshoots.)
+Ring rectangle_under_rounding(const Ring& ring, const Ring& rectangle, double radius, double* fit = nullptr);
+
 }  // namespace lodforge

@@ -159,29 +159,45 @@ double building_noise(const std::vector<Ring>& rings, const std::vector<std::vec
   return noise;
 }
 
+// Whether the contour's best rectangle along the lattice (rounded by `rounding` where above 0, as
+// its mask rounds corners) explains it as well as its moments' ellipse does, and within twice its
+// noise, noise_m, or pixel (refinement.round_fit_ratio, round_fit_noise): under a wobble of a metre
+// a house's normals spread off its walls; a clean triangle's rectangle leaves a corner out by
+// metres; under a rounding of 2 m a house of 5 m is a disc, which its rectangle rounded so draws.
+// (A rounding that moves a corner less than a pixel, R (sqrt 2 - 1), is the staircase's: none.)
+bool resolves_rounding(double rounding, double pixel_size) { return rounding * (std::sqrt(2.0) - 1) >= pixel_size; }
+bool no_rounder_than_rectangle(const Ring& outer, const Vec2& lattice, double pixel_size, double noise_m, double rounding,
+                               const RefineOptions& o) {
+  if (o.round_fit_ratio <= 0) return false;
+  if (!resolves_rounding(rounding, pixel_size)) rounding = 0;
+  double rectangle_fit = std::numeric_limits<double>::infinity();
+  Ring rectangle = best_rectangle(outer, {lattice}, &rectangle_fit);
+  if (rounding > 0 && !rectangle.empty()) rectangle_under_rounding(outer, rectangle, rounding, &rectangle_fit);
+  const bool within_noise = o.round_fit_noise <= 0 || rectangle_fit <= o.round_fit_noise * std::max(noise_m, pixel_size);
+  return std::isfinite(rectangle_fit) && within_noise && rectangle_fit <= o.round_fit_ratio * moment_ellipse_fit(outer);
+}
+
 // Whether the building's walls are held to its lattice: not a round or oblique shape (little of
 // it along the lattice, its outline turning about once, as a convex one does, not back and forth as
 // a wobble does). A building of a few dozen pixels, or of a few dozen times its mask's noise,
 // shows no curvature: it is taken as on its lattice. So is one that its normals read as round or
-// oblique but whose best rectangle explains its contour as well as its moments' ellipse does, and
-// within twice its noise, noise_m, or pixel (refinement.round_fit_ratio, round_fit_noise): under a
-// wobble of a metre a house's normals spread off its walls; a clean triangle's rectangle leaves a
-// corner out by metres.
+// oblique but whose best rectangle explains its contour as well as its moments' ellipse does
+// (no_rounder_than_rectangle; rounded by its mask's rounding, mask_rounding_m, where above 0).
 // *undetermined: taken so because its shape does not tell (too small for its noise, or no rounder
 // than a rectangle), not by its walls: its neighbours' lattice is lent to it (outline_lattice).
+// *by_rectangle: false where it was taken so, or not, before the rectangle's test.
 bool holds_to_lattice(const std::vector<Ring>& rings, const LabelingInput& input, const Vec2& lattice, double pixel_size,
-                      double noise_floor_m, double noise_m, const RefineOptions& o, bool* undetermined) {
+                      double noise_floor_m, double noise_m, double mask_rounding_m, const RefineOptions& o, bool* undetermined,
+                      bool* by_rectangle) {
   const double outline_m = perimeter(rings[0]);
   *undetermined = outline_m < o.min_round_noise * noise_floor_m;
+  *by_rectangle = false;
   if (too_short_to_show_round(outline_m, pixel_size, noise_floor_m, o) ||
       lattice_share(input.normals, input.lengths, lattice, o.lattice_deg) >= o.min_lattice_share ||
       total_turning(rings[0], input.normals[0], std::max(1.0, 2 * pixel_size)) >= o.min_turning)
     return true;
-  if (o.round_fit_ratio <= 0) return false;
-  double rectangle_fit = std::numeric_limits<double>::infinity();
-  best_rectangle(rings[0], {lattice}, &rectangle_fit);
-  const bool within_noise = o.round_fit_noise <= 0 || rectangle_fit <= o.round_fit_noise * std::max(noise_m, pixel_size);
-  *undetermined = std::isfinite(rectangle_fit) && within_noise && rectangle_fit <= o.round_fit_ratio * moment_ellipse_fit(rings[0]);
+  *by_rectangle = o.round_fit_ratio > 0;
+  *undetermined = no_rounder_than_rectangle(rings[0], lattice, pixel_size, noise_m, std::max(0.0, mask_rounding_m), o);
   return *undetermined;
 }
 
@@ -262,8 +278,11 @@ void run_chain(const std::vector<Ring>& rings, double pixel_size, const CoreOpti
   if (o.lattice.fit_max_turn_deg > 0)
     fitted.direction = fit_lattice(rings, input.normals, chord.share >= o.lattice.min_share ? chord.direction : first_main, pixel_size,
                                    o.lattice, o.noise, o.corners.snap_correlation_m, &fitted.uncertainty, &fitted.spread, noise);
-  bool undetermined = false;
-  const bool on_lattice = holds_to_lattice(rings, input, lattice, pixel_size, noise_floor_m, noise, o.refinement, &undetermined);
+  bool undetermined = false, by_rectangle = false;
+  const bool on_lattice =
+      holds_to_lattice(rings, input, lattice, pixel_size, noise_floor_m, noise, mask_rounding, o.refinement, &undetermined, &by_rectangle);
+  // (Read as round before its mask's rounding is known: tested again under it, held_under_rounding.)
+  if (!on_lattice && by_rectangle && mask_rounding < 0) result.read_round = BuildingResult::ReadRound{lattice, noise};
   result.noise_m = noise;
   result.regularity_noise_m = regularity_noise;
   result.arc_noise_m = arc_noise;
@@ -376,6 +395,13 @@ double pooled_rounding(const std::vector<double>& measured_m, const CoreOptions&
   const auto middle = rounded.begin() + long(rounded.size() / 2);  // (the upper median of an even count)
   std::nth_element(rounded.begin(), middle, rounded.end());
   return *middle;
+}
+
+bool held_under_rounding(const std::vector<Ring>& rings, double pixel_size, const CoreOptions& o, const BuildingResult& result,
+                         double mask_rounding_m) {
+  return result.ok && result.read_round && resolves_rounding(mask_rounding_m, pixel_size) && !rings.empty() &&
+         no_rounder_than_rectangle(rings[0], result.read_round->lattice, pixel_size, result.read_round->noise_m, mask_rounding_m,
+                                   o.refinement);
 }
 
 void take_mask_rounding(const std::vector<Ring>& rings, double pixel_size, const CoreOptions& o, double mask_rounding_m,

@@ -69,6 +69,15 @@ struct BuildingResult {
     bool on_lattice = false;
   };
   std::optional<BeforeEllipse> before_ellipse;
+  // Where its mask's rounding was not known yet and it was read as round (not held to its
+  // lattice: its best rectangle, sharp, explains its contour less well than its ellipse; refinement
+  // .round_fit_ratio): the lattice and noise that test took, for held_under_rounding to take it
+  // again with the rectangle rounded as its mask rounds corners; else none.
+  struct ReadRound {
+    Vec2 lattice = Vec2::Zero();
+    double noise_m = 0;
+  };
+  std::optional<ReadRound> read_round;
   std::string route;            // the chain's corner route taken: "original" or "deformed"; empty otherwise
   std::string note;             // when ok: why the route taken is not the one asked for (a budget), else empty
   double seconds = 0;
@@ -83,6 +92,13 @@ struct BuildingResult {
   void add_start_seconds(double s) {
     seconds += s;
     chain_seconds.start += s;
+  }
+  // Another run's times (the same building's, drawn before) added to this one's.
+  void add_seconds(const BuildingResult& earlier) {
+    seconds += earlier.seconds;
+    chain_seconds.start += earlier.chain_seconds.start;
+    chain_seconds.labeling += earlier.chain_seconds.labeling;
+    chain_seconds.outline += earlier.chain_seconds.outline;
   }
 
   std::string status() const { return ok ? "ok" : "fallback"; }
@@ -155,6 +171,14 @@ double pooled_rounding(const std::vector<double>& measured_m, const CoreOptions&
 // added to the result's. Never throws: a failure leaves the outline the chain drew.
 void take_mask_rounding(const std::vector<Ring>& rings, double pixel_size, const CoreOptions& options, double mask_rounding_m,
                         BuildingResult& result);
+
+// Whether a building read as round while its mask's rounding was not known (result.read_round) is
+// held to its lattice under that rounding, mask_rounding_m: its best rectangle rounded so explains
+// its contour as well as its ellipse does (refinement.round_fit_ratio, round_fit_noise): a house
+// of 5 x 5 m under a rounding of 2 m is a disc in its mask. Then its chain, run again with the
+// rounding known (BuildingStart::mask_rounding_m), draws it on its lattice.
+bool held_under_rounding(const std::vector<Ring>& rings, double pixel_size, const CoreOptions& options, const BuildingResult& result,
+                         double mask_rounding_m);
 
 // The regularizers the core offers, by name: "deformation" (the chain above, corner route in
 // options.corners.route), "cgal" (CGAL Shape_regularization, options.cgal; the fallback when it

@@ -91,35 +91,6 @@ class StretchGuard {
   std::vector<std::vector<std::pair<double, double>>> reference_;
 };
 
-// A ring as a segmentation that rounds corners by `radius` draws it (an opening and a closing by
-// a disc): each corner an arc of that radius (eight chords) tangent to its two walls, the radius
-// less where the tangent points would pass the middle of either wall.
-Ring rounded_ring(const Ring& ring, double radius) {
-  Ring out;
-  const std::size_t n = ring.size();
-  for (std::size_t i = 0; i < n; ++i) {
-    const Vec2 before = edge_vector(ring, (i + n - 1) % n), after = edge_vector(ring, i), v = ring[i];
-    const double turn = std::atan2(cross(before, after), before.dot(after));  // (signed: left > 0)
-    const double half_tan = std::tan(0.5 * std::abs(turn));
-    if (!(before.norm() > 0) || !(after.norm() > 0) || !(half_tan > 1e-9)) {
-      out.push_back(v);
-      continue;
-    }
-    const double tangent = std::min({radius * half_tan, 0.5 * before.norm(), 0.5 * after.norm()});
-    const double r = tangent / half_tan;
-    const Vec2 u = before.normalized(), left(-u.y(), u.x());
-    const Vec2 start = v - tangent * u, centre = start + (turn > 0 ? r : -r) * left;
-    for (int k = 0; k <= 8; ++k) out.push_back(centre + Eigen::Rotation2Dd(turn * k / 8) * (start - centre));
-  }
-  return out;
-}
-
-PolygonWithHoles rounded_polygon(const PolygonWithHoles& polygon, double radius) {
-  PolygonWithHoles out{rounded_ring(polygon.outer, radius), {}};
-  for (const Ring& hole : polygon.holes) out.holes.push_back(rounded_ring(hole, radius));
-  return out;
-}
-
 // Replaces the chain's outline by the building's moment rectangle when that explains the contour
 // (a high percentile, models.rectangle_quantile, of the contour's distances to each) no worse than the outline plus the allowed noise,
 // and leaves out no stretch of it that the outline explains (a wing, a notch, an arc's bow)
@@ -146,6 +117,8 @@ void choose_rectangle(const std::vector<Ring>& rings, double pixel_size, const C
   double mean_fit = 0;  // the best rectangle's mean distance, which chose it
   Ring rectangle = lattice ? moment_rectangle(rings[0], *lattice) : best_rectangle(rings[0], result.directions, &mean_fit);
   if (rectangle.empty()) return;
+  // (Under a rounding, the sides moved out of the arcs where that draws the contour nearer.)
+  if (rounding > 0) rectangle = rectangle_under_rounding(rings[0], rectangle, rounding);
   PolygonWithHoles candidate{std::move(rectangle), {}};
   const auto outline_distances = boundary_distances(rings[0], rounding > 0 ? rounded_polygon(result.footprint, rounding) : result.footprint);
   const auto rectangle_distances = boundary_distances(rings[0], rounding > 0 ? rounded_polygon(candidate, rounding) : candidate);
@@ -184,8 +157,7 @@ bool round_beyond_rectangle(const std::vector<Ring>& rings, double pixel_size, c
                             double ellipse_fit, const std::vector<Vec2>& directions, double rounding) {
   double rectangle_fit = 0;
   Ring rectangle = best_rectangle(rings[0], directions, &rectangle_fit);
-  if (rounding > 0 && !rectangle.empty())
-    rectangle_fit = mean_distance(boundary_distances(rings[0], rounded_polygon(PolygonWithHoles{std::move(rectangle), {}}, rounding)));
+  if (rounding > 0 && !rectangle.empty()) rectangle_under_rounding(rings[0], rectangle, rounding, &rectangle_fit);
   const double noise_mean = within ? within->mean : 0.0;
   const auto beyond_noise = [noise_mean](double fit) { return std::sqrt(std::max(0.0, fit * fit - noise_mean * noise_mean)); };
   const double ellipse_excess = within ? std::min(ellipse_fit, std::max(beyond_noise(ellipse_fit), within->tolerance)) : ellipse_fit;
