@@ -33,7 +33,7 @@ double inverse_erf(double y) {
 // bisector, as without a hysteresis. (Walked one way alone, a run would reach hysteresis_deg
 // farther into the corner after it than into the one before: along a corner rounded by 2 m, a
 // metre more of arc at its end, which turns its fitted line; a small house's lattice came out
-// 3-5 degrees off, always the same way.)
+// 2-7 degrees off, always the same way.)
 std::vector<int> axis_labels(const std::vector<Vec2>& normals, const Vec2 (&axes)[4], double hysteresis_deg) {
   const std::size_t n = normals.size();
   const auto nearest = [&](std::size_t i) {

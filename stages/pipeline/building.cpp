@@ -406,6 +406,7 @@ bool held_under_rounding(const std::vector<Ring>& rings, double pixel_size, cons
 
 void take_mask_rounding(const std::vector<Ring>& rings, double pixel_size, const CoreOptions& o, double mask_rounding_m,
                         BuildingResult& result) {
+  result.read_round.reset();  // (judged by held_under_rounding before this)
   // A step under the mask's rounding, its time added to the building's outline time; a failure
   // there leaves the building as its chain drew it.
   const auto under_rounding = [&](const auto& step) {

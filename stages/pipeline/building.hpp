@@ -167,8 +167,9 @@ double pooled_rounding(const std::vector<double>& measured_m, const CoreOptions&
 // (pooled_rounding; BuildingStart::mask_rounding_m was negative), where it measured none of its
 // own and kept its outline for it (result.unsquared, then cleared; rounding_pooled set where
 // mask_rounding_m is above 0), and a building drawn as its ellipse compared with its rectangle
-// rounded so (result.before_ellipse, then cleared). The same outline as the chain given that rounding draws; its time
-// added to the result's. Never throws: a failure leaves the outline the chain drew.
+// rounded so (result.before_ellipse, then cleared; result.read_round cleared too, for
+// held_under_rounding, which is asked first). The same outline as the chain given that rounding
+// draws; its time added to the result's. Never throws: a failure leaves the outline the chain drew.
 void take_mask_rounding(const std::vector<Ring>& rings, double pixel_size, const CoreOptions& options, double mask_rounding_m,
                         BuildingResult& result);
 
