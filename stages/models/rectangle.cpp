@@ -480,4 +480,11 @@ Ring rectangle_under_rounding(const Ring& ring, const Ring& rectangle, double ra
   return as_grown < as_is ? grown : rectangle;
 }
 
+double best_rectangle_fit(const Ring& ring, const std::vector<Vec2>& normals, double radius) {
+  double fit = std::numeric_limits<double>::infinity();
+  const Ring rectangle = best_rectangle(ring, normals, &fit);
+  if (radius > 0 && !rectangle.empty()) rectangle_under_rounding(ring, rectangle, radius, &fit);
+  return fit;
+}
+
 }  // namespace lodforge

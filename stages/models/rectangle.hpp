@@ -165,4 +165,9 @@ Ring grown_for_rounding(const Ring& rectangle, double radius, double area);
 // rounding measured is larger than the mask's, the grown one overshoots.)
 Ring rectangle_under_rounding(const Ring& ring, const Ring& rectangle, double radius, double* fit = nullptr);
 
+// best_rectangle's mean distance to the ring over the candidate normals; under a rounding (radius
+// above 0) that of the rectangle as the mask rounds it (rectangle_under_rounding). Infinity for a
+// degenerate ring.
+double best_rectangle_fit(const Ring& ring, const std::vector<Vec2>& normals, double radius = 0);
+
 }  // namespace lodforge

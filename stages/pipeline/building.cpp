@@ -169,10 +169,7 @@ bool resolves_rounding(double rounding, double pixel_size) { return rounding * (
 bool no_rounder_than_rectangle(const Ring& outer, const Vec2& lattice, double pixel_size, double noise_m, double rounding,
                                const RefineOptions& o) {
   if (o.round_fit_ratio <= 0) return false;
-  if (!resolves_rounding(rounding, pixel_size)) rounding = 0;
-  double rectangle_fit = std::numeric_limits<double>::infinity();
-  Ring rectangle = best_rectangle(outer, {lattice}, &rectangle_fit);
-  if (rounding > 0 && !rectangle.empty()) rectangle_under_rounding(outer, rectangle, rounding, &rectangle_fit);
+  const double rectangle_fit = best_rectangle_fit(outer, {lattice}, resolves_rounding(rounding, pixel_size) ? rounding : 0.0);
   const bool within_noise = o.round_fit_noise <= 0 || rectangle_fit <= o.round_fit_noise * std::max(noise_m, pixel_size);
   return std::isfinite(rectangle_fit) && within_noise && rectangle_fit <= o.round_fit_ratio * moment_ellipse_fit(outer);
 }
@@ -185,18 +182,15 @@ bool no_rounder_than_rectangle(const Ring& outer, const Vec2& lattice, double pi
 // (no_rounder_than_rectangle; rounded by its mask's rounding, mask_rounding_m, where above 0).
 // *undetermined: taken so because its shape does not tell (too small for its noise, or no rounder
 // than a rectangle), not by its walls: its neighbours' lattice is lent to it (outline_lattice).
-// *by_rectangle: false where it was taken so, or not, before the rectangle's test.
+// (Not held: read as round by its rectangle's test, or with that test off.)
 bool holds_to_lattice(const std::vector<Ring>& rings, const LabelingInput& input, const Vec2& lattice, double pixel_size,
-                      double noise_floor_m, double noise_m, double mask_rounding_m, const RefineOptions& o, bool* undetermined,
-                      bool* by_rectangle) {
+                      double noise_floor_m, double noise_m, double mask_rounding_m, const RefineOptions& o, bool* undetermined) {
   const double outline_m = perimeter(rings[0]);
   *undetermined = outline_m < o.min_round_noise * noise_floor_m;
-  *by_rectangle = false;
   if (too_short_to_show_round(outline_m, pixel_size, noise_floor_m, o) ||
       lattice_share(input.normals, input.lengths, lattice, o.lattice_deg) >= o.min_lattice_share ||
       total_turning(rings[0], input.normals[0], std::max(1.0, 2 * pixel_size)) >= o.min_turning)
     return true;
-  *by_rectangle = o.round_fit_ratio > 0;
   *undetermined = no_rounder_than_rectangle(rings[0], lattice, pixel_size, noise_m, std::max(0.0, mask_rounding_m), o);
   return *undetermined;
 }
@@ -278,11 +272,11 @@ void run_chain(const std::vector<Ring>& rings, double pixel_size, const CoreOpti
   if (o.lattice.fit_max_turn_deg > 0)
     fitted.direction = fit_lattice(rings, input.normals, chord.share >= o.lattice.min_share ? chord.direction : first_main, pixel_size,
                                    o.lattice, o.noise, o.corners.snap_correlation_m, &fitted.uncertainty, &fitted.spread, noise);
-  bool undetermined = false, by_rectangle = false;
-  const bool on_lattice =
-      holds_to_lattice(rings, input, lattice, pixel_size, noise_floor_m, noise, mask_rounding, o.refinement, &undetermined, &by_rectangle);
-  // (Read as round before its mask's rounding is known: tested again under it, held_under_rounding.)
-  if (!on_lattice && by_rectangle && mask_rounding < 0) result.read_round = BuildingResult::ReadRound{lattice, noise};
+  bool undetermined = false;
+  const bool on_lattice = holds_to_lattice(rings, input, lattice, pixel_size, noise_floor_m, noise, mask_rounding, o.refinement, &undetermined);
+  // (Read as round by its rectangle before its mask's rounding is known: tested again under it,
+  // held_under_rounding.)
+  if (!on_lattice && o.refinement.round_fit_ratio > 0 && mask_rounding < 0) result.read_round = BuildingResult::ReadRound{lattice, noise};
   result.noise_m = noise;
   result.regularity_noise_m = regularity_noise;
   result.arc_noise_m = arc_noise;

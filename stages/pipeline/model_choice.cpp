@@ -6,7 +6,6 @@
 #include <optional>
 #include <string>
 #include <utility>
-#include <Eigen/Geometry>
 
 #include "directions/refine.hpp"
 #include "geometry/polygon.hpp"
@@ -155,9 +154,7 @@ constexpr double kEllipseVertices = 2.5;
 // and of its rectangle alike, and under a rounding of 2 m a house of 5 m is a disc in its mask.
 bool round_beyond_rectangle(const std::vector<Ring>& rings, double pixel_size, const CoreOptions& co, const std::optional<NoiseFit>& within,
                             double ellipse_fit, const std::vector<Vec2>& directions, double rounding) {
-  double rectangle_fit = 0;
-  Ring rectangle = best_rectangle(rings[0], directions, &rectangle_fit);
-  if (rounding > 0 && !rectangle.empty()) rectangle_under_rounding(rings[0], rectangle, rounding, &rectangle_fit);
+  const double rectangle_fit = best_rectangle_fit(rings[0], directions, rounding);
   const double noise_mean = within ? within->mean : 0.0;
   const auto beyond_noise = [noise_mean](double fit) { return std::sqrt(std::max(0.0, fit * fit - noise_mean * noise_mean)); };
   const double ellipse_excess = within ? std::min(ellipse_fit, std::max(beyond_noise(ellipse_fit), within->tolerance)) : ellipse_fit;
