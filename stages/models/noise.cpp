@@ -291,16 +291,23 @@ std::optional<Vec2> fit_lattice(const std::vector<Ring>& rings, const std::vecto
   };
   Vec2 normal = start;
   double spread = 0;
-  for (int pass = 0; pass < 3; ++pass) {
+  // The first pass fits nothing: its outliers are judged about the start direction, near the
+  // walls, so that a long oblique wall a run took in (its normals within 45 + fit_hysteresis_deg
+  // of the run's axis) leaves the fit before it can turn it; a first fit with it in turned
+  // the lattice of a stepped Delft block 6 degrees off its walls, its spread twice the noise,
+  // which kept the oblique wall in.
+  for (int pass = 0; pass < 4; ++pass) {
     update_means();
-    Eigen::Matrix2d scatter = Eigen::Matrix2d::Zero();
-    for (std::size_t k = 0; k < samples.size(); ++k) {
-      const Vec2 d = samples[k].q - mean[samples[k].run];
-      scatter += keep[k] * samples[k].w * d * d.transpose();
+    if (pass > 0) {
+      Eigen::Matrix2d scatter = Eigen::Matrix2d::Zero();
+      for (std::size_t k = 0; k < samples.size(); ++k) {
+        const Vec2 d = samples[k].q - mean[samples[k].run];
+        scatter += keep[k] * samples[k].w * d * d.transpose();
+      }
+      const Vec2 fitted = Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d>(scatter).eigenvectors().col(0);
+      if (!fitted.allFinite()) return std::nullopt;
+      normal = fitted.dot(start) < 0 ? Vec2(-fitted) : fitted;
     }
-    Vec2 fitted = Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d>(scatter).eigenvectors().col(0);
-    if (!fitted.allFinite()) return std::nullopt;
-    normal = fitted.dot(start) < 0 ? Vec2(-fitted) : fitted;
     std::vector<std::pair<double, double>> residuals, kept;  // of every sample, of those in the fit
     residuals.reserve(samples.size());
     for (std::size_t k = 0; k < samples.size(); ++k) {
@@ -309,7 +316,7 @@ std::optional<Vec2> fit_lattice(const std::vector<Ring>& rings, const std::vecto
     }
     if (kept.empty()) return std::nullopt;
     spread = weighted_quantile(std::move(kept), no.quantile) / gaussian_abs_quantile(no.quantile);
-    if (pass == 2) break;  // the last fit's samples are those its spread and uncertainty describe
+    if (pass == 3) break;  // the last fit's samples are those its spread and uncertainty describe
     const double bound = lo.fit_outlier_noise * std::max(spread, 0.5 * pixel_size);
     // A run whose own RMS about its line exceeds the bound steps along its wall (row houses, a
     // step of a few pixels the smoothed normals did not turn at): it leaves the fit whole.
