@@ -42,6 +42,20 @@ TEST(Geometry, PolygonProblemChecksHoles) {
   EXPECT_NE(polygon_problem(crossing), "");
 }
 
+// Of a polygon whose holes cross its outer ring or each other, the holes that fit stay, in order.
+TEST(Geometry, HolesThatFitKeepsTheValidOnes) {
+  const Ring good{{2, 2}, {2, 4}, {4, 4}, {4, 2}}, across{{8, 2}, {8, 4}, {12, 4}, {12, 2}}, over_good{{3, 3}, {3, 5}, {5, 5}, {5, 3}},
+      other{{6, 6}, {6, 8}, {8, 8}, {8, 6}};
+  int dropped = -1;
+  const PolygonWithHoles kept = holes_that_fit({square(10), {good, across, over_good, other}}, &dropped);
+  EXPECT_EQ(dropped, 2);
+  ASSERT_EQ(kept.holes.size(), 2u);
+  EXPECT_EQ(kept.holes[0], good);
+  EXPECT_EQ(kept.holes[1], other);
+  EXPECT_EQ(polygon_problem(kept), "");
+  EXPECT_NEAR(area(kept), 92.0, 1e-12);
+}
+
 // Two corner lines that overshoot past each other make a thin inverted loop: it is cut off at the
 // crossing, and the ring keeps its corner. A loop wider than allowed, or a figure eight, is left.
 TEST(Geometry, UntangleCutsOffAThinLoopOnly) {

@@ -157,6 +157,16 @@ std::string ring_problem(const Ring& ring) {
   return {};
 }
 
+PolygonWithHoles holes_that_fit(const PolygonWithHoles& polygon, int* dropped) {
+  PolygonWithHoles kept{polygon.outer, {}};
+  for (const Ring& hole : polygon.holes) {
+    kept.holes.push_back(hole);
+    if (!polygon_problem(kept).empty()) kept.holes.pop_back();
+  }
+  if (dropped) *dropped = int(polygon.holes.size() - kept.holes.size());
+  return kept;
+}
+
 std::string polygon_problem(const PolygonWithHoles& polygon) {
   if (std::string p = ring_problem(polygon.outer); !p.empty()) return "outer ring: " + p;
   if (signed_area(polygon.outer) <= 0) return "outer ring is not counter-clockwise";

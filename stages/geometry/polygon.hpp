@@ -43,6 +43,11 @@ std::string ring_problem(const Ring& ring);
 // counter-clockwise, holes clockwise, inside the outer ring and pairwise disjoint.
 std::string polygon_problem(const PolygonWithHoles& polygon);
 
+// The polygon with only those of its holes that keep it valid (polygon_problem), each tried in
+// turn beside the ones kept; its outer ring must be valid alone. *dropped, when asked: how many
+// were left out.
+PolygonWithHoles holes_that_fit(const PolygonWithHoles& polygon, int* dropped = nullptr);
+
 // Cuts off the loops of a ring that crosses itself: at each crossing the ring splits in two and
 // the piece of larger area, turning the ring's way, is kept. Each piece cut off must be thinner
 // than max_width on average (its area over half its perimeter). True, with the ring changed, when

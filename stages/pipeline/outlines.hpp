@@ -30,8 +30,9 @@ using StageProblem = std::pair<std::string, std::string>;  // stage, problem (em
 
 // The corner polygon of the rings (metres from origin) at a context, validated: an invalid polygon
 // is retried with coarser run absorption (short runs are where crossings come from), then again
-// with runs left unsplit (steps are short too). *curved (when given): whether the polygon drawn
-// keeps a run of a ring as a curve.
+// with runs left unsplit (steps are short too), and last, where only its holes are invalid, drawn
+// as first asked with the holes that fit (holes_that_fit). *curved (when given): whether the
+// polygon drawn keeps a run of a ring as a curve.
 StageProblem outline(const std::vector<Ring>& rings, const EdgeLabels& labels, const std::vector<Vec2>& directions,
                      const CornerOptions& o, const Vec2& origin, double pixel_size, const CornerContext& context,
                      double min_run_px, PolygonWithHoles& footprint, bool* curved = nullptr);
