@@ -2520,11 +2520,6 @@ TEST(CleanMasks, ABuildingThatMeasuresNoRoundingTakesItsMasks) {
   }
 }
 
-// Under a rounding, a small house whose every corner the rounding took reads as a blob: its
-// rectangle is compared with the contour rounded as the mask rounds it. A shed of 3 x 2.6 m whose
-// contour a rounding of 1.2 m drew (at 0.1 m), its outline the octagon of its straight walls (0.6
-// and 0.2 m long: no square corner for rounded_share, no wall to square a chain from): under the
-// mask's rounding it becomes its rectangle; without one (models.rounding_noise = 0) it stays.
 // A rectangle grown for a rounding: a house of 3 x 2.6 m rounded by 1.2 m has 6.56 m^2; its
 // rectangle drawn 0.2 m inside every wall, grown so that rounded by 1.2 m it has that area, is the
 // house again (turned by 30 degrees, either way round); its rounding then lies on the contour.
@@ -2547,6 +2542,11 @@ TEST(Squaring, ARectangleGrownForItsRoundingIsTheHouse) {
   EXPECT_EQ(grown_for_rounding(house.outer, 0.0, rounded_area), house.outer);  // (no rounding: as it is)
 }
 
+// Under a rounding, a small house whose every corner the rounding took reads as a blob: its
+// rectangle is compared with the contour rounded as the mask rounds it. A shed of 3 x 2.6 m whose
+// contour a rounding of 1.2 m drew (at 0.1 m), its outline the octagon of its straight walls (0.6
+// and 0.2 m long: no square corner for rounded_share, no wall to square a chain from): under the
+// mask's rounding it becomes its rectangle; without one (models.rounding_noise = 0) it stays.
 TEST(Squaring, ASmallHouseWhoseCornersARoundingTookIsItsRectangle) {
   const double radius = 1.2, w = 3.0, h = 2.6;
   Ring contour;

@@ -66,8 +66,8 @@ double lattice_noise(const std::vector<Ring>& rings, const std::vector<std::vect
 // lattice.fit_outlier_noise spreads from their run's line, and runs whose own RMS about it is
 // over lattice.fit_outlier_noise times the runs' median (a run stepping along row houses), leave
 // the fit; before the first fit they are judged about `start` (a fit with an oblique wall in,
-// which a run took in, turns toward it, and its spread keeps it in). A wall's direction averages its wobble out over its whole length, where a labeled
-// direction follows a flank. No fit (nullopt) when fewer than two runs have a middle, the runs
+// which a run took in, turns toward it, and its spread keeps it in). A wall's direction averages
+// its wobble out over its whole length, where a labeled direction follows a flank. No fit (nullopt) when fewer than two runs have a middle, the runs
 // leave fewer than 3 points to spare, or the fit turns more than lattice.fit_max_turn_deg from
 // `start`. When fitted: *uncertainty, the standard error of its direction (radians), the spread
 // taken as correlated over correlation_m; *spread, the runs' spread about their lines (map

@@ -191,7 +191,7 @@ bool holds_to_lattice(const std::vector<Ring>& rings, const LabelingInput& input
       lattice_share(input.normals, input.lengths, lattice, o.lattice_deg) >= o.min_lattice_share ||
       total_turning(rings[0], input.normals[0], std::max(1.0, 2 * pixel_size)) >= o.min_turning)
     return true;
-  *undetermined = no_rounder_than_rectangle(rings[0], lattice, pixel_size, noise_m, std::max(0.0, mask_rounding_m), o);
+  *undetermined = no_rounder_than_rectangle(rings[0], lattice, pixel_size, noise_m, mask_rounding_m, o);
   return *undetermined;
 }
 

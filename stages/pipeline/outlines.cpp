@@ -39,6 +39,8 @@ StageProblem outline(const std::vector<Ring>& rings, const EdgeLabels& labels, c
   bool drawn_curved = false;
   CornerOptions corner_options = o;
   std::string problem;
+  PolygonWithHoles first;  // the polygon drawn as first asked
+  bool first_curved = false;
   try {
     for (const double split_px : {o.split_px, 0.0}) {
       corner_options.split_px = split_px;
@@ -50,23 +52,20 @@ StageProblem outline(const std::vector<Ring>& rings, const EdgeLabels& labels, c
           if (curved) *curved = drawn_curved;
           return {};
         }
+        if (split_px == o.split_px && attempt == 0) first = footprint, first_curved = drawn_curved;
         corner_options.min_run_px = std::max(2.0, 2 * corner_options.min_run_px);
       }
     }
-    // Still invalid where only holes are (a courtyard drawn across a wall within the noise of
-    // it, or a gap between houses a wobble closed into a hole): the outline drawn as first
-    // asked keeps its outer ring and the holes that fit, not the whole building lost to the
-    // fallback.
-    corner_options.split_px = o.split_px;
-    corner_options.min_run_px = min_run_px;
-    PolygonWithHoles first = corner_polygon(rings, labels, directions, corner_options, origin, pixel_size, context, &drawn_curved);
-    if (!first.holes.empty() && polygon_problem({first.outer, {}}).empty()) {
-      footprint = holes_that_fit(first);
-      if (curved) *curved = drawn_curved;
-      return {};
-    }
   } catch (const StageError& e) {
     return {e.stage, e.what()};
+  }
+  // Still invalid where only holes are (a courtyard drawn across a wall within the noise of it,
+  // or a gap between houses a wobble closed into a hole): the polygon drawn as first asked keeps
+  // its outer ring and the holes that fit, not the whole building lost to the fallback.
+  if (!first.holes.empty() && polygon_problem({first.outer, {}}).empty()) {
+    footprint = holes_that_fit(first);
+    if (curved) *curved = first_curved;
+    return {};
   }
   return {"validation", problem};
 }
