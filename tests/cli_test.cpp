@@ -513,7 +513,7 @@ TEST_F(Cli, AThinRowUnderAWobbleHasSquareEnds) {
 TEST_F(Cli, AHoleDrawnAcrossTheOuterRingIsLeftOutNotTheBuilding) {
   CommandRun r = lodforge(extract_segmentation("0.5", 2, "1", "2", "0", path("sim")));
   ASSERT_EQ(r.code, 0) << r.output;
-  r = lodforge("regularize -q --mask " + path("sim/seg_class.tif") + " --out " + path("rows.gpkg") + " --stats " + path("stats.json"));
+  r = lodforge("regularize --mask " + path("sim/seg_class.tif") + " --out " + path("rows.gpkg") + " --stats " + path("stats.json"));
   ASSERT_EQ(r.code, 0) << r.output;
   const nlohmann::json stats = nlohmann::json::parse(test::slurp(dir / "stats.json"));
   EXPECT_EQ(stats.at("fallback").get<int>(), 0) << r.output;
@@ -528,6 +528,16 @@ TEST_F(Cli, AHoleDrawnAcrossTheOuterRingIsLeftOutNotTheBuilding) {
       EXPECT_GE(double(right), 0.9 * double(corners)) << right << " of " << corners;
     }
   EXPECT_TRUE(found) << "no footprint holds the row's point: the test no longer shows the case";
+  // The hole left out is said in the row's reason, the others' have none.
+  GDALDataset* d = static_cast<GDALDataset*>(GDALOpenEx(path("rows.gpkg").c_str(), GDAL_OF_VECTOR, nullptr, nullptr, nullptr));
+  ASSERT_NE(d, nullptr);
+  std::vector<std::string> reasons;
+  for (auto& f : *d->GetLayer(0))
+    if (!f->IsFieldNull(f->GetFieldIndex("reason"))) reasons.push_back(f->GetFieldAsString("reason"));
+  GDALClose(d);
+  ASSERT_EQ(reasons.size(), 1u);
+  EXPECT_TRUE(reasons[0].rfind("its outline covers 1 hole of the mask (", 0) == 0) << reasons[0];
+  EXPECT_NE(r.output.find("1 building(s) cover holes of the mask"), std::string::npos) << r.output;
 }
 
 // Row houses of the TU Delft campus (BAG) in a simulated segmentation at 25 cm under half a metre

@@ -56,6 +56,20 @@ TEST(Geometry, HolesThatFitKeepsTheValidOnes) {
   EXPECT_NEAR(area(kept), 92.0, 1e-12);
 }
 
+// A point inside a ring whose box's middle lies outside it (a U), and the contour's holes a
+// polygon covers: the one it draws filled, not the one it keeps, nor one outside it.
+TEST(Geometry, InteriorPointAndCoveredHoles) {
+  const Ring u{{0, 0}, {10, 0}, {10, 10}, {8, 10}, {8, 2}, {2, 2}, {2, 10}, {0, 10}};
+  const Vec2 p = interior_point(u);
+  EXPECT_TRUE(point_in_ring(p, u)) << p.transpose();
+  EXPECT_FALSE(point_in_ring(Vec2(5, 5), u));
+  const Ring kept{{2, 2}, {2, 4}, {4, 4}, {4, 2}}, filled{{6, 6}, {6, 8}, {7, 8}, {7, 6.5}, {8, 6.5}, {8, 6}}, outside{{12, 2}, {12, 4}, {14, 4}, {14, 2}};
+  const std::vector<Ring> contour{square(10), kept, filled, outside};
+  EXPECT_EQ(covered_holes(contour, {square(10), {kept}}), (std::vector<std::size_t>{2}));
+  EXPECT_EQ(covered_holes(contour, {square(10), {kept, filled}}), (std::vector<std::size_t>{}));
+  EXPECT_EQ(covered_holes(contour, {square(10), {}}), (std::vector<std::size_t>{1, 2}));
+}
+
 // Two corner lines that overshoot past each other make a thin inverted loop: it is cut off at the
 // crossing, and the ring keeps its corner. A loop wider than allowed, or a figure eight, is left.
 TEST(Geometry, UntangleCutsOffAThinLoopOnly) {

@@ -166,7 +166,7 @@ int run_regularize(int argc, char** argv) {
 
   std::vector<FootprintRecord> records(count);
   std::map<std::string, int> failures, models;
-  int failed = 0, rerouted = 0, lent = 0, took_rounding = 0;
+  int failed = 0, rerouted = 0, lent = 0, took_rounding = 0, covering = 0;
   std::vector<double> roundings;  // of the buildings whose corners the segmentation rounded (BuildingResult::rounding_m)
   for (std::size_t i = 0; i < count; ++i) {
     const BuildingResult& r = results[i];
@@ -175,11 +175,12 @@ int run_regularize(int argc, char** argv) {
     rec.polygon = r.footprint;
     rec.status = r.status();
     rec.failed_stage = r.failed_stage;
-    rec.reason = r.ok ? r.note : r.reason;
+    rec.reason = r.remark();
     rec.regularizer = !r.ok ? "douglas_peucker" : regularizer == "deformation" ? "deformation_" + r.route : regularizer;
     rec.model = r.model;
     ++models[r.ok ? r.model : "fallback"];
     if (r.ok && !r.note.empty()) ++rerouted;
+    if (r.holes_covered > 0) ++covering;
     if (r.ok && r.lattice_lent) ++lent;
     if (r.ok && r.rounding_m > 0) roundings.push_back(r.rounding_m);
     if (r.ok && r.rounding_pooled) ++took_rounding;
@@ -210,6 +211,9 @@ int run_regularize(int argc, char** argv) {
                  took_rounding, batch.rounding_m, batch.rounding_samples);
   if (rerouted > 0)
     spdlog::info("{} building(s) took the original corner route instead of the deformed one (over a budget; the reason is in their 'reason' field)", rerouted);
+  if (covering > 0)
+    spdlog::info("{} building(s) cover holes of the mask (a courtyard drawn filled, or a hole that crossed the outline; "
+                 "their 'reason' field says how many and their area)", covering);
   if (auto stats = args.get("stats")) {
     // Times overall, then by contour size (edges of all rings), which the cost grows with.
     struct SizeClass { const char* name; std::size_t below; std::vector<const BuildingResult*> results; };

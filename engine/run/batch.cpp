@@ -345,6 +345,7 @@ RegularizedBatch regularize_batch(const std::string& regularizer, const std::vec
     for (Ring& h : flat.holes) h = remove_degenerate_vertices(h, 1e-9);
     r.footprint = polygon_problem(flat).empty() ? std::move(flat) : std::move(*clipped);
   });
+  for (std::size_t i = 0; i < buildings.size(); ++i) batch.results[i].count_covered_holes(buildings[i].rings);
   return batch;
 }
 

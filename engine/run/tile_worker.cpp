@@ -71,7 +71,7 @@ std::vector<BuildingOutput> regularize_tile(const TileBuildings& tile, const Job
     o.footprint = std::move(r.footprint);
     o.ok = r.ok;
     o.stage = r.failed_stage;
-    o.reason = r.ok ? r.note : r.reason;
+    o.reason = r.remark();
     o.model = r.ok ? r.model : "";
     o.seconds = r.seconds;
   }

@@ -167,6 +167,40 @@ PolygonWithHoles holes_that_fit(const PolygonWithHoles& polygon, int* dropped) {
   return kept;
 }
 
+Vec2 interior_point(const Ring& ring) {
+  std::vector<double> heights;
+  for (const Vec2& p : ring) heights.push_back(p.y());
+  std::sort(heights.begin(), heights.end());
+  heights.erase(std::unique(heights.begin(), heights.end()), heights.end());
+  if (heights.size() < 2) return ring.empty() ? Vec2(0, 0) : ring.front();
+  const double middle = 0.5 * (heights.front() + heights.back());
+  std::size_t k = std::size_t(std::upper_bound(heights.begin(), heights.end(), middle) - heights.begin());
+  k = std::clamp<std::size_t>(k, 1, heights.size() - 1);
+  const double y = 0.5 * (heights[k - 1] + heights[k]);
+  std::vector<double> crossings;
+  for (std::size_t i = 0, j = ring.size() - 1; i < ring.size(); j = i++) {
+    const Vec2 &a = ring[i], &b = ring[j];
+    if ((a.y() > y) != (b.y() > y)) crossings.push_back(a.x() + (y - a.y()) * (b.x() - a.x()) / (b.y() - a.y()));
+  }
+  std::sort(crossings.begin(), crossings.end());
+  double x = ring.front().x(), widest = -1;
+  for (std::size_t i = 0; i + 1 < crossings.size(); i += 2)
+    if (crossings[i + 1] - crossings[i] > widest) widest = crossings[i + 1] - crossings[i], x = 0.5 * (crossings[i] + crossings[i + 1]);
+  return {x, y};
+}
+
+std::vector<std::size_t> covered_holes(const std::vector<Ring>& rings, const PolygonWithHoles& polygon) {
+  std::vector<std::size_t> covered;
+  for (std::size_t r = 1; r < rings.size(); ++r) {
+    if (rings[r].size() < 3) continue;
+    const Vec2 p = interior_point(rings[r]);
+    if (point_in_ring(p, polygon.outer) &&
+        std::none_of(polygon.holes.begin(), polygon.holes.end(), [&p](const Ring& hole) { return point_in_ring(p, hole); }))
+      covered.push_back(r);
+  }
+  return covered;
+}
+
 std::string polygon_problem(const PolygonWithHoles& polygon) {
   if (std::string p = ring_problem(polygon.outer); !p.empty()) return "outer ring: " + p;
   if (signed_area(polygon.outer) <= 0) return "outer ring is not counter-clockwise";

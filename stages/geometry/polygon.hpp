@@ -48,6 +48,14 @@ std::string polygon_problem(const PolygonWithHoles& polygon);
 // were left out.
 PolygonWithHoles holes_that_fit(const PolygonWithHoles& polygon, int* dropped = nullptr);
 
+// A point strictly inside a simple ring: on the horizontal line halfway between the two vertex
+// heights nearest its box's middle, the middle of the widest stretch inside it.
+Vec2 interior_point(const Ring& ring);
+
+// Which of the contour's holes (rings[1..]) the polygon covers: a point inside the hole
+// (interior_point) lies inside its outer ring and in none of its holes. Their indices in rings.
+std::vector<std::size_t> covered_holes(const std::vector<Ring>& rings, const PolygonWithHoles& polygon);
+
 // Cuts off the loops of a ring that crosses itself: at each crossing the ring splits in two and
 // the piece of larger area, turning the ring's way, is kept. Each piece cut off must be thinner
 // than max_width on average (its area over half its perimeter). True, with the ring changed, when

@@ -3,8 +3,10 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <iomanip>
 #include <limits>
 #include <optional>
+#include <sstream>
 #include <stdexcept>
 
 #include "corners/corners.hpp"
@@ -494,6 +496,20 @@ BuildingResult regularize_building(const std::vector<Ring>& rings, double pixel_
   }
   result.seconds = std::chrono::duration<double>(Clock::now() - start).count();
   return result;
+}
+
+void BuildingResult::count_covered_holes(const std::vector<Ring>& rings) {
+  holes_covered = 0, holes_covered_m2 = 0;
+  for (const std::size_t r : covered_holes(rings, footprint)) ++holes_covered, holes_covered_m2 += std::abs(signed_area(rings[r]));
+}
+
+std::string BuildingResult::remark() const {
+  if (!ok) return reason;
+  if (holes_covered == 0) return note;
+  std::ostringstream text;
+  text << (note.empty() ? "" : note + "; ") << "its outline covers " << holes_covered << " hole" << (holes_covered == 1 ? "" : "s")
+       << " of the mask (" << std::fixed << std::setprecision(1) << holes_covered_m2 << " m^2)";
+  return text.str();
 }
 
 const std::vector<std::string>& regularizer_names() {

@@ -80,6 +80,15 @@ struct BuildingResult {
   std::optional<ReadRound> read_round;
   std::string route;            // the chain's corner route taken: "original" or "deformed"; empty otherwise
   std::string note;             // when ok: why the route taken is not the one asked for (a budget), else empty
+  // The holes of its contour that its footprint covers (covered_holes, set by whoever runs the
+  // batch: after the raster's edge clips it): a courtyard a model draws filled (a rectangle, an
+  // ellipse) or a hole drawn across the outline and left out (holes_that_fit). How many, their area (m^2).
+  int holes_covered = 0;
+  double holes_covered_m2 = 0;
+  // Its holes covered, measured on its contour's rings (those it was regularized from).
+  void count_covered_holes(const std::vector<Ring>& rings);
+  // What its output's reason says: for the fallback, why; else its note, then the holes it covers.
+  std::string remark() const;
   double seconds = 0;
   // ... of which: its start (the normals smoothed, the noise sampled: its share of the mask's
   // noise rounds too), its labeling (directions, noise, lattice), its outline (corner route and
