@@ -394,7 +394,7 @@ struct ModelChoice : LabeledBuilding {
   void take_lattice_outline_within_noise();
   void redraw_stretches();
   void simplify_by_criterion();
-  bool offer_coarse_lattices(Criterion& criterion);
+  bool offer_lattice_outlines(Criterion& criterion);
   bool offer_staircase_lines(Criterion& criterion);
   void walk_merged_steps(StepPath& path, bool outline_replaced, Criterion& criterion);
 };
@@ -603,8 +603,8 @@ void ModelChoice::redraw_stretches() {
   if (outline_reach(candidate, contour) <= outline_reach(chosen, contour) + noise_m) result.footprint = std::move(candidate);
 }
 
-// Simpler outlines against the chosen one, by a Bayesian information criterion: the lattice
-// outline drawn as if the noise were coarse_scale and its square times as large
+// Other outlines against the chosen one, by a Bayesian information criterion: the lattice
+// outline, as drawn and as if the noise were coarse_scale and its square times as large
 // (models.coarse_scale), the outline with its staircases drawn as oblique walls
 // (models.staircase_corners), and the path of its steps merged one at a time
 // (models.merge_patience). A wobble whose wavelength is a few times its amplitude cuts the
@@ -627,24 +627,32 @@ void ModelChoice::simplify_by_criterion() {
   std::optional<StepPath> path;
   if (o.models.merge_patience > 0) path.emplace(rings, result.footprint, o.models.merge_parallel_deg);
   criterion.start(path ? criterion.of(path->fit(), vertex_count(result.footprint)) : criterion.of(result.footprint));
-  const bool coarse = offer_coarse_lattices(criterion);
+  const bool coarse = offer_lattice_outlines(criterion);
   const bool lines = offer_staircase_lines(criterion);
   if (path) walk_merged_steps(*path, coarse || lines, criterion);
   criterion.settle(model_noise(result, pixel_size, o.models), noise_correlation_m(o.corners, pixel_size), o.models.criterion_stretch_noise);
 }
 
-// The lattice outline drawn as if the noise were coarse_scale and its square times as large, each
-// with fewer vertices than the chosen outline offered to the criterion. Whether one was taken.
-bool ModelChoice::offer_coarse_lattices(Criterion& criterion) {
+// The lattice outline, and the lattice outline drawn as if the noise were coarse_scale and its
+// square times as large, offered to the criterion whatever their vertices (lattice_more_vertices):
+// a more regular outline with more of them is taken where it explains the contour enough better (a block's rear annexes,
+// steps of a metre or two, drawn as square steps where the chain's outline cut a diagonal across
+// them, or drew them as the plain lines at coarse pixels). Whether one was taken.
+bool ModelChoice::offer_lattice_outlines(Criterion& criterion) {
+  if (o.models.coarse_scale <= 1) return false;
   bool taken = false;
-  for (const PolygonWithHoles& drawn : coarse_lattice_outlines()) {
-    if (vertex_count(drawn) >= vertex_count(result.footprint)) continue;
+  const auto offer = [&](const PolygonWithHoles& drawn, const char* model) {
+    if (!o.models.lattice_more_vertices && vertex_count(drawn) >= vertex_count(result.footprint)) return;
     const double c = criterion.of(drawn);
     if (criterion.offer(c)) {
-      criterion.take(drawn, c, "coarse_lattice");
+      criterion.take(drawn, c, model);
       taken = true;
     }
-  }
+  };
+  // (A lattice outline taken before is cleared: lattice_outline empty. With lattice_more_vertices
+  // off, the coarse ones alone compete, those with fewer vertices.)
+  if (!lattice_outline.outer.empty() && o.models.lattice_more_vertices) offer(lattice_outline, "lattice");
+  for (const PolygonWithHoles& drawn : coarse_lattice_outlines()) offer(drawn, "coarse_lattice");
   return taken;
 }
 
