@@ -635,9 +635,10 @@ void ModelChoice::simplify_by_criterion() {
 
 // The lattice outline, and the lattice outline drawn as if the noise were coarse_scale and its
 // square times as large, offered to the criterion whatever their vertices (lattice_more_vertices):
-// a more regular outline with more of them is taken where it explains the contour enough better (a block's rear annexes,
-// steps of a metre or two, drawn as square steps where the chain's outline cut a diagonal across
-// them, or drew them as the plain lines at coarse pixels). Whether one was taken.
+// a more regular outline with more of them is taken where it explains the contour enough better
+// (a block's rear annexes, steps of a metre or two, drawn as square steps where the chain's
+// outline cut a diagonal across them, or drew them as the plain lines at coarse pixels). Whether
+// one was taken.
 bool ModelChoice::offer_lattice_outlines(Criterion& criterion) {
   if (o.models.coarse_scale <= 1) return false;
   bool taken = false;
