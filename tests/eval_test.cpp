@@ -225,18 +225,26 @@ std::string synthetic_row(const std::filesystem::path& dir, const std::string& p
   return (dir / "mask" / "footprints.gpkg").string();
 }
 
+// Delft's old town (the BGT footprints of tests/data) simulated as bench/sweep.sh makes a row:
+// `pixel` metres a pixel under `wobble` metres of wobble at a `wavelength` m wavelength, corners
+// rounded by twice the wobble, speckles; into dir/mask. Its true footprints (the BGT's file).
+std::string old_town_row(const std::filesystem::path& dir, const std::string& pixel, double wobble, double wavelength) {
+  const std::string bgt = test::test_data() + "/delft-ahn3-bgt/derived/bgt_pand_buildings.geojson";
+  EXPECT_TRUE(std::filesystem::exists(bgt)) << "test data missing at " << test::test_data();
+  const auto r = test::lodforge("synth --from " + bgt + " --pixel-size " + pixel + " --seed 1 --set boundary_noise_m=" + std::to_string(wobble) +
+                                " --set noise_wavelength_m=" + std::to_string(wavelength) + " --set corner_radius_m=" + std::to_string(2 * wobble) +
+                                " --set speckle_per_km2=400 --set speckle_size_m=0.5 --out " + (dir / "mask").string());
+  EXPECT_EQ(r.code, 0) << r.output;
+  return bgt;
+}
+
 // A triangle competes with the rectangle too: Delft's old town simulated at 0.25 m under half a
 // metre of wobble at a 2 m wavelength (as bench/sweep.sh makes it) has a shed of 8 m² that the
 // chain draws as a triangle (seen with the rectangle test off), and the rectangle test passed
 // over every outline of fewer than five vertices. No footprint is a triangle now.
 TEST(EvalCommand, NoFootprintIsATriangle) {
   const auto dir = test::fresh_test_directory("lodforge_triangle");
-  const std::string bgt = test::test_data() + "/delft-ahn3-bgt/derived/bgt_pand_buildings.geojson";
-  ASSERT_TRUE(std::filesystem::exists(bgt)) << "test data missing at " << test::test_data();
-  ASSERT_EQ(test::lodforge("synth --from " + bgt + " --pixel-size 0.25 --seed 1 --set boundary_noise_m=0.5 --set noise_wavelength_m=2 " +
-                           "--set corner_radius_m=1 --set speckle_per_km2=400 --set speckle_size_m=0.5 --out " + (dir / "mask").string())
-                .code,
-            0);
+  old_town_row(dir, "0.25", 0.5, 2);
   GDALAllRegister();
   const auto triangles = [&](const std::string& name, const std::string& options) {
     const std::string out = (dir / (name + ".gpkg")).string();
@@ -268,11 +276,7 @@ TEST(EvalCommand, NoFootprintIsATriangle) {
 // their lattice outlines, IoU 0.8556 (0.8505 before), within 0.002 of the raw contour.
 TEST(EvalCommand, DelftBlocksAt2mAreNotCutAcross) {
   const auto dir = test::fresh_test_directory("lodforge_delft2m");
-  const std::string truth = test::test_data() + "/delft-ahn3-bgt/derived/bgt_pand_buildings.geojson";
-  ASSERT_EQ(test::lodforge("synth --from " + truth + " --pixel-size 2 --seed 1 --set boundary_noise_m=0.25 --set noise_wavelength_m=8" +
-                           " --set corner_radius_m=0.5 --set speckle_per_km2=400 --set speckle_size_m=0.5 --out " + (dir / "mask").string())
-                .code,
-            0);
+  const std::string truth = old_town_row(dir, "2", 0.25, 8);
   const auto iou = [&](const std::string& name, const std::string& options) {
     return regularize_and_eval(dir, truth, name, options).at("overall_iou").get<double>();
   };
@@ -289,11 +293,7 @@ TEST(EvalCommand, DelftBlocksAt2mAreNotCutAcross) {
 // explain the contour enough better are taken: 0.694 and 0.9182.
 TEST(EvalCommand, DelftsRearAnnexesAreSquareSteps) {
   const auto dir = test::fresh_test_directory("lodforge_delft_annexes");
-  const std::string truth = test::test_data() + "/delft-ahn3-bgt/derived/bgt_pand_buildings.geojson";
-  ASSERT_EQ(test::lodforge("synth --from " + truth + " --pixel-size 0.25 --seed 1 --set boundary_noise_m=0.5 --set noise_wavelength_m=8" +
-                           " --set corner_radius_m=1 --set speckle_per_km2=400 --set speckle_size_m=0.5 --out " + (dir / "mask").string())
-                .code,
-            0);
+  const std::string truth = old_town_row(dir, "0.25", 0.5, 8);
   const nlohmann::json ours = regularize_and_eval(dir, truth, "ours", "");
   EXPECT_GE(ours.at("right_angle_share").get<double>(), 0.685) << ours.dump();
   EXPECT_GE(ours.at("overall_iou").get<double>(), 0.9178) << ours.dump();

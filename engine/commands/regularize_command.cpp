@@ -180,7 +180,7 @@ int run_regularize(int argc, char** argv) {
     rec.model = r.model;
     ++models[r.ok ? r.model : "fallback"];
     if (r.ok && !r.note.empty()) ++rerouted;
-    if (r.holes_covered > 0) ++covering;
+    if (r.ok && r.holes_covered > 0) ++covering;  // (a fallback's reason says why it failed)
     if (r.ok && r.lattice_lent) ++lent;
     if (r.ok && r.rounding_m > 0) roundings.push_back(r.rounding_m);
     if (r.ok && r.rounding_pooled) ++took_rounding;

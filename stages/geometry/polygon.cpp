@@ -157,13 +157,12 @@ std::string ring_problem(const Ring& ring) {
   return {};
 }
 
-PolygonWithHoles holes_that_fit(const PolygonWithHoles& polygon, int* dropped) {
+PolygonWithHoles holes_that_fit(const PolygonWithHoles& polygon) {
   PolygonWithHoles kept{polygon.outer, {}};
   for (const Ring& hole : polygon.holes) {
     kept.holes.push_back(hole);
     if (!polygon_problem(kept).empty()) kept.holes.pop_back();
   }
-  if (dropped) *dropped = int(polygon.holes.size() - kept.holes.size());
   return kept;
 }
 

@@ -44,9 +44,8 @@ std::string ring_problem(const Ring& ring);
 std::string polygon_problem(const PolygonWithHoles& polygon);
 
 // The polygon with only those of its holes that keep it valid (polygon_problem), each tried in
-// turn beside the ones kept; its outer ring must be valid alone. *dropped, when asked: how many
-// were left out.
-PolygonWithHoles holes_that_fit(const PolygonWithHoles& polygon, int* dropped = nullptr);
+// turn beside the ones kept; its outer ring must be valid alone.
+PolygonWithHoles holes_that_fit(const PolygonWithHoles& polygon);
 
 // A point strictly inside a simple ring: on the horizontal line halfway between the two vertex
 // heights nearest its box's middle, the middle of the widest stretch inside it.
