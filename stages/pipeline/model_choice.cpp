@@ -911,4 +911,12 @@ void square_and_clean(const std::vector<Ring>& rings, double pixel_size, bool on
 }
 
 
+double outline_criterion(const std::vector<Ring>& rings, double pixel_size, const CoreOptions& o, double noise_m,
+                         const PolygonWithHoles& outline, double parameters) {
+  const double correlation = std::max(pixel_size, o.models.coarse_correlation_noise * noise_m);
+  // (Two parameters a vertex.)
+  return information_criterion(contour_fit(rings, outline), double(vertex_count(outline)) + 0.5 * parameters,
+                               std::max(2.0, total_perimeter(rings) / correlation), pixel_size);
+}
+
 }  // namespace lodforge::chain

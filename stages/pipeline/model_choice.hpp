@@ -70,4 +70,12 @@ void simplify_under_rounding(const std::vector<Ring>& rings, double pixel_size, 
 void ellipse_under_rounding(const std::vector<Ring>& rings, double pixel_size, const CoreOptions& o, double rounding,
                             BuildingResult::BeforeEllipse before, BuildingResult& result);
 
+// The information criterion the model choice weighs simpler outlines by (n ln(d^2) + 2 k ln(n), d
+// the contour's mean distance to the outline, k its vertices, n the contour's length over one
+// independent sample of it: models.coarse_correlation_noise times noise_m, at least a pixel):
+// the less, the better the outline explains the contour for its vertices. parameters: other
+// parameters fitted to the contour, each counted as half a vertex.
+double outline_criterion(const std::vector<Ring>& rings, double pixel_size, const CoreOptions& o, double noise_m,
+                         const PolygonWithHoles& outline, double parameters = 0);
+
 }  // namespace lodforge::chain
