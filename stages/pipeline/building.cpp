@@ -352,7 +352,7 @@ void run_chain(const std::vector<Ring>& rings, double pixel_size, const CoreOpti
   try {
     chain::choose_outline({rings, fit_rings, origin, pixel_size, labels, *trial_input, street, on_lattice, follow_chords, fitted.spread}, o,
                           over_budget, *lent);
-  } catch (const StageError&) {
+  } catch (const std::exception&) {  // (its budget, or no outline on that lattice: its own stands)
     return;
   }
   if (takes_neighbours_lattice(rings, pixel_size, o, noise, result.footprint, lent->footprint, street.lattice)) {
