@@ -233,7 +233,7 @@ Vec2 outline_lattice(const Vec2& labeled, const FittedLattice& fitted, bool unde
 // to a lattice of its own while its neighbours agree on one: a wobble as long as the building
 // bends its whole blob and turns its walls together, and its lattice with them (a shed of 4 x 2.5 m
 // under half a metre of wobble, up to 35 degrees off its street's), where its neighbours' is the
-// likelier; but not always (a clean house of 7 x 5 m at 1 m pixels set askew to its street). Its
+// likelier; but not always (a clean house of 5 x 4 m at 1 m pixels set askew to its street). Its
 // outline drawn on its neighbours' lattice (lent) is taken over the one on its own (own) where
 // every wall of it lies on that lattice (a wall the chain drew off it says the building is not on
 // it) and it explains the contour no worse by the model choice's information criterion, its own

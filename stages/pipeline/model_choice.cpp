@@ -145,6 +145,12 @@ double information_criterion(double fit, double vertices, double samples, double
 }
 constexpr double kEllipseVertices = 2.5;
 
+// The criterion's independent samples of the contour: its length over models.coarse_correlation_noise
+// times the building's noise (at least a pixel), at least two.
+double criterion_samples(const std::vector<Ring>& rings, double pixel_size, const ModelOptions& o, double noise_m) {
+  return std::max(2.0, total_perimeter(rings) / std::max(pixel_size, o.coarse_correlation_noise * noise_m));
+}
+
 // Round, not a rectangle whose corners the segmentation rounded: the contour's best rectangle
 // (the same five parameters as its ellipse; rounded by `rounding` where that is above 0, the
 // mask's, as the mask draws it) leaves it ellipse_rectangle_ratio times as far as its ellipse
@@ -619,8 +625,7 @@ void ModelChoice::simplify_by_criterion() {
   if (!(o.models.coarse_scale > 1 || o.models.merge_patience > 0 || o.models.staircase_corners > 0) || !lattice_ok ||
       vertex_count(result.footprint) <= 4 || has_arc(result.footprint) || over_budget())
     return;
-  const double correlation = std::max(pixel_size, o.models.coarse_correlation_noise * context.noise);
-  Criterion criterion(rings, pixel_size, std::max(2.0, total_perimeter(rings) / correlation), o.models.criterion_stretch_noise > 0,
+  Criterion criterion(rings, pixel_size, criterion_samples(rings, pixel_size, o.models, context.noise), o.models.criterion_stretch_noise > 0,
                       result);
   // (The merge path measures the chosen outline's fit, as contour_fit does, for the walk below:
   // made first, it gives the criterion's start, and is made again only if another outline wins.)
@@ -913,10 +918,9 @@ void square_and_clean(const std::vector<Ring>& rings, double pixel_size, bool on
 
 double outline_criterion(const std::vector<Ring>& rings, double pixel_size, const CoreOptions& o, double noise_m,
                          const PolygonWithHoles& outline, double parameters) {
-  const double correlation = std::max(pixel_size, o.models.coarse_correlation_noise * noise_m);
   // (Two parameters a vertex.)
   return information_criterion(contour_fit(rings, outline), double(vertex_count(outline)) + 0.5 * parameters,
-                               std::max(2.0, total_perimeter(rings) / correlation), pixel_size);
+                               criterion_samples(rings, pixel_size, o.models, noise_m), pixel_size);
 }
 
 }  // namespace lodforge::chain
