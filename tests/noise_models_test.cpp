@@ -1194,6 +1194,19 @@ double largest_angle_to_lattice_deg(const PolygonWithHoles& p, const Vec2& latti
   return worst;
 }
 
+// Outlines of one building's masks against its street's lattice: how many have every wall on it,
+// and the means over the masks of their walls' largest angle to it and of their IoU.
+struct StreetTally {
+  int aligned = 0;
+  double worst = 0, iou = 0;
+  void add(const PolygonWithHoles& outline, const PolygonWithHoles& truth, const Vec2& street, int masks) {
+    const double w = largest_angle_to_lattice_deg(outline, street);
+    aligned += w < 1e-6;
+    worst += w / masks;
+    iou += test::iou(outline, truth) / masks;
+  }
+};
+
 // The points within a radius of another: across cells, the radius itself included, ascending,
 // points that are not finite left out.
 TEST(Lattice, PointsWithinARadiusAcrossCells) {
@@ -1297,10 +1310,8 @@ TEST(NoisyMasks, ABlobTakesItsStreetsLattice) {
   const PolygonWithHoles truth = small_house(angle);
   const Vec2 street(std::cos(angle * M_PI / 180), std::sin(angle * M_PI / 180));
   const double pixel = 0.25, pooled_noise = kMetreWobblePooledNoise, smoothing_noise = kMetreWobbleSmoothingNoise;
-  const auto worst_wall = [&](const PolygonWithHoles& p) { return largest_angle_to_lattice_deg(p, street); };
   const int masks = 8;
-  double off_alone = 0, off_lent = 0, iou_alone = 0, iou_lent = 0;
-  int aligned_alone = 0, aligned_lent = 0;
+  StreetTally alone_tally, lent_tally;
   for (std::uint64_t seed = 1; seed <= std::uint64_t(masks); ++seed) {
     const test::RasterizedShape shape = metre_wobble_mask(truth, seed);
     ASSERT_EQ(shape.buildings.size(), 1u);
@@ -1311,18 +1322,15 @@ TEST(NoisyMasks, ABlobTakesItsStreetsLattice) {
     const BuildingResult a = regularize_building(shape.buildings[0].rings, pixel, CoreOptions{}, pooled_noise, alone);
     const BuildingResult b = regularize_building(shape.buildings[0].rings, pixel, CoreOptions{}, pooled_noise, lent);
     ASSERT_TRUE(a.ok && b.ok) << "seed " << seed << ": " << a.reason << b.reason;
-    aligned_lent += worst_wall(b.footprint) < 1e-6;
-    aligned_alone += worst_wall(a.footprint) < 1e-6;
-    off_alone += worst_wall(a.footprint) / masks;
-    off_lent += worst_wall(b.footprint) / masks;
-    iou_alone += test::iou(a.footprint, truth) / masks;
-    iou_lent += test::iou(b.footprint, truth) / masks;
+    alone_tally.add(a.footprint, truth, street, masks);
+    lent_tally.add(b.footprint, truth, street, masks);
   }
-  std::cerr << "walls off the street's lattice " << off_alone << " (lent " << off_lent << "), IoU " << iou_alone << " -> " << iou_lent << "\n";
-  EXPECT_GE(aligned_lent, 6);
-  EXPECT_LE(aligned_alone, 1);
-  EXPECT_LE(off_lent, 0.5 * off_alone);
-  EXPECT_GE(iou_lent, iou_alone + 0.01);
+  std::cerr << "walls off the street's lattice " << alone_tally.worst << " (lent " << lent_tally.worst << "), IoU " << alone_tally.iou
+            << " -> " << lent_tally.iou << "\n";
+  EXPECT_GE(lent_tally.aligned, 6);
+  EXPECT_LE(alone_tally.aligned, 1);
+  EXPECT_LE(lent_tally.worst, 0.5 * alone_tally.worst);
+  EXPECT_GE(lent_tally.iou, alone_tally.iou + 0.01);
 }
 
 // A shed of 4 x 2.5 m under half a metre of wobble (8 m wavelength, corners rounded by a metre, as
@@ -1339,12 +1347,10 @@ TEST(NoisyMasks, UnderHalfAMetreOfWobbleAShedMayTakeItsStreetsLattice) {
   const double angle = 33.0, pixel = 0.25, pooled_noise = 0.26;
   const PolygonWithHoles truth = test::rotated({{{0, 0}, {4, 0}, {4, 2.5}, {0, 2.5}}, {}}, angle);
   const Vec2 street(std::cos(angle * M_PI / 180), std::sin(angle * M_PI / 180));
-  const auto worst_wall = [&](const PolygonWithHoles& p) { return largest_angle_to_lattice_deg(p, street); };
   CoreOptions off;
   off.lattice.neighbour_noise = 0;
   const int masks = 8;
-  double worst_on = 0, worst_off = 0, iou_on = 0, iou_off = 0;
-  int aligned = 0, aligned_off = 0;
+  StreetTally on_tally, off_tally;
   for (std::uint64_t seed = 1; seed <= std::uint64_t(masks); ++seed) {
     const test::RasterizedShape shape = test::rasterize_shape_m(truth, pixel, 0.5, 8.0, 1.0, seed);
     ASSERT_EQ(shape.buildings.size(), 1u);
@@ -1354,18 +1360,14 @@ TEST(NoisyMasks, UnderHalfAMetreOfWobbleAShedMayTakeItsStreetsLattice) {
     const BuildingResult on = regularize_building(shape.buildings[0].rings, pixel, CoreOptions{}, pooled_noise, start);
     const BuildingResult r_off = regularize_building(shape.buildings[0].rings, pixel, off, pooled_noise, start);
     ASSERT_TRUE(on.ok && r_off.ok) << "seed " << seed << ": " << on.reason << r_off.reason;
-    aligned += worst_wall(on.footprint) < 1e-6;
-    aligned_off += worst_wall(r_off.footprint) < 1e-6;
-    worst_on += worst_wall(on.footprint) / masks;
-    worst_off += worst_wall(r_off.footprint) / masks;
-    iou_on += test::iou(on.footprint, truth) / masks;
-    iou_off += test::iou(r_off.footprint, truth) / masks;
+    on_tally.add(on.footprint, truth, street, masks);
+    off_tally.add(r_off.footprint, truth, street, masks);
   }
-  std::cerr << "aligned " << aligned << " (off " << aligned_off << "), walls off the street's lattice " << worst_on << " (off "
-            << worst_off << "), IoU " << iou_on << " (" << iou_off << ")\n";
-  EXPECT_GE(aligned, aligned_off + 1);
-  EXPECT_LE(worst_on, 0.75 * worst_off);
-  EXPECT_GE(iou_on, iou_off + 0.005);
+  std::cerr << "aligned " << on_tally.aligned << " (off " << off_tally.aligned << "), walls off the street's lattice " << on_tally.worst
+            << " (off " << off_tally.worst << "), IoU " << on_tally.iou << " (" << off_tally.iou << ")\n";
+  EXPECT_GE(on_tally.aligned, off_tally.aligned + 1);
+  EXPECT_LE(on_tally.worst, 0.75 * off_tally.worst);
+  EXPECT_GE(on_tally.iou, off_tally.iou + 0.005);
 }
 
 // ... but a clean house of 5 x 4 m at 1 m pixels (a noise of 0.28 m, the campus's there), set 33
