@@ -26,7 +26,7 @@ struct RefineOptions {
   double min_turning = 1.5;        // ... whose outline turns less than this many full turns has no lattice
   double min_round_px = 40;        // ... unless its outline is shorter than this many pixels
   double min_round_m = 20;         // ... or than this (m)
-  double min_round_noise = 60;     // ... or than this many times the mask's boundary noise
+  double min_round_noise = 80;     // ... or than this many times the mask's boundary noise
   double round_fit_ratio = 1;      // ... or whose best rectangle explains its contour as well as this many times its moments' ellipse does
   double round_fit_noise = 2;      // ... and within this many times the building's boundary noise (or pixels)
   double missing_axis_deg = 10;    // a building on a lattice with no direction this near one of its axes and a curve gets it (0 = off)

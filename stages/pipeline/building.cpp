@@ -182,19 +182,27 @@ bool no_rounder_than_rectangle(const Ring& outer, const Vec2& lattice, double pi
 // shows no curvature: it is taken as on its lattice. So is one that its normals read as round or
 // oblique but whose best rectangle explains its contour as well as its moments' ellipse does
 // (no_rounder_than_rectangle; rounded by its mask's rounding, mask_rounding_m, where above 0).
-// *undetermined: taken so because its shape does not tell (too small for its noise, or no rounder
-// than a rectangle), not by its walls: its neighbours' lattice is lent to it (outline_lattice).
+// *undetermined: taken so because its shape does not tell (too small for its noise, under
+// undetermined_noise noises, or no rounder than a rectangle), not by its walls: its neighbours'
+// lattice is lent to it (outline_lattice). (Between undetermined_noise and min_round_noise noises
+// it is held to a lattice, its own unless, as a larger building, its walls do not show and its
+// rectangle explains it: a clean house of 5 x 4 m at 1 m pixels may stand askew to its street.)
 // (Not held: read as round by its rectangle's test, or with that test off.)
 bool holds_to_lattice(const std::vector<Ring>& rings, const LabelingInput& input, const Vec2& lattice, double pixel_size,
-                      double noise_floor_m, double noise_m, double mask_rounding_m, const RefineOptions& o, bool* undetermined) {
+                      double noise_floor_m, double noise_m, double mask_rounding_m, const RefineOptions& o, double undetermined_noise,
+                      bool* undetermined) {
   const double outline_m = perimeter(rings[0]);
-  *undetermined = outline_m < o.min_round_noise * noise_floor_m;
-  if (too_short_to_show_round(outline_m, pixel_size, noise_floor_m, o) ||
-      lattice_share(input.normals, input.lengths, lattice, o.lattice_deg) >= o.min_lattice_share ||
+  *undetermined = outline_m < undetermined_noise * noise_floor_m;
+  const bool short_for_noise = outline_m < o.min_round_noise * noise_floor_m;
+  const bool short_for_pixels = outline_m < std::max(o.min_round_px * pixel_size, o.min_round_m);
+  if (short_for_pixels || (*undetermined && short_for_noise)) return true;
+  if (lattice_share(input.normals, input.lengths, lattice, o.lattice_deg) >= o.min_lattice_share ||
       total_turning(rings[0], input.normals[0], std::max(1.0, 2 * pixel_size)) >= o.min_turning)
     return true;
+  // (Between undetermined_noise and min_round_noise noises and its walls not showing: held, and its
+  // lattice undetermined where no rounder than its rectangle, as a larger building's.)
   *undetermined = no_rounder_than_rectangle(rings[0], lattice, pixel_size, noise_m, mask_rounding_m, o);
-  return *undetermined;
+  return *undetermined || short_for_noise;
 }
 
 // The lattice fitted to the contour's runs along it (lattice.fit_*), its direction's standard error
@@ -208,7 +216,7 @@ struct FittedLattice {
 // one (main direction or chords'), or the fitted one unless the labeled one lies within its
 // uncertainty (on a clean wall the labeled direction is exact). A building whose own lattice is
 // undetermined takes its neighbours' (lattice.neighbour_*, result.lattice_lent): one too small to
-// show its walls under its mask's noise (refinement.min_round_noise) or no rounder than its best
+// show its walls under its mask's noise (lattice.undetermined_noise) or no rounder than its best
 // rectangle (refinement.round_fit_ratio), one whose fitted lattice
 // lies within fit_keep_uncertainty standard errors of theirs, or, without a fit, one whose chords
 // give it no lattice. (A fitted lattice is held only to its near neighbours', those whose centres
@@ -298,7 +306,8 @@ void run_chain(const std::vector<Ring>& rings, double pixel_size, const CoreOpti
     fitted.direction = fit_lattice(rings, input.normals, chord.share >= o.lattice.min_share ? chord.direction : first_main, pixel_size,
                                    o.lattice, o.noise, o.corners.snap_correlation_m, &fitted.uncertainty, &fitted.spread, noise);
   bool undetermined = false;
-  const bool on_lattice = holds_to_lattice(rings, input, lattice, pixel_size, noise_floor_m, noise, mask_rounding, o.refinement, &undetermined);
+  const bool on_lattice = holds_to_lattice(rings, input, lattice, pixel_size, noise_floor_m, noise, mask_rounding, o.refinement,
+                                           o.lattice.undetermined_noise, &undetermined);
   // (Read as round by its rectangle before its mask's rounding is known: tested again under it,
   // held_under_rounding.)
   if (!on_lattice && o.refinement.round_fit_ratio > 0 && mask_rounding < 0) result.read_round = BuildingResult::ReadRound{lattice, noise};
