@@ -1078,6 +1078,33 @@ test::RasterizedShape metre_wobble_mask(const PolygonWithHoles& truth, std::uint
 }
 constexpr double kMetreWobblePooledNoise = 0.69, kMetreWobbleSmoothingNoise = 0.53;
 
+// Eight masks of a house under a metre of wobble at 25 cm pixels (metre_wobble_mask), each
+// regularized with two sets of options: how many come out square quadrilaterals, and their mean
+// IoU against the truth.
+struct SquareTally {
+  int squared = 0, squared_off = 0;
+  double iou = 0, iou_off = 0;
+};
+void tally_metre_wobble_squares(const PolygonWithHoles& truth, const CoreOptions& on, const CoreOptions& off, SquareTally& t) {
+  const int masks = 8;
+  const auto is_square = [](const BuildingResult& b) {
+    return b.footprint.outer.size() == 4 && right_angle_corners(b.footprint).first == 4;
+  };
+  for (std::uint64_t seed = 1; seed <= std::uint64_t(masks); ++seed) {
+    const test::RasterizedShape shape = metre_wobble_mask(truth, seed);
+    ASSERT_EQ(shape.buildings.size(), 1u);
+    BuildingStart start;
+    start.smoothing_noise_m = kMetreWobbleSmoothingNoise;
+    const BuildingResult r = regularize_building(shape.buildings[0].rings, 0.25, on, kMetreWobblePooledNoise, start);
+    const BuildingResult r_off = regularize_building(shape.buildings[0].rings, 0.25, off, kMetreWobblePooledNoise, start);
+    ASSERT_TRUE(r.ok && r_off.ok) << "seed " << seed << ": " << r.reason << r_off.reason;
+    t.squared += is_square(r);
+    t.squared_off += is_square(r_off);
+    t.iou += test::iou(r.footprint, truth) / masks;
+    t.iou_off += test::iou(r_off.footprint, truth) / masks;
+  }
+}
+
 // A 6 x 5 m house under a metre of wobble, its corners rounded by 2 m, at 25 cm pixels, on a
 // mask whose buildings measure 0.69 m of boundary noise (normals smoothed for 0.53 m: the pooled
 // noises of the campus at 0.25 m under that wobble): a blob of 27-34 m of traced outline that
@@ -1086,35 +1113,16 @@ constexpr double kMetreWobblePooledNoise = 0.69, kMetreWobbleSmoothingNoise = 0.
 // is taken as on a lattice. Of eight masks, 8 square quadrilaterals (none without the rule:
 // heptagons and the like), mean IoU 0.700 (0.698; the mask itself lies that far off).
 TEST(NoisyMasks, UnderAMetreOfWobbleASmallHouseIsARectangle) {
-  const PolygonWithHoles truth = small_house(27.0);
-  const double pixel = 0.25, pooled_noise = kMetreWobblePooledNoise, smoothing_noise = kMetreWobbleSmoothingNoise;
   CoreOptions on, off;
   on.refinement.round_fit_ratio = 0;  // (this rule alone: round_fit_ratio takes most of them as on a lattice too)
   off.refinement.min_round_noise = 0;
   off.refinement.round_fit_ratio = 0;
-  int squared = 0, squared_off = 0;
-  double iou = 0, iou_off = 0;
-  const int masks = 8;
-  for (std::uint64_t seed = 1; seed <= std::uint64_t(masks); ++seed) {
-    const test::RasterizedShape shape = metre_wobble_mask(truth, seed);
-    ASSERT_EQ(shape.buildings.size(), 1u);
-    BuildingStart start;
-    start.smoothing_noise_m = smoothing_noise;
-    const BuildingResult r = regularize_building(shape.buildings[0].rings, pixel, on, pooled_noise, start);
-    const BuildingResult r_off = regularize_building(shape.buildings[0].rings, pixel, off, pooled_noise, start);
-    ASSERT_TRUE(r.ok && r_off.ok) << "seed " << seed << ": " << r.reason << r_off.reason;
-    const auto is_square = [](const BuildingResult& b) {
-      return b.footprint.outer.size() == 4 && right_angle_corners(b.footprint).first == 4;
-    };
-    squared += is_square(r);
-    squared_off += is_square(r_off);
-    iou += test::iou(r.footprint, truth) / masks;
-    iou_off += test::iou(r_off.footprint, truth) / masks;
-  }
-  std::cerr << "squared " << squared << " (without the rule " << squared_off << "), mean IoU " << iou << " (" << iou_off << ")\n";
-  EXPECT_GE(squared, 6);
-  EXPECT_LE(squared_off, 3);
-  EXPECT_GE(iou, iou_off - 0.02);
+  SquareTally t;
+  ASSERT_NO_FATAL_FAILURE(tally_metre_wobble_squares(small_house(27.0), on, off, t));
+  std::cerr << "squared " << t.squared << " (without the rule " << t.squared_off << "), mean IoU " << t.iou << " (" << t.iou_off << ")\n";
+  EXPECT_GE(t.squared, 6);
+  EXPECT_LE(t.squared_off, 3);
+  EXPECT_GE(t.iou, t.iou_off - 0.02);
 }
 
 // ... and an 8 x 6 m house so, 28 m round: a traced outline of 52-67 noises of 0.69 m, within
@@ -1122,34 +1130,15 @@ TEST(NoisyMasks, UnderAMetreOfWobbleASmallHouseIsARectangle) {
 // bound at 60, as before session 60: the masks of 64 and 67 noises drawn with 8 and 7 vertices),
 // mean IoU 0.769 (0.767).
 TEST(NoisyMasks, UnderAMetreOfWobbleAHouseOf8By6IsARectangle) {
-  const PolygonWithHoles truth = test::rotated({{{0, 0}, {8, 0}, {8, 6}, {0, 6}}, {}}, 27.0);
-  const double pixel = 0.25;
   CoreOptions on, off;
   on.refinement.round_fit_ratio = 0;  // (this rule alone)
   off.refinement.round_fit_ratio = 0;
   off.refinement.min_round_noise = 60;
-  int squared = 0, squared_off = 0;
-  double iou = 0, iou_off = 0;
-  const int masks = 8;
-  for (std::uint64_t seed = 1; seed <= std::uint64_t(masks); ++seed) {
-    const test::RasterizedShape shape = metre_wobble_mask(truth, seed);
-    ASSERT_EQ(shape.buildings.size(), 1u);
-    BuildingStart start;
-    start.smoothing_noise_m = kMetreWobbleSmoothingNoise;
-    const BuildingResult r = regularize_building(shape.buildings[0].rings, pixel, on, kMetreWobblePooledNoise, start);
-    const BuildingResult r_off = regularize_building(shape.buildings[0].rings, pixel, off, kMetreWobblePooledNoise, start);
-    ASSERT_TRUE(r.ok && r_off.ok) << "seed " << seed << ": " << r.reason << r_off.reason;
-    const auto is_square = [](const BuildingResult& b) {
-      return b.footprint.outer.size() == 4 && right_angle_corners(b.footprint).first == 4;
-    };
-    squared += is_square(r);
-    squared_off += is_square(r_off);
-    iou += test::iou(r.footprint, truth) / masks;
-    iou_off += test::iou(r_off.footprint, truth) / masks;
-  }
-  std::cerr << "squared " << squared << " (bound at 60: " << squared_off << "), mean IoU " << iou << " (" << iou_off << ")\n";
-  EXPECT_GE(squared, squared_off + 2);
-  EXPECT_GE(iou, iou_off - 0.01);
+  SquareTally t;
+  ASSERT_NO_FATAL_FAILURE(tally_metre_wobble_squares(test::rotated({{{0, 0}, {8, 0}, {8, 6}, {0, 6}}, {}}, 27.0), on, off, t));
+  std::cerr << "squared " << t.squared << " (bound at 60: " << t.squared_off << "), mean IoU " << t.iou << " (" << t.iou_off << ")\n";
+  EXPECT_GE(t.squared, t.squared_off + 2);
+  EXPECT_GE(t.iou, t.iou_off - 0.01);
 }
 
 // A 12 x 9 m house under a metre of wobble (8 m wavelength), its corners rounded by 2 m, at 10 cm

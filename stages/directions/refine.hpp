@@ -74,11 +74,17 @@ bool add_missing_axis(std::vector<Vec2>& directions, const Vec2& main, const Ref
 bool drop_insignificant_directions(const std::vector<Ring>& rings, const EdgeLabels& labels, std::vector<Vec2>& directions,
                                    const Vec2& main, double noise, const RefineOptions& options);
 
-// Whether an outline this long (m) is too short to show a round shape from a rectangle: under
-// min_round_px pixels or min_round_m, or under min_round_noise times its mask's boundary noise
-// (noise_floor_m). Such a building is taken as on a lattice.
+// Whether an outline this long (m) is too few pixels long to show a round shape from a rectangle:
+// under min_round_px pixels or min_round_m.
+inline bool too_short_in_pixels(double outline_m, double pixel_size, const RefineOptions& o) {
+  return outline_m < std::max(o.min_round_px * pixel_size, o.min_round_m);
+}
+
+// Whether an outline this long (m) is too short to show a round shape from a rectangle: too few
+// pixels long, or under min_round_noise times its mask's boundary noise (noise_floor_m). Such a
+// building is taken as on a lattice.
 inline bool too_short_to_show_round(double outline_m, double pixel_size, double noise_floor_m, const RefineOptions& o) {
-  return outline_m < o.min_round_noise * noise_floor_m || outline_m < std::max(o.min_round_px * pixel_size, o.min_round_m);
+  return outline_m < o.min_round_noise * noise_floor_m || too_short_in_pixels(outline_m, pixel_size, o);
 }
 
 // Releases long runs from their shared direction: a run whose own least-squares direction

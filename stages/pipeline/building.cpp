@@ -194,8 +194,8 @@ bool holds_to_lattice(const std::vector<Ring>& rings, const LabelingInput& input
   const double outline_m = perimeter(rings[0]);
   *undetermined = outline_m < undetermined_noise * noise_floor_m;
   const bool short_for_noise = outline_m < o.min_round_noise * noise_floor_m;
-  const bool short_for_pixels = outline_m < std::max(o.min_round_px * pixel_size, o.min_round_m);
-  if (short_for_pixels || (*undetermined && short_for_noise)) return true;
+  // (Undetermined by its size, held only within min_round_noise: at 0 that rule is off.)
+  if (too_short_in_pixels(outline_m, pixel_size, o) || (*undetermined && short_for_noise)) return true;
   if (lattice_share(input.normals, input.lengths, lattice, o.lattice_deg) >= o.min_lattice_share ||
       total_turning(rings[0], input.normals[0], std::max(1.0, 2 * pixel_size)) >= o.min_turning)
     return true;
