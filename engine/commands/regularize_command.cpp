@@ -166,7 +166,7 @@ int run_regularize(int argc, char** argv) {
 
   std::vector<FootprintRecord> records(count);
   std::map<std::string, int> failures, models;
-  int failed = 0, rerouted = 0, lent = 0, took_rounding = 0, covering = 0;
+  int failed = 0, rerouted = 0, lent = 0, supported = 0, took_rounding = 0, covering = 0;
   std::vector<double> roundings;  // of the buildings whose corners the segmentation rounded (BuildingResult::rounding_m)
   for (std::size_t i = 0; i < count; ++i) {
     const BuildingResult& r = results[i];
@@ -182,6 +182,7 @@ int run_regularize(int argc, char** argv) {
     if (r.ok && !r.note.empty()) ++rerouted;
     if (r.ok && r.holes_covered > 0) ++covering;  // (a fallback's reason says why it failed)
     if (r.ok && r.lattice_lent) ++lent;
+    if (r.ok && r.lattice_of_support) ++supported;
     if (r.ok && r.rounding_m > 0) roundings.push_back(r.rounding_m);
     if (r.ok && r.rounding_pooled) ++took_rounding;
     if (!r.ok) {
@@ -262,6 +263,7 @@ int run_regularize(int argc, char** argv) {
     out["fallback"] = failed;
     out["original_route"] = rerouted;
     out["lattice_lent"] = lent;
+    out["lattice_of_support"] = supported;
     out["corner_rounding"] = {{"buildings", roundings.size()},
                               {"radius_m_median", rounding_median},
                               {"measured", batch.rounding_samples},

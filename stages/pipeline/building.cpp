@@ -90,6 +90,32 @@ Vec2 main_direction(const EdgeLabels& labels, const std::vector<std::vector<doub
   return directions[std::max_element(support.begin(), support.end()) - support.begin()];
 }
 
+// The lattice that holds the most labeled contour: the direction whose own labeled length and
+// that of the directions within same_deg of it (lattice.max_gap_deg), up to quarter turns, sum to
+// the most (ties: the one with the more of its own); none where that lies within min_turn_deg of
+// `held`, the lattice the outline is held to (lattice.support_turn_deg; 0 = off). The main
+// direction is the single direction with the most: where a street front of one direction outweighs
+// each of the walls of two at right angles behind it, but not both, their lattice is the one the
+// steps are squared on. (Nearer the held lattice it is that lattice, moved by its chords or its
+// fit, which average a wobble out; farther, it may also be the labeled main direction, where the
+// chords or the fit took the lattice off it.)
+std::optional<Vec2> lattice_of_support(const EdgeLabels& labels, const LabelingInput& input, const Vec2& held, double same_deg,
+                                       double min_turn_deg) {
+  if (min_turn_deg <= 0 || held.squaredNorm() == 0) return std::nullopt;
+  const std::vector<Vec2>& directions = input.directions;
+  const std::vector<double> support = labeled_support(labels, input.lengths, directions.size());
+  std::size_t best = 0;
+  double most = -1;
+  for (std::size_t i = 0; i < directions.size(); ++i) {
+    double sum = 0;
+    for (std::size_t j = 0; j < directions.size(); ++j)
+      if (angle_between_lattices_deg(directions[i], directions[j]) <= same_deg) sum += support[j];
+    if (sum > most || (sum == most && support[i] > support[best])) best = i, most = sum;
+  }
+  if (most <= 0 || angle_between_lattices_deg(directions[best], held) <= min_turn_deg) return std::nullopt;
+  return directions[best];
+}
+
 // The contour's normals (the start's) and its edges' lengths, per ring, for the labeling.
 LabelingInput labeling_input(const std::vector<Ring>& rings, std::vector<std::vector<Vec2>> normals) {
   LabelingInput input;
@@ -260,6 +286,32 @@ bool takes_neighbours_lattice(const std::vector<Ring>& rings, double pixel_size,
   return chain::outline_criterion(rings, pixel_size, o, noise_m, lent) <= chain::outline_criterion(rings, pixel_size, o, noise_m, own, 1.0);
 }
 
+// The building's outline drawn on the lattice with the most labeled contour (lattice_of_support;
+// own: its labeled building, own.context its own lattice), from the same labels (input and
+// trial as they were before its own outline was chosen), taken over its own outline (result)
+// where it has no more vertices and explains the contour better by the model choice's
+// information criterion: both lattices are read off the same labels, neither is given.
+void take_supported_lattice(const chain::LabeledBuilding& own, const Vec2& supported, const CoreOptions& o,
+                            const std::function<bool()>& over_budget, LabelingInput& input, BuildingResult trial,
+                            BuildingResult& result) {
+  CornerContext context = own.context;
+  context.lattice = supported;
+  try {
+    chain::choose_outline({own.rings, own.fit_rings, own.origin, own.pixel_size, own.labels, input, context, own.on_lattice,
+                           own.follow_chords, own.fit_spread},
+                          o, over_budget, trial);
+  } catch (const std::exception&) {  // (its budget, or no outline on that lattice: its own stands)
+    return;
+  }
+  if (vertex_count(trial.footprint) > vertex_count(result.footprint) ||
+      chain::outline_criterion(own.rings, own.pixel_size, o, own.context.noise, trial.footprint) >=
+          chain::outline_criterion(own.rings, own.pixel_size, o, own.context.noise, result.footprint))
+    return;
+  trial.chain_seconds = result.chain_seconds;
+  trial.lattice_of_support = true;
+  result = std::move(trial);
+}
+
 void run_chain(const std::vector<Ring>& rings, double pixel_size, const CoreOptions& o, double noise_floor_m,
                BuildingStart start, BuildingResult& result, const std::function<bool()>& over_budget) {
   if (const std::string problem = contour_problem(rings, o); !problem.empty()) throw StageError("input", problem);
@@ -352,8 +404,17 @@ void run_chain(const std::vector<Ring>& rings, double pixel_size, const CoreOpti
   std::optional<LabelingInput> trial_input;
   std::optional<BuildingResult> lent;
   if (trial) trial_input = input, lent = result;
+  // (And on the lattice with the most labeled contour, where that is not its own.)
+  const std::optional<Vec2> supported =
+      on_lattice && !result.lattice_lent
+          ? lattice_of_support(labels, input, context.lattice, o.lattice.max_gap_deg, o.lattice.support_turn_deg)
+          : std::nullopt;
+  std::optional<LabelingInput> supported_input;
+  std::optional<BuildingResult> on_supported;
+  if (supported) supported_input = input, on_supported = result;
   const chain::LabeledBuilding labeled{rings, fit_rings, origin, pixel_size, labels, input, context, on_lattice, follow_chords, fitted.spread};
   chain::choose_outline(labeled, o, over_budget, result);
+  if (supported) take_supported_lattice(labeled, *supported, o, over_budget, *supported_input, std::move(*on_supported), result);
   if (!trial) return;
   CornerContext street = context;
   street.lattice = neighbour_lattice.direction;
