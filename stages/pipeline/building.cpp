@@ -286,24 +286,33 @@ bool takes_neighbours_lattice(const std::vector<Ring>& rings, double pixel_size,
   return chain::outline_criterion(rings, pixel_size, o, noise_m, lent) <= chain::outline_criterion(rings, pixel_size, o, noise_m, own, 1.0);
 }
 
-// The building's outline drawn on the lattice with the most labeled contour (lattice_of_support;
-// own: its labeled building, own.context its own lattice), from the same labels (input and
-// trial as they were before its own outline was chosen), taken over its own outline (result)
-// where it has no more vertices and explains the contour better by the model choice's
-// information criterion: both lattices are read off the same labels, neither is given.
-void take_supported_lattice(const chain::LabeledBuilding& own, const Vec2& supported, const CoreOptions& o,
-                            const std::function<bool()>& over_budget, LabelingInput& input, BuildingResult trial,
-                            BuildingResult& result) {
+// The building's outline drawn again on another lattice (own: its labeled building, drawn on its
+// own lattice; input and trial as they were before that outline was chosen, trial receiving the
+// new one): false where none could be drawn (its budget, or no outline on that lattice), when its
+// own outline stands.
+bool outline_on_lattice(const chain::LabeledBuilding& own, const Vec2& lattice, const CoreOptions& o,
+                        const std::function<bool()>& over_budget, LabelingInput& input, BuildingResult& trial) {
   CornerContext context = own.context;
-  context.lattice = supported;
+  context.lattice = lattice;
   try {
     chain::choose_outline({own.rings, own.fit_rings, own.origin, own.pixel_size, own.labels, input, context, own.on_lattice,
                            own.follow_chords, own.fit_spread},
                           o, over_budget, trial);
-  } catch (const std::exception&) {  // (its budget, or no outline on that lattice: its own stands)
-    return;
+  } catch (const std::exception&) {
+    return false;
   }
-  if (vertex_count(trial.footprint) > vertex_count(result.footprint) ||
+  return true;
+}
+
+// The building's outline drawn on the lattice with the most labeled contour (lattice_of_support,
+// outline_on_lattice), taken over its own outline (result) where it has no more vertices and
+// explains the contour better by the model choice's information criterion: both lattices are read
+// off the same labels, neither is given.
+void take_supported_lattice(const chain::LabeledBuilding& own, const Vec2& supported, const CoreOptions& o,
+                            const std::function<bool()>& over_budget, LabelingInput& input, BuildingResult trial,
+                            BuildingResult& result) {
+  if (!outline_on_lattice(own, supported, o, over_budget, input, trial) ||
+      vertex_count(trial.footprint) > vertex_count(result.footprint) ||
       chain::outline_criterion(own.rings, own.pixel_size, o, own.context.noise, trial.footprint) >=
           chain::outline_criterion(own.rings, own.pixel_size, o, own.context.noise, result.footprint))
     return;
@@ -416,16 +425,9 @@ void run_chain(const std::vector<Ring>& rings, double pixel_size, const CoreOpti
   chain::choose_outline(labeled, o, over_budget, result);
   if (supported) take_supported_lattice(labeled, *supported, o, over_budget, *supported_input, std::move(*on_supported), result);
   if (!trial) return;
-  CornerContext street = context;
-  street.lattice = neighbour_lattice.direction;
   lent->lattice_lent = true;
-  try {
-    chain::choose_outline({rings, fit_rings, origin, pixel_size, labels, *trial_input, street, on_lattice, follow_chords, fitted.spread}, o,
-                          over_budget, *lent);
-  } catch (const std::exception&) {  // (its budget, or no outline on that lattice: its own stands)
-    return;
-  }
-  if (takes_neighbours_lattice(rings, pixel_size, o, noise, result.footprint, lent->footprint, street.lattice)) {
+  if (!outline_on_lattice(labeled, neighbour_lattice.direction, o, over_budget, *trial_input, *lent)) return;
+  if (takes_neighbours_lattice(rings, pixel_size, o, noise, result.footprint, lent->footprint, neighbour_lattice.direction)) {
     lent->chain_seconds = result.chain_seconds;
     result = std::move(*lent);
   }

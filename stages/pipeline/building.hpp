@@ -35,7 +35,7 @@ struct BuildingResult {
                                 // "ellipse" (its moments' ellipse, models.ellipse_turn_deg);
                                 // empty for the fallback
   bool lattice_lent = false;    // its walls held to its neighbours' lattice (BuildingStart::neighbour_lattice)
-  bool lattice_of_support = false;  // its outline drawn on the lattice with the most labeled contour (lattice.support_gap_deg)
+  bool lattice_of_support = false;  // its outline drawn on the lattice with the most labeled contour (lattice.support_turn_deg)
   double rounding_m = 0;        // the radius the segmentation rounded its corners by, where its outline's square corners
                                 // lie farther off the contour than its noise explains (models.rounding_noise; m), else 0
   int rounding_corners = -1;    // the square corners that rounding was measured on; -1: none measured (an outline off the
