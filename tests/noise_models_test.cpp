@@ -2535,6 +2535,42 @@ TEST(CleanMasks, RoundedStepsOfARowComeBackAsSteps) {
   EXPECT_EQ(alone.corners, alone.corners_off);
 }
 
+// A recess and a knob 1.6 and 2 m deep, 6 and 10 m wide, in the long wall of a 40 x 10 m house,
+// their mask's corners rounded by 2 m (no wobble), at 0.1 and 0.25 m, turned by 0-82.5 degrees,
+// the mask's rounding known (as a batch pools it). A rounding that deep spreads the recess's or
+// knob's corners wide, and the outline draws them with oblique walls that reach past the arcs,
+// longer than the chains the building's rounding squares (2 R, R measured at 1.5-2 m); squared
+// as if the rounding were twice as large (models.rounded_chain_scale), the outline competes under
+// the rounding with the lattice outlines and is taken where it explains the contour better: on
+// each shape and pixel no fewer right angles and no lower IoU, over all of them right angles 1,693
+// of 1,923 against 1,525 of 2,068 and IoU 0.98757 against 0.98579 (measured on 64 shapes, 0.8-2 m
+// deep by 4-10 m wide: never worse; the same outlines up to 1.2 m deep but for three recesses at
+// 0.1 m, IoU +0.0004 to +0.0012).
+TEST(CleanMasks, ARoundedRecessOrKnobComesBackSquare) {
+  CoreOptions off;
+  off.models.rounded_chain_scale = 0;
+  UnderRounding all;
+  for (double depth : {1.6, 2.0})
+    for (double width : {6.0, 10.0})
+      for (int knob = 0; knob < 2; ++knob) {
+        const double y = knob ? 10 + depth : 10 - depth, x0 = 20 - width / 2, x1 = 20 + width / 2;
+        const std::vector<PolygonWithHoles> shape = {{{{0, 0}, {40, 0}, {40, 10}, {x1, 10}, {x1, y}, {x0, y}, {x0, 10}, {0, 10}}, {}}};
+        for (double pixel : {0.1, 0.25}) {
+          UnderRounding s;
+          ASSERT_TRUE(compare_under_rounding(shape, pixel, off, s, 2.0, 0.0, true));
+          const std::string which = std::string(knob ? "knob " : "recess ") + std::to_string(depth) + " x " + std::to_string(width) +
+                                    " m at " + std::to_string(pixel) + " m: " + s.summary();
+          EXPECT_GE(double(s.right) / s.corners, double(s.right_off) / s.corners_off - 1e-9) << which;
+          EXPECT_GE(s.iou, s.iou_off - 1e-9) << which;
+          all.corners += s.corners, all.right += s.right, all.corners_off += s.corners_off, all.right_off += s.right_off;
+          all.iou += s.iou, all.iou_off += s.iou_off, all.cases += s.cases;
+        }
+      }
+  std::cout << all.summary() << '\n';
+  EXPECT_GT(double(all.right) / all.corners, double(all.right_off) / all.corners_off + 0.08);
+  EXPECT_GT(all.iou / all.cases, all.iou_off / all.cases + 0.001);
+}
+
 // A clean mask whose corners the segmentation rounded by 2 m (no wobble: the noise measures a few
 // centimetres, so the outline followed two or four of the roundings as a step or a cut): a 24 x
 // 14 m house at 0.25 m, turned by 0-82.5 degrees, comes out a rectangle at every angle (it did at

@@ -729,6 +729,15 @@ void simplify_under_rounding(const std::vector<Ring>& rings, double pixel_size, 
   if (!(rounding > 0) || !(o.models.rounded_criterion > 0) || candidates.empty()) return;
   CornerContext rounded_context = context;
   rounded_context.mask_rounding = rounding;
+  // And the chosen outline with its chains off the lattice squared as if the rounding were
+  // rounded_chain_scale times as large (square_and_clean's squaring, with chains that long).
+  if (o.models.rounded_chain_scale > 1 && context.lattice.squaredNorm() > 0) {
+    const double snap_correlation = noise_correlation_m(o.corners, pixel_size);
+    if (std::optional<PolygonWithHoles> squared =
+            square_connectors(result.footprint, context.lattice, o.models.merge_parallel_deg, context.noise, snap_correlation, 0.0,
+                              2 * o.models.rounded_chain_scale * rounding, std::max(2 * pixel_size, snap_correlation)))
+      candidates.emplace_back(std::move(*squared), result.model);
+  }
   const double correlation =
       std::max({pixel_size, o.models.coarse_correlation_noise * context.noise, o.models.rounded_criterion * rounding});
   const double samples = std::max(2.0, total_perimeter(rings) / correlation);
