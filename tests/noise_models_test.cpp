@@ -2383,6 +2383,10 @@ TEST(Corners, TheGapOfRoundedCornersMeasuresTheRadius) {
 struct UnderRounding {
   int corners = 0, right = 0, corners_off = 0, right_off = 0, cases = 0;
   double iou = 0, iou_off = 0;
+  void add(const UnderRounding& o) {
+    corners += o.corners, right += o.right, corners_off += o.corners_off, right_off += o.right_off, cases += o.cases;
+    iou += o.iou, iou_off += o.iou_off;
+  }
   std::string summary() const {
     std::ostringstream out;
     out << "right angles " << right << " of " << corners << ", without " << right_off << " of " << corners_off << "; IoU " << iou / cases
@@ -2562,8 +2566,7 @@ TEST(CleanMasks, ARoundedRecessOrKnobComesBackSquare) {
                                     " m at " + std::to_string(pixel) + " m: " + s.summary();
           EXPECT_GE(double(s.right) / s.corners, double(s.right_off) / s.corners_off - 1e-9) << which;
           EXPECT_GE(s.iou, s.iou_off - 1e-9) << which;
-          all.corners += s.corners, all.right += s.right, all.corners_off += s.corners_off, all.right_off += s.right_off;
-          all.iou += s.iou, all.iou_off += s.iou_off, all.cases += s.cases;
+          all.add(s);
         }
       }
   std::cout << all.summary() << '\n';

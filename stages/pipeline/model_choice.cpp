@@ -722,6 +722,16 @@ std::vector<std::pair<PolygonWithHoles, std::string>> ModelChoice::rounding_cand
   return candidates;
 }
 
+// The outline's chains of walls off its lattice up to max_chain long squared, whatever the noise
+// (square_connectors, between walls on the lattice at least two pixels and the noise's correlation
+// length long): the squaring under a rounding of max_chain / 2; none where nothing is squared.
+std::optional<PolygonWithHoles> square_rounded_chains(const PolygonWithHoles& outline, double pixel_size, const CornerContext& context,
+                                                      const CoreOptions& o, double max_chain) {
+  const double correlation = noise_correlation_m(o.corners, pixel_size);
+  return square_connectors(outline, context.lattice, o.models.merge_parallel_deg, context.noise, correlation, 0.0, max_chain,
+                           std::max(2 * pixel_size, correlation));
+}
+
 }  // namespace
 
 void simplify_under_rounding(const std::vector<Ring>& rings, double pixel_size, const CornerContext& context, const CoreOptions& o,
@@ -731,13 +741,10 @@ void simplify_under_rounding(const std::vector<Ring>& rings, double pixel_size, 
   rounded_context.mask_rounding = rounding;
   // And the chosen outline with its chains off the lattice squared as if the rounding were
   // rounded_chain_scale times as large (square_and_clean's squaring, with chains that long).
-  if (o.models.rounded_chain_scale > 1 && context.lattice.squaredNorm() > 0) {
-    const double snap_correlation = noise_correlation_m(o.corners, pixel_size);
+  if (o.models.rounded_chain_scale > 1 && context.lattice.squaredNorm() > 0)
     if (std::optional<PolygonWithHoles> squared =
-            square_connectors(result.footprint, context.lattice, o.models.merge_parallel_deg, context.noise, snap_correlation, 0.0,
-                              2 * o.models.rounded_chain_scale * rounding, std::max(2 * pixel_size, snap_correlation)))
+            square_rounded_chains(result.footprint, pixel_size, context, o, 2 * o.models.rounded_chain_scale * rounding))
       candidates.emplace_back(std::move(*squared), result.model);
-  }
   const double correlation =
       std::max({pixel_size, o.models.coarse_correlation_noise * context.noise, o.models.rounded_criterion * rounding});
   const double samples = std::max(2.0, total_perimeter(rings) / correlation);
@@ -907,8 +914,7 @@ void square_and_clean(const std::vector<Ring>& rings, double pixel_size, bool on
       if (std::optional<PolygonWithHoles> leveled = level_rounded_treads(result.footprint, context.lattice, o.models.merge_parallel_deg,
                                                                           rounding_radius, o.models.tread_rounding))
         result.footprint = std::move(*leveled);
-    if (std::optional<PolygonWithHoles> squared = square_connectors(result.footprint, context.lattice, o.models.merge_parallel_deg,
-                                                                   context.noise, correlation, 0.0, 2 * rounding_radius, min_wall))
+    if (std::optional<PolygonWithHoles> squared = square_rounded_chains(result.footprint, pixel_size, context, o, 2 * rounding_radius))
       result.footprint = std::move(*squared);
     choose_rectangle(rings, pixel_size, o, result, &context.lattice, rounding_radius);
   }

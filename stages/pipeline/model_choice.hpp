@@ -53,8 +53,8 @@ void square_and_clean(const std::vector<Ring>& rings, double pixel_size, bool on
 // Under its mask's corner rounding (m), where the building measured one of its own: the
 // candidates (outlines on its lattice, with their models' names; and the chosen outline with its
 // chains off the lattice squared as if the rounding were models.rounded_chain_scale times as
-// large, under its own model's name), each squared and cleaned as above, against the chosen outline by an information criterion (n ln(d^2) + 2 k ln(n), k its
-// vertices), every outline compared with the contour as the mask draws it, its corners rounded
+// large, under its own model's name), each squared and cleaned as above, against the chosen
+// outline by an information criterion (n ln(d^2) + 2 k ln(n), k its vertices), every outline compared with the contour as the mask draws it, its corners rounded
 // so (d: the contour's mean distance to it), one independent sample of contour per
 // models.rounded_criterion roundings (a rounding's departure from a polygon spans its arc, where
 // the noise the mask's blur leaves is a few centimetres). The candidate of least criterion, where
